@@ -1,0 +1,100 @@
+#pragma once
+/// @file MainWindow.h
+/// @brief The workstation window: module selector and panel, a 3D view and
+/// three slice views on one scene, window/level presets, HU under the
+/// cursor, progress and cancel for long work.
+
+#include <array>
+#include <atomic>
+#include <filesystem>
+#include <string>
+
+#include <QMainWindow>
+
+#include "modules/core/Module.h"
+
+class QComboBox;
+class QLabel;
+class QMenu;
+class QProgressBar;
+class QPushButton;
+class QStackedWidget;
+class QThread;
+
+namespace caps {
+
+class Session;
+class VolumeNode;
+
+namespace ui {
+class SliceView;
+class ThreeDView;
+} // namespace ui
+
+class MainWindow : public QMainWindow, public ModuleHost
+{
+  Q_OBJECT
+public:
+  explicit MainWindow(Session& session, QWidget* parent = nullptr);
+  ~MainWindow() override;
+
+  /// Opens a DICOM folder, an image file or a scene bundle.
+  void openPath(const std::filesystem::path& path);
+
+  /// Unattended mode (tests, scripts): errors go to stderr instead of
+  /// dialogs; once all work is done, the window is saved to @a file and the
+  /// application quits (exit code 1 if an error was reported).
+  void screenshotWhenIdle(const std::filesystem::path& file);
+
+  // ModuleHost
+  void runTask(const std::string& title, TaskWork work) override;
+  void showError(const std::string& title, const std::string& message) override;
+  void showWarning(const std::string& title, const std::string& message) override;
+  void showStatus(const std::string& message) override;
+  QWidget* window() override { return this; }
+
+protected:
+  void dragEnterEvent(QDragEnterEvent* event) override;
+  void dropEvent(QDropEvent* event) override;
+  void closeEvent(QCloseEvent* event) override;
+
+private:
+  void buildViews();
+  void buildMenus();
+  void buildModulePanels();
+  void buildStatusBar();
+  void observeScene();
+  void showVolume(const std::string& id);
+  void applyWindowLevel(double window, double level);
+  void moveCursor(const std::array<double, 3>& position);
+  void showCursorInfo(double x, double y, double z, bool inside);
+  void taskFinished(const std::string& title, std::function<void()> finish,
+                    const std::string& error, bool cancelled);
+  void openScene(const std::filesystem::path& bundle);
+  void saveScene(bool askForName);
+  void addRecent(const std::filesystem::path& path);
+  void updateRecentMenu();
+  void maybeTakeScreenshot();
+
+  Session& session_;
+  int observer_ = -1;
+  std::string volume_id_;
+  std::array<ui::SliceView*, 3> slice_views_{};
+  ui::ThreeDView* view3d_ = nullptr;
+  QComboBox* module_selector_ = nullptr;
+  QStackedWidget* panels_ = nullptr;
+  QComboBox* presets_ = nullptr;
+  QLabel* cursor_info_ = nullptr;
+  QProgressBar* progress_ = nullptr;
+  QLabel* progress_label_ = nullptr;
+  QPushButton* cancel_ = nullptr;
+  QMenu* recent_menu_ = nullptr;
+  QThread* task_thread_ = nullptr;
+  std::atomic<bool> cancel_requested_{false};
+  std::filesystem::path scene_path_;
+  std::filesystem::path screenshot_file_;
+  bool unattended_ = false;
+  bool error_reported_ = false;
+};
+
+} // namespace caps

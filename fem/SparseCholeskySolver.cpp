@@ -1,0 +1,320 @@
+#include "fem/SparseCholeskySolver.h"
+
+#include <cholmod.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <new>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace caps::fem {
+
+namespace {
+
+// Wraps an Eigen matrix as a cholmod_sparse without copying. stype = 1: CHOLMOD
+// reads the upper triangle only, so both upper and full input work.
+cholmod_sparse viewOf(const Eigen::SparseMatrix<double>& a) {
+  cholmod_sparse s{};
+  s.nrow = static_cast<size_t>(a.rows());
+  s.ncol = static_cast<size_t>(a.cols());
+  s.nzmax = static_cast<size_t>(a.nonZeros());
+  s.p = const_cast<int*>(a.outerIndexPtr());
+  s.i = const_cast<int*>(a.innerIndexPtr());
+  s.nz = nullptr;
+  s.x = const_cast<double*>(a.valuePtr());
+  s.z = nullptr;
+  s.stype = 1;
+  s.itype = CHOLMOD_INT;
+  s.xtype = CHOLMOD_REAL;
+  s.dtype = CHOLMOD_DOUBLE;
+  s.sorted = 1;
+  s.packed = 1;
+  return s;
+}
+
+cholmod_dense denseViewOf(const double* data, Eigen::Index rows, Eigen::Index cols) {
+  cholmod_dense b{};
+  b.nrow = static_cast<size_t>(rows);
+  b.ncol = static_cast<size_t>(cols);
+  b.nzmax = b.nrow * b.ncol;
+  b.d = b.nrow;
+  b.x = const_cast<double*>(data);
+  b.z = nullptr;
+  b.xtype = CHOLMOD_REAL;
+  b.dtype = CHOLMOD_DOUBLE;
+  return b;
+}
+
+std::string notPositiveDefiniteMessage(Eigen::Index column, const std::string& detail) {
+  std::ostringstream out;
+  out << "The stiffness matrix is not positive definite: the Cholesky factorization "
+      << "failed at column " << column << ", i.e. degree of freedom " << column
+      << " of the assembled system (" << detail << "). The model probably still has rigid-body freedom (not enough "
+      << "fixed nodes to stop it translating or rotating) or contains an inverted "
+      << "element (zero or negative volume). Check the boundary conditions and the "
+      << "elements around that degree of freedom.";
+  return out.str();
+}
+
+}  // namespace
+
+struct SparseCholeskySolver::Impl {
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  Eigen::Index n = 0;
+  // Pattern given to analyzePattern(), to catch factorize() on another pattern.
+  std::vector<int> outer;
+  std::vector<int> inner;
+  bool factorized = false;
+  SolverStatus status = SolverStatus::InvalidInput;
+  std::string message = "no matrix has been analyzed yet";
+  Eigen::Index failedColumn = -1;
+  // Below about 1e-12 only rounding is left of a zero pivot; real soft-tissue
+  // models with fixed bone stay far above it.
+  double pivotTolerance = 1e-12;
+
+  Impl() {
+    cholmod_start(&common);
+    common.supernodal = CHOLMOD_SUPERNODAL;  // dense supernodes go to BLAS
+    common.final_ll = 1;                     // keep L L^T, as factorized
+    common.print = 0;                        // failures are reported via message()
+  }
+  ~Impl() {
+    cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+
+  void fail(SolverStatus s, std::string text, Eigen::Index column = -1) {
+    status = s;
+    message = std::move(text);
+    failedColumn = column;
+    factorized = false;
+  }
+  void succeed() {
+    status = SolverStatus::Success;
+    message.clear();
+    failedColumn = -1;
+  }
+
+  // CHOLMOD errors other than "not positive definite" are resource failures
+  // or bugs on our side, not something a model change can fix.
+  void throwOnCholmodError(const char* stage) const {
+    if (common.status == CHOLMOD_OUT_OF_MEMORY) throw std::bad_alloc();
+    if (common.status < CHOLMOD_OK) {
+      throw std::runtime_error(std::string("CHOLMOD ") + stage + " failed with status " +
+                               std::to_string(common.status));
+    }
+  }
+
+  // Checks shape and triangle; returns false (with status set) on bad input.
+  bool validate(const Eigen::SparseMatrix<double>& a) {
+    if (a.rows() != a.cols()) {
+      fail(SolverStatus::InvalidInput,
+           "The matrix must be square but is " + std::to_string(a.rows()) + " x " +
+               std::to_string(a.cols()) + ".");
+      return false;
+    }
+    if (a.rows() == 0) {
+      fail(SolverStatus::InvalidInput, "The matrix is empty: the model has no free degrees of freedom.");
+      return false;
+    }
+    if (a.nonZeros() > std::numeric_limits<int>::max()) {
+      fail(SolverStatus::InvalidInput, "The matrix has too many entries for 32-bit indices.");
+      return false;
+    }
+    Eigen::Index upper = 0;
+    Eigen::Index lower = 0;
+    for (Eigen::Index j = 0; j < a.outerSize(); ++j) {
+      for (Eigen::SparseMatrix<double>::InnerIterator it(a, j); it; ++it) {
+        if (it.row() < j) ++upper;
+        if (it.row() > j) ++lower;
+      }
+    }
+    if (upper == 0 && lower > 0) {
+      fail(SolverStatus::InvalidInput,
+           "Only the lower triangle of the matrix is stored; pass the upper triangle or the "
+           "full symmetric matrix.");
+      return false;
+    }
+    if (lower > 0 && lower != upper) {
+      fail(SolverStatus::InvalidInput,
+           "The matrix is not symmetric in pattern: " + std::to_string(upper) +
+               " entries above the diagonal but " + std::to_string(lower) + " below.");
+      return false;
+    }
+    return true;
+  }
+
+  // Supernodal L L^T: pivot_j = L_jj^2 is what is left of the diagonal entry
+  // after eliminating the columns before it. Returns the permuted column with
+  // the smallest pivot / diagonal ratio.
+  std::pair<Eigen::Index, double> smallestPivotRatio(const std::vector<double>& diagonal) const {
+    const auto* super = static_cast<const int*>(factor->super);
+    const auto* pi = static_cast<const int*>(factor->pi);
+    const auto* px = static_cast<const int*>(factor->px);
+    const auto* x = static_cast<const double*>(factor->x);
+    const auto* perm = static_cast<const int*>(factor->Perm);
+    Eigen::Index worst = -1;
+    double worstRatio = std::numeric_limits<double>::infinity();
+    for (size_t s = 0; s < factor->nsuper; ++s) {
+      const int firstColumn = super[s];
+      const int columns = super[s + 1] - firstColumn;
+      const int rowsInSupernode = pi[s + 1] - pi[s];
+      for (int jj = 0; jj < columns; ++jj) {
+        const double ljj = x[px[s] + jj + static_cast<Eigen::Index>(jj) * rowsInSupernode];
+        const int original = perm ? perm[firstColumn + jj] : firstColumn + jj;
+        const double ratio = ljj * ljj / diagonal[static_cast<size_t>(original)];
+        if (ratio < worstRatio) {
+          worstRatio = ratio;
+          worst = firstColumn + jj;
+        }
+      }
+    }
+    return {worst, worstRatio};
+  }
+
+  // Column-major right-hand sides in, solutions out; shared by both solve()s.
+  Eigen::MatrixXd solveDense(const double* data, Eigen::Index rows, Eigen::Index cols) {
+    if (!factorized) {
+      throw std::logic_error("solve() needs a successful factorization: " +
+                             (message.empty() ? std::string("call factorize() first") : message));
+    }
+    if (rows != n) {
+      throw std::invalid_argument("solve(): the right-hand side has " + std::to_string(rows) +
+                                  " rows but the matrix has " + std::to_string(n) + ".");
+    }
+    if (cols == 0) return Eigen::MatrixXd(n, 0);
+    cholmod_dense view = denseViewOf(data, rows, cols);
+    cholmod_dense* x = cholmod_solve(CHOLMOD_A, factor, &view, &common);
+    if (!x) {
+      throwOnCholmodError("solve");
+      throw std::runtime_error("CHOLMOD solve returned no result");
+    }
+    Eigen::MatrixXd result =
+        Eigen::Map<const Eigen::MatrixXd>(static_cast<const double*>(x->x), rows, cols);
+    cholmod_free_dense(&x, &common);
+    return result;
+  }
+
+  Eigen::Index originalColumn(Eigen::Index permuted) const {
+    const auto* perm = static_cast<const int*>(factor->Perm);
+    return perm ? perm[permuted] : permuted;
+  }
+};
+
+SparseCholeskySolver::SparseCholeskySolver() : d(std::make_unique<Impl>()) {}
+SparseCholeskySolver::~SparseCholeskySolver() = default;
+SparseCholeskySolver::SparseCholeskySolver(SparseCholeskySolver&&) noexcept = default;
+SparseCholeskySolver& SparseCholeskySolver::operator=(SparseCholeskySolver&&) noexcept = default;
+
+void SparseCholeskySolver::analyzePattern(const SparseMatrix& input) {
+  cholmod_free_factor(&d->factor, &d->common);
+  d->n = 0;
+  d->outer.clear();
+  d->inner.clear();
+  if (!d->validate(input)) return;
+
+  // CHOLMOD wants packed columns; copy only if Eigen left slack.
+  SparseMatrix compressed;
+  const SparseMatrix& a = input.isCompressed() ? input : (compressed = input, compressed);
+  cholmod_sparse view = viewOf(a);
+  d->factor = cholmod_analyze(&view, &d->common);
+  if (!d->factor) {
+    d->throwOnCholmodError("analysis");
+    throw std::runtime_error("CHOLMOD analysis returned no factor");
+  }
+  d->n = a.rows();
+  d->outer.assign(a.outerIndexPtr(), a.outerIndexPtr() + a.outerSize() + 1);
+  d->inner.assign(a.innerIndexPtr(), a.innerIndexPtr() + a.nonZeros());
+  d->factorized = false;
+  d->succeed();
+}
+
+void SparseCholeskySolver::factorize(const SparseMatrix& input) {
+  if (!d->factor) {
+    d->fail(SolverStatus::InvalidInput,
+            "factorize() needs a successful analyzePattern() on a matrix with this pattern first.");
+    return;
+  }
+  SparseMatrix compressed;
+  const SparseMatrix& a = input.isCompressed() ? input : (compressed = input, compressed);
+  const bool samePattern =
+      a.rows() == d->n && a.cols() == d->n &&
+      static_cast<size_t>(a.nonZeros()) == d->inner.size() &&
+      std::equal(d->outer.begin(), d->outer.end(), a.outerIndexPtr()) &&
+      std::equal(d->inner.begin(), d->inner.end(), a.innerIndexPtr());
+  if (!samePattern) {
+    d->fail(SolverStatus::InvalidInput,
+            "The matrix pattern differs from the one given to analyzePattern(); call "
+            "analyzePattern() (or compute()) again after changing the mesh or constraints.");
+    return;
+  }
+
+  // Diagonal entries, for the pivot ratio check; also catch NaN/Inf early.
+  std::vector<double> diagonal(static_cast<size_t>(d->n), 0.0);
+  for (Eigen::Index j = 0; j < a.outerSize(); ++j) {
+    for (SparseMatrix::InnerIterator it(a, j); it; ++it) {
+      if (it.row() > j) continue;  // strict lower triangle is ignored
+      if (!std::isfinite(it.value())) {
+        d->fail(SolverStatus::InvalidInput,
+                "The matrix has a non-finite entry (NaN or infinity) at row " +
+                    std::to_string(it.row()) + ", column " + std::to_string(j) +
+                    "; check the material parameters and element geometry there.",
+                j);
+        return;
+      }
+      if (it.row() == j) diagonal[static_cast<size_t>(j)] = it.value();
+    }
+  }
+
+  cholmod_sparse view = viewOf(a);
+  cholmod_factorize(&view, d->factor, &d->common);
+  if (d->common.status == CHOLMOD_NOT_POSDEF) {
+    const auto column = d->originalColumn(static_cast<Eigen::Index>(d->factor->minor));
+    d->fail(SolverStatus::NotPositiveDefinite,
+            notPositiveDefiniteMessage(column, "zero or negative pivot"), column);
+    return;
+  }
+  d->throwOnCholmodError("factorization");
+
+  if (d->pivotTolerance > 0.0) {
+    const auto [permuted, ratio] = d->smallestPivotRatio(diagonal);
+    if (permuted >= 0 && !(ratio >= d->pivotTolerance)) {
+      const auto column = d->originalColumn(permuted);
+      std::ostringstream detail;
+      detail << "only " << ratio << " of its diagonal stiffness is left, below the tolerance "
+             << d->pivotTolerance;
+      d->fail(SolverStatus::NotPositiveDefinite, notPositiveDefiniteMessage(column, detail.str()),
+              column);
+      return;
+    }
+  }
+  d->factorized = true;
+  d->succeed();
+}
+
+void SparseCholeskySolver::compute(const SparseMatrix& a) {
+  analyzePattern(a);
+  if (d->status == SolverStatus::Success) factorize(a);
+}
+
+Eigen::MatrixXd SparseCholeskySolver::solve(const Eigen::MatrixXd& b) const {
+  return d->solveDense(b.data(), b.rows(), b.cols());
+}
+
+Eigen::VectorXd SparseCholeskySolver::solve(const Eigen::VectorXd& b) const {
+  return d->solveDense(b.data(), b.rows(), 1).col(0);
+}
+
+SolverStatus SparseCholeskySolver::status() const { return d->status; }
+std::string SparseCholeskySolver::message() const { return d->message; }
+Eigen::Index SparseCholeskySolver::failedColumn() const { return d->failedColumn; }
+Eigen::Index SparseCholeskySolver::rows() const { return d->n; }
+void SparseCholeskySolver::setPivotTolerance(double tolerance) { d->pivotTolerance = tolerance; }
+double SparseCholeskySolver::pivotTolerance() const { return d->pivotTolerance; }
+
+}  // namespace caps::fem

@@ -1,0 +1,126 @@
+#pragma once
+/// @file Module.h
+/// @brief The plugin interface every workstation module implements.
+///
+/// A module is a shared library in the app's plugin folder that exports
+/// `caps_module_api_version()` and `caps_create_module()` (use
+/// CAPS_DECLARE_MODULE). Like a 3D Slicer loadable module it has metadata,
+/// a logic object bound to the scene (no widgets: the command line and the
+/// tests drive exactly what the GUI drives), an optional Qt panel, and
+/// optional command-line subcommands.
+
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <memory>
+#include <string>
+#include <vector>
+
+class QWidget;
+
+namespace caps {
+
+class Scene;
+class ModuleHost;
+
+/// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
+/// in a way that breaks plugins built against the old headers.
+inline constexpr int kModuleApiVersion = 1;
+
+/// The module's algorithmic side, bound to the scene. Subclasses add the
+/// module's operations; it never includes a widget header.
+class ModuleLogic
+{
+public:
+  explicit ModuleLogic(Scene& scene) : scene_(scene) {}
+  virtual ~ModuleLogic() = default;
+  ModuleLogic(const ModuleLogic&) = delete;
+  ModuleLogic& operator=(const ModuleLogic&) = delete;
+
+  Scene& scene() const { return scene_; }
+
+private:
+  Scene& scene_;
+};
+
+/// A headless subcommand: `caps NAME ARGS...`.
+struct ModuleCommand
+{
+  std::string name;    ///< "info"
+  std::string summary; ///< one line for `caps --help`
+  std::string usage;   ///< full text for `caps NAME --help`
+  /// Runs the command; returns the process exit code (0 = success). Messages
+  /// for the user go to err; results to out.
+  std::function<int(ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out,
+                    std::ostream& err)>
+    run;
+};
+
+/// Progress report of long work: fraction in [0,1] and the current step;
+/// returning false asks the work to stop.
+using TaskProgress = std::function<bool(double fraction, const std::string& step)>;
+
+/// Long work split in two: `work` runs on a worker thread and must not touch
+/// the scene; the function it returns runs afterwards on the GUI thread and
+/// may (to add nodes, for instance).
+using TaskWork = std::function<std::function<void()>(const TaskProgress& progress)>;
+
+/// What the workstation offers a module's panel.
+class ModuleHost
+{
+public:
+  virtual ~ModuleHost() = default;
+  /// Runs long work with progress and a Cancel button in the status bar.
+  /// Exceptions from either half are shown to the user; nothing else happens.
+  virtual void runTask(const std::string& title, TaskWork work) = 0;
+  /// Shows an error the user must read (a dialog; stderr when headless).
+  virtual void showError(const std::string& title, const std::string& message) = 0;
+  /// Shows something the user should know that did not stop the work.
+  virtual void showWarning(const std::string& title, const std::string& message) = 0;
+  /// Shows a transient message in the status bar.
+  virtual void showStatus(const std::string& message) = 0;
+  /// The main window, as parent for dialogs.
+  virtual QWidget* window() = 0;
+};
+
+/// A workstation module: metadata and factories only.
+class Module
+{
+public:
+  virtual ~Module() = default;
+  virtual std::string name() const = 0;  ///< short id: "volumes"
+  virtual std::string title() const = 0; ///< shown in the module selector: "Volumes"
+  virtual std::string help() const = 0;  ///< a paragraph for the user
+  virtual std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const = 0;
+  /// The module's panel, or nullptr for modules without one.
+  virtual QWidget* createPanel(ModuleLogic& logic, ModuleHost& host, QWidget* parent) const
+  {
+    (void)logic, (void)host, (void)parent;
+    return nullptr;
+  }
+  virtual std::vector<ModuleCommand> commands() const { return {}; }
+  /// Whether the module opens this path (a dropped folder, a recent file).
+  virtual bool canOpen(const std::filesystem::path& path) const
+  {
+    (void)path;
+    return false;
+  }
+  /// Opens the path in the workstation (through host.runTask for slow reads).
+  virtual void open(ModuleLogic& logic, ModuleHost& host, const std::filesystem::path& path) const
+  {
+    (void)logic, (void)host, (void)path;
+  }
+};
+
+} // namespace caps
+
+/// Exports a module class from its plugin library.
+#define CAPS_DECLARE_MODULE(ModuleClass)                                                          \
+  extern "C" __attribute__((visibility("default"))) int caps_module_api_version()                  \
+  {                                                                                                \
+    return ::caps::kModuleApiVersion;                                                              \
+  }                                                                                                \
+  extern "C" __attribute__((visibility("default"))) ::caps::Module* caps_create_module()           \
+  {                                                                                                \
+    return new ModuleClass();                                                                      \
+  }

@@ -1,0 +1,422 @@
+#include "segmentation/CtReader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
+#include <sstream>
+
+#include <itkCommand.h>
+#include <itkGDCMImageIO.h>
+#include <itkGDCMSeriesFileNames.h>
+#include <itkImage.h>
+#include <itkImageFileReader.h>
+#include <itkImageIOFactory.h>
+#include <itkImageSeriesReader.h>
+#include <itkMetaDataObject.h>
+#include <vtkMatrix3x3.h>
+
+namespace fs = std::filesystem;
+
+namespace caps::seg {
+namespace {
+
+// DICOM fields kept for the report and the info listing, by keyword.
+struct DicomField
+{
+  const char* tag;
+  const char* keyword;
+};
+constexpr DicomField kKeptFields[] = {
+  {"0010|0010", "PatientName"},       {"0010|0020", "PatientID"},
+  {"0010|0030", "PatientBirthDate"},  {"0010|0040", "PatientSex"},
+  {"0010|1010", "PatientAge"},        {"0008|0020", "StudyDate"},
+  {"0008|1030", "StudyDescription"},  {"0020|000d", "StudyInstanceUID"},
+  {"0008|0050", "AccessionNumber"},   {"0008|103e", "SeriesDescription"},
+  {"0020|000e", "SeriesInstanceUID"}, {"0020|0011", "SeriesNumber"},
+  {"0008|0060", "Modality"},          {"0008|0070", "Manufacturer"},
+  {"0008|1090", "ManufacturerModelName"}, {"0008|0080", "InstitutionName"},
+  {"0018|0060", "KVP"},               {"0018|1210", "ConvolutionKernel"},
+  {"0018|0050", "SliceThickness"},    {"0018|5100", "PatientPosition"},
+  {"0018|1120", "GantryDetectorTilt"}, {"0018|0015", "BodyPartExamined"},
+  {"0002|0010", "TransferSyntaxUID"},
+};
+
+std::string trim(std::string s)
+{
+  const auto notSpace = [](unsigned char c) { return !std::isspace(c) && c != '\0'; };
+  s.erase(s.begin(), std::find_if(s.begin(), s.end(), notSpace));
+  s.erase(std::find_if(s.rbegin(), s.rend(), notSpace).base(), s.end());
+  return s;
+}
+
+std::string lower(std::string s)
+{
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string tagValue(itk::GDCMImageIO* io, const char* tag)
+{
+  std::string value;
+  if (!io->GetValueFromTag(tag, value))
+    return {};
+  return trim(value);
+}
+
+// First line of an ITK exception, without the file/line noise.
+std::string itkReason(const itk::ExceptionObject& e)
+{
+  std::string text = e.GetDescription();
+  return trim(text.substr(0, text.find('\n')));
+}
+
+bool isRegularFile(const fs::path& p)
+{
+  std::error_code ec;
+  return fs::is_regular_file(p, ec);
+}
+
+// Reports ITK filter progress to our callback and turns a "stop" answer
+// into an abort of the filter.
+void watchProgress(itk::ProcessObject* filter, const ProgressCallback& progress,
+                   const std::string& step)
+{
+  if (!progress)
+    return;
+  auto observer = itk::CStyleCommand::New();
+  struct Context
+  {
+    itk::ProcessObject* filter;
+    ProgressCallback progress;
+    std::string step;
+  };
+  auto* context = new Context{filter, progress, step};
+  observer->SetClientData(context);
+  observer->SetConstCallback([](const itk::Object*, const itk::EventObject&, void* data) {
+    auto* c = static_cast<Context*>(data);
+    if (!c->progress(c->filter->GetProgress(), c->step))
+      c->filter->AbortGenerateDataOn();
+  });
+  observer->SetClientDataDeleteCallback([](void* data) { delete static_cast<Context*>(data); });
+  filter->AddObserver(itk::ProgressEvent(), observer);
+}
+
+template <class PixelT>
+vtkSmartPointer<vtkImageData> toVtk(itk::Image<PixelT, 3>* image, int vtkType)
+{
+  const auto region = image->GetLargestPossibleRegion();
+  const auto size = region.GetSize();
+  auto out = vtkSmartPointer<vtkImageData>::New();
+  out->SetDimensions(static_cast<int>(size[0]), static_cast<int>(size[1]),
+                     static_cast<int>(size[2]));
+  out->SetSpacing(image->GetSpacing()[0], image->GetSpacing()[1], image->GetSpacing()[2]);
+  out->SetOrigin(image->GetOrigin()[0], image->GetOrigin()[1], image->GetOrigin()[2]);
+  const auto& d = image->GetDirection();
+  out->SetDirectionMatrix(d(0, 0), d(0, 1), d(0, 2), d(1, 0), d(1, 1), d(1, 2), d(2, 0), d(2, 1),
+                          d(2, 2));
+  out->AllocateScalars(vtkType, 1);
+  std::memcpy(out->GetScalarPointer(), image->GetBufferPointer(),
+              region.GetNumberOfPixels() * sizeof(PixelT));
+  return out;
+}
+
+template <class PixelT> constexpr int vtkTypeOf();
+template <> constexpr int vtkTypeOf<short>() { return VTK_SHORT; }
+template <> constexpr int vtkTypeOf<float>() { return VTK_FLOAT; }
+
+template <class PixelT>
+CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
+                    const CtReadOptions& options)
+{
+  using Image = itk::Image<PixelT, 3>;
+  auto io = itk::GDCMImageIO::New();
+  auto reader = itk::ImageSeriesReader<Image>::New();
+  reader->SetImageIO(io);
+  reader->SetFileNames(series.files);
+  reader->MetaDataDictionaryArrayUpdateOn();
+  watchProgress(reader, options.progress, "Reading " + std::to_string(series.sliceCount) + " slices");
+  try
+  {
+    reader->Update();
+  }
+  catch (const itk::ProcessAborted&)
+  {
+    throw Cancelled();
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    throw CtReadError("Could not read the DICOM series '" + series.seriesDescription + "' in " +
+                      folder.string() + ": a slice is damaged or incomplete (" + itkReason(e) +
+                      "). Remove or replace the damaged file, or export the series again.");
+  }
+  CtVolume volume;
+  volume.image = toVtk<PixelT>(reader->GetOutput(), vtkTypeOf<PixelT>());
+  volume.sourcePath = folder.string();
+  for (const auto& field : kKeptFields)
+  {
+    const std::string value = tagValue(io, field.tag);
+    if (!value.empty())
+      volume.metadata[field.keyword] = value;
+  }
+  // ITK notes when the slice positions are not evenly spaced (missing slices).
+  const auto& dict = reader->GetOutput()->GetMetaDataDictionary();
+  double deviation = 0.0;
+  if (itk::ExposeMetaData<double>(dict, "ITK_non_uniform_sampling_deviation", deviation))
+  {
+    std::ostringstream w;
+    w << "The slices are not evenly spaced (largest deviation " << deviation
+      << " mm): slices may be missing; distances along the slice axis may be wrong.";
+    volume.warnings.push_back(w.str());
+  }
+  return volume;
+}
+
+template <class PixelT>
+CtVolume readFile(const fs::path& path, itk::ImageIOBase* io, const CtReadOptions& options)
+{
+  using Image = itk::Image<PixelT, 3>;
+  auto reader = itk::ImageFileReader<Image>::New();
+  reader->SetImageIO(io);
+  reader->SetFileName(path.string());
+  watchProgress(reader, options.progress, "Reading " + path.filename().string());
+  try
+  {
+    reader->Update();
+  }
+  catch (const itk::ProcessAborted&)
+  {
+    throw Cancelled();
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    throw CtReadError("Could not read " + path.string() + ": the file is damaged or incomplete (" +
+                      itkReason(e) + ").");
+  }
+  CtVolume volume;
+  volume.image = toVtk<PixelT>(reader->GetOutput(), vtkTypeOf<PixelT>());
+  volume.sourcePath = path.string();
+  return volume;
+}
+
+CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
+                         const CtReadOptions& options)
+{
+  const auto series = listDicomSeries(folder);
+  if (series.empty())
+  {
+    if (!requestedFile.empty())
+      throw CtReadError(requestedFile.string() +
+                        " is not a readable DICOM file: it is damaged, incomplete (truncated) or "
+                        "not DICOM at all. Export the series again, or choose another file.");
+    throw CtReadError("No readable DICOM slices in " + folder.string() +
+                      ". Choose the folder that holds the CT slices, or a NIfTI (.nii), NRRD "
+                      "(.nrrd) or MetaImage (.mha) file.");
+  }
+
+  const DicomSeriesInfo* chosen = nullptr;
+  if (!options.seriesUid.empty())
+  {
+    for (const auto& s : series)
+      if (s.seriesUid == options.seriesUid)
+        chosen = &s;
+    if (!chosen)
+      throw CtReadError("No series with UID " + options.seriesUid + " in " + folder.string() + ".");
+  }
+  else if (options.seriesIndex >= 0)
+  {
+    if (options.seriesIndex >= static_cast<int>(series.size()))
+      throw CtReadError("Series " + std::to_string(options.seriesIndex + 1) + " asked for, but " +
+                        folder.string() + " holds only " + std::to_string(series.size()) + ".");
+    chosen = &series[options.seriesIndex];
+  }
+  else if (!requestedFile.empty())
+  {
+    const std::string wanted = fs::absolute(requestedFile).lexically_normal().string();
+    for (const auto& s : series)
+      for (const auto& f : s.files)
+        if (fs::absolute(f).lexically_normal().string() == wanted)
+          chosen = &s;
+    if (!chosen)
+      throw CtReadError(requestedFile.string() +
+                        " is not a readable DICOM slice: it is damaged, incomplete (truncated) or "
+                        "not DICOM. Export the series again, or choose another file.");
+  }
+  else if (series.size() == 1)
+  {
+    chosen = &series.front();
+  }
+  else
+  {
+    std::ostringstream m;
+    m << folder.string() << " holds " << series.size()
+      << " DICOM series; say which one to load (by number or series UID):";
+    for (size_t i = 0; i < series.size(); ++i)
+      m << "\n  " << describeSeries(series[i], static_cast<int>(i) + 1);
+    throw CtReadError(m.str());
+  }
+
+  // Whole-HU rescales fit int16 and halve the memory of a float volume.
+  auto io = itk::GDCMImageIO::New();
+  io->SetFileName(chosen->files.front());
+  double slope = 1.0, intercept = 0.0;
+  try
+  {
+    io->ReadImageInformation();
+    slope = io->GetRescaleSlope();
+    intercept = io->GetRescaleIntercept();
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    throw CtReadError("Could not read the first slice " + chosen->files.front() + " (" +
+                      itkReason(e) + ").");
+  }
+  const bool wholeHu = slope == std::round(slope) && intercept == std::round(intercept) &&
+                       std::abs(slope) <= 1.0;
+  CtVolume volume = wholeHu ? readSeries<short>(*chosen, folder, options)
+                            : readSeries<float>(*chosen, folder, options);
+
+  // Files in the folder that no series could use are worth a warning: they may
+  // be slices that are missing from the volume.
+  std::set<std::string> used;
+  for (const auto& s : series)
+    for (const auto& f : s.files)
+      used.insert(fs::path(f).filename().string());
+  std::vector<std::string> unused;
+  for (const auto& entry : fs::directory_iterator(folder))
+    if (entry.is_regular_file() && !used.count(entry.path().filename().string()))
+    {
+      const std::string ext = lower(entry.path().extension().string());
+      if (ext == ".dcm" || ext.empty() || ext == ".ima")
+        unused.push_back(entry.path().filename().string());
+    }
+  if (!unused.empty())
+  {
+    std::ostringstream w;
+    w << unused.size() << " file(s) in the folder could not be read as DICOM and were skipped";
+    for (size_t i = 0; i < std::min<size_t>(unused.size(), 3); ++i)
+      w << (i ? ", " : ": ") << unused[i];
+    if (unused.size() > 3)
+      w << ", ...";
+    w << ". If they are slices of this series, the volume has gaps.";
+    volume.warnings.push_back(w.str());
+  }
+  if (series.size() > 1)
+    volume.warnings.push_back("The folder holds " + std::to_string(series.size()) +
+                              " series; loaded '" + chosen->seriesDescription + "'.");
+  return volume;
+}
+
+} // namespace
+
+std::vector<DicomSeriesInfo> listDicomSeries(const fs::path& folder)
+{
+  std::vector<DicomSeriesInfo> result;
+  auto names = itk::GDCMSeriesFileNames::New();
+  names->SetUseSeriesDetails(true);
+  names->SetRecursive(false);
+  try
+  {
+    names->SetDirectory(folder.string());
+    for (const auto& uid : names->GetSeriesUIDs())
+    {
+      DicomSeriesInfo info;
+      info.files = names->GetFileNames(uid);
+      if (info.files.empty())
+        continue;
+      info.sliceCount = static_cast<int>(info.files.size());
+      auto io = itk::GDCMImageIO::New();
+      io->SetFileName(info.files.front());
+      try
+      {
+        io->ReadImageInformation();
+      }
+      catch (const itk::ExceptionObject&)
+      {
+        continue; // a header GDCM grouped but cannot read: not a usable series
+      }
+      info.seriesUid = tagValue(io, "0020|000e");
+      if (info.seriesUid.empty())
+        info.seriesUid = uid;
+      info.patientName = tagValue(io, "0010|0010");
+      info.patientId = tagValue(io, "0010|0020");
+      info.studyDate = tagValue(io, "0008|0020");
+      info.seriesDescription = tagValue(io, "0008|103e");
+      info.modality = tagValue(io, "0008|0060");
+      info.pixelSpacing[0] = io->GetSpacing(1);
+      info.pixelSpacing[1] = io->GetSpacing(0);
+      const std::string thickness = tagValue(io, "0018|0050");
+      info.sliceThickness = thickness.empty() ? 0.0 : std::atof(thickness.c_str());
+      result.push_back(std::move(info));
+    }
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    throw CtReadError("Could not scan " + folder.string() + " for DICOM files (" + itkReason(e) +
+                      ").");
+  }
+  std::stable_sort(result.begin(), result.end(), [](const auto& a, const auto& b) {
+    return a.sliceCount > b.sliceCount;
+  });
+  return result;
+}
+
+std::string describeSeries(const DicomSeriesInfo& s, int index)
+{
+  std::ostringstream out;
+  out << index << ": " << (s.modality.empty() ? "?" : s.modality) << " '" << s.seriesDescription
+      << "' " << s.sliceCount << " slice" << (s.sliceCount == 1 ? "" : "s") << ", "
+      << s.pixelSpacing[1] << " x " << s.pixelSpacing[0] << " mm pixels, " << s.sliceThickness
+      << " mm thick, patient " << s.patientName << ", study date " << s.studyDate
+      << ", UID " << s.seriesUid;
+  return out.str();
+}
+
+CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
+{
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw CtReadError("No such file or folder: " + path.string() + ".");
+  if (fs::is_directory(path, ec))
+    return readDicomFolder(path, {}, options);
+  if (!isRegularFile(path))
+    throw CtReadError(path.string() + " is not a file or a folder.");
+  if (fs::file_size(path, ec) == 0)
+    throw CtReadError(path.string() + " is empty (0 bytes). Choose the CT series folder or an "
+                                      "image file.");
+
+  // DICOM first: a slice stands for the series it belongs to, as in a PACS viewer.
+  auto gdcm = itk::GDCMImageIO::New();
+  if (gdcm->CanReadFile(path.string().c_str()))
+    return readDicomFolder(path.parent_path().empty() ? fs::path(".") : path.parent_path(), path,
+                           options);
+
+  auto io = itk::ImageIOFactory::CreateImageIO(path.string().c_str(),
+                                               itk::IOFileModeEnum::ReadMode);
+  if (!io)
+    throw CtReadError(path.string() +
+                      " is not an image CAPS can read. Choose a DICOM series folder, or a NIfTI "
+                      "(.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file.");
+  try
+  {
+    io->SetFileName(path.string());
+    io->ReadImageInformation();
+  }
+  catch (const itk::ExceptionObject& e)
+  {
+    throw CtReadError("Could not read the header of " + path.string() + " (" + itkReason(e) +
+                      "). The file is damaged or not an image.");
+  }
+  if (io->GetNumberOfDimensions() != 3)
+    throw CtReadError(path.string() + " has " + std::to_string(io->GetNumberOfDimensions()) +
+                      " dimensions; CAPS needs a 3D CT volume.");
+  if (io->GetNumberOfComponents() != 1)
+    throw CtReadError(path.string() + " has " + std::to_string(io->GetNumberOfComponents()) +
+                      " values per voxel (a colour image?); CAPS needs a grey-level CT volume.");
+  using C = itk::IOComponentEnum;
+  const auto component = io->GetComponentType();
+  const bool fitsShort = component == C::CHAR || component == C::UCHAR || component == C::SHORT;
+  return fitsShort ? readFile<short>(path, io, options) : readFile<float>(path, io, options);
+}
+
+} // namespace caps::seg

@@ -1,0 +1,98 @@
+#pragma once
+/// @file SliceView.h
+/// @brief One 2D slice view of a CT volume (axial, coronal or sagittal).
+
+#include <array>
+
+#include <QVTKOpenGLNativeWidget.h>
+#include <vtkSmartPointer.h>
+
+class vtkActor;
+class vtkCornerAnnotation;
+class vtkImageData;
+class vtkImageSlice;
+class vtkImageSliceMapper;
+class vtkLineSource;
+class vtkRenderer;
+class vtkTextActor;
+
+namespace caps::ui {
+
+enum class SliceOrientation { Axial, Coronal, Sagittal };
+
+/// A slice through a volume in radiological convention (patient left on the
+/// right of the screen, anterior up in axial views, face to the left in
+/// sagittal views).
+///
+/// Mouse: wheel scrolls slices, left drag sets window/level, a left click
+/// puts the crosshair there, right drag zooms, middle drag pans.
+///
+/// Positions exchanged with the outside are in image space: origin +
+/// spacing * index, along the volume's index axes. For the usual axial CT
+/// (identity direction) this is the patient frame; an oblique volume is shown
+/// along its own axes.
+class SliceView : public QVTKOpenGLNativeWidget
+{
+  Q_OBJECT
+public:
+  explicit SliceView(SliceOrientation orientation, QWidget* parent = nullptr);
+  ~SliceView() override;
+
+  SliceOrientation orientation() const { return orientation_; }
+
+  /// Shows @a image (nullptr clears the view) at its middle slice.
+  void setImage(vtkImageData* image);
+  vtkImageData* image() const;
+
+  void setWindowLevel(double window, double level);
+  double window() const;
+  double level() const;
+
+  int slice() const { return slice_; }
+  int sliceCount() const;
+  void setSlice(int slice);
+
+  /// Moves the slice to contain @a position and the crosshair onto it.
+  void setCursorPosition(const std::array<double, 3>& position);
+  const std::array<double, 3>& cursorPosition() const { return cursor_; }
+
+  /// Image-space point under display pixel (x, y) on the current slice.
+  std::array<double, 3> pointAtDisplay(int x, int y) const;
+
+  /// Internal: called by the view's interactor style.
+  void handleWheel(int steps);
+  void handleHover(int x, int y);
+  void handleClick(int x, int y);
+  void handleWindowLevelChanged();
+
+signals:
+  /// The mouse is over @a position; @a inside tells whether it is in the volume.
+  void hovered(double x, double y, double z, bool inside);
+  /// The user clicked at @a position (to move the linked crosshair).
+  void clicked(double x, double y, double z);
+  void windowLevelChanged(double window, double level);
+  void sliceChanged(int slice);
+
+private:
+  int sliceAxis() const;
+  void resetCamera();
+  void updateSlicePlane();
+  void updateCrosshair();
+  void updateAnnotation();
+
+  SliceOrientation orientation_;
+  vtkSmartPointer<vtkRenderer> renderer_;
+  vtkSmartPointer<vtkImageData> image_;
+  vtkSmartPointer<vtkImageSliceMapper> mapper_;
+  vtkSmartPointer<vtkImageSlice> slice_actor_;
+  vtkSmartPointer<vtkLineSource> line_a_;
+  vtkSmartPointer<vtkLineSource> line_b_;
+  vtkSmartPointer<vtkActor> crosshair_a_;
+  vtkSmartPointer<vtkActor> crosshair_b_;
+  vtkSmartPointer<vtkCornerAnnotation> corners_;
+  std::array<vtkSmartPointer<vtkTextActor>, 4> edge_labels_; ///< top, bottom, left, right
+  std::array<double, 3> cursor_{0.0, 0.0, 0.0};
+  int slice_ = 0;
+};
+
+} // namespace caps::ui
