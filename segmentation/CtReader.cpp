@@ -1,14 +1,16 @@
 #include "segmentation/CtReader.h"
+#include "segmentation/DicomFileCheck.h"
 
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <cstring>
 #include <set>
 #include <sstream>
 
+#include <gdcmScanner.h>
 #include <itkCommand.h>
 #include <itkGDCMImageIO.h>
-#include <itkGDCMSeriesFileNames.h>
 #include <itkImage.h>
 #include <itkImageFileReader.h>
 #include <itkImageIOFactory.h>
@@ -50,12 +52,6 @@ std::string trim(std::string s)
   return s;
 }
 
-std::string lower(std::string s)
-{
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
-
 std::string tagValue(itk::GDCMImageIO* io, const char* tag)
 {
   std::string value;
@@ -84,22 +80,10 @@ void watchProgress(itk::ProcessObject* filter, const ProgressCallback& progress,
 {
   if (!progress)
     return;
-  auto observer = itk::CStyleCommand::New();
-  struct Context
-  {
-    itk::ProcessObject* filter;
-    ProgressCallback progress;
-    std::string step;
-  };
-  auto* context = new Context{filter, progress, step};
-  observer->SetClientData(context);
-  observer->SetConstCallback([](const itk::Object*, const itk::EventObject&, void* data) {
-    auto* c = static_cast<Context*>(data);
-    if (!c->progress(c->filter->GetProgress(), c->step))
-      c->filter->AbortGenerateDataOn();
+  filter->AddObserver(itk::ProgressEvent(), [filter, progress, step](const itk::EventObject&) {
+    if (!progress(filter->GetProgress(), step))
+      filter->AbortGenerateDataOn();
   });
-  observer->SetClientDataDeleteCallback([](void* data) { delete static_cast<Context*>(data); });
-  filter->AddObserver(itk::ProgressEvent(), observer);
 }
 
 template <class PixelT>
@@ -199,19 +183,33 @@ CtVolume readFile(const fs::path& path, itk::ImageIOBase* io, const CtReadOption
   return volume;
 }
 
+// "3 files are damaged: a.dcm (the file is cut short ...), b.dcm (...)".
+std::string describeDamage(const std::vector<std::pair<std::string, std::string>>& damaged)
+{
+  std::ostringstream out;
+  out << damaged.size() << (damaged.size() == 1 ? " file is" : " files are") << " damaged";
+  for (size_t i = 0; i < std::min<size_t>(damaged.size(), 3); ++i)
+    out << (i ? "; " : ": ") << damaged[i].first << " (" << damaged[i].second << ")";
+  if (damaged.size() > 3)
+    out << "; ...";
+  return out.str();
+}
+
 CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
                          const CtReadOptions& options)
 {
-  const auto series = listDicomSeries(folder);
+  const DicomFolderScan scan = scanDicomFolder(folder);
+  const auto& series = scan.series;
   if (series.empty())
   {
-    if (!requestedFile.empty())
-      throw CtReadError(requestedFile.string() +
-                        " is not a readable DICOM file: it is damaged, incomplete (truncated) or "
-                        "not DICOM at all. Export the series again, or choose another file.");
-    throw CtReadError("No readable DICOM slices in " + folder.string() +
-                      ". Choose the folder that holds the CT slices, or a NIfTI (.nii), NRRD "
-                      "(.nrrd) or MetaImage (.mha) file.");
+    std::string message = "No readable DICOM slices in " + folder.string() + ".";
+    if (!scan.damaged.empty())
+      message += " " + describeDamage(scan.damaged) + ". Export the series again from the "
+                                                      "scanner or PACS.";
+    else
+      message += " Choose the folder that holds the CT slices, or a NIfTI (.nii), NRRD (.nrrd) "
+                 "or MetaImage (.mha) file.";
+    throw CtReadError(message);
   }
 
   const DicomSeriesInfo* chosen = nullptr;
@@ -276,31 +274,10 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   CtVolume volume = wholeHu ? readSeries<short>(*chosen, folder, options)
                             : readSeries<float>(*chosen, folder, options);
 
-  // Files in the folder that no series could use are worth a warning: they may
-  // be slices that are missing from the volume.
-  std::set<std::string> used;
-  for (const auto& s : series)
-    for (const auto& f : s.files)
-      used.insert(fs::path(f).filename().string());
-  std::vector<std::string> unused;
-  for (const auto& entry : fs::directory_iterator(folder))
-    if (entry.is_regular_file() && !used.count(entry.path().filename().string()))
-    {
-      const std::string ext = lower(entry.path().extension().string());
-      if (ext == ".dcm" || ext.empty() || ext == ".ima")
-        unused.push_back(entry.path().filename().string());
-    }
-  if (!unused.empty())
-  {
-    std::ostringstream w;
-    w << unused.size() << " file(s) in the folder could not be read as DICOM and were skipped";
-    for (size_t i = 0; i < std::min<size_t>(unused.size(), 3); ++i)
-      w << (i ? ", " : ": ") << unused[i];
-    if (unused.size() > 3)
-      w << ", ...";
-    w << ". If they are slices of this series, the volume has gaps.";
-    volume.warnings.push_back(w.str());
-  }
+  if (!scan.damaged.empty())
+    volume.warnings.push_back(describeDamage(scan.damaged) +
+                              " and were skipped. If they are slices of this series, the volume "
+                              "has gaps: export the series again.");
   if (series.size() > 1)
     volume.warnings.push_back("The folder holds " + std::to_string(series.size()) +
                               " series; loaded '" + chosen->seriesDescription + "'.");
@@ -309,56 +286,122 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
 
 } // namespace
 
-std::vector<DicomSeriesInfo> listDicomSeries(const fs::path& folder)
+DicomFolderScan scanDicomFolder(const fs::path& folder)
 {
-  std::vector<DicomSeriesInfo> result;
-  auto names = itk::GDCMSeriesFileNames::New();
-  names->SetUseSeriesDetails(true);
-  names->SetRecursive(false);
-  try
+  DicomFolderScan scan;
+  std::vector<fs::path> files;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec))
+    if (entry.is_regular_file(ec))
+      files.push_back(entry.path());
+  if (ec)
+    throw CtReadError("Cannot list " + folder.string() + ": " + ec.message() + ".");
+  std::sort(files.begin(), files.end());
+
+  // Damaged files never reach GDCM (see DicomFileCheck.h).
+  gdcm::Directory::FilenamesType sound;
+  for (const auto& file : files)
   {
-    names->SetDirectory(folder.string());
-    for (const auto& uid : names->GetSeriesUIDs())
+    const DicomFileCheck check = checkDicomFile(file);
+    if (check.kind == DicomFileKind::Sound)
+      sound.push_back(file.string());
+    else if (check.kind == DicomFileKind::Damaged)
+      scan.damaged.emplace_back(file.filename().string(), check.problem);
+  }
+  if (sound.empty())
+    return scan;
+
+  const gdcm::Tag seriesUid(0x0020, 0x000e), orientation(0x0020, 0x0037),
+    position(0x0020, 0x0032), instance(0x0020, 0x0013), rows(0x0028, 0x0010),
+    columns(0x0028, 0x0011), spacing(0x0028, 0x0030), thickness(0x0018, 0x0050),
+    patientName(0x0010, 0x0010), patientId(0x0010, 0x0020), studyDate(0x0008, 0x0020),
+    description(0x0008, 0x103e), modality(0x0008, 0x0060);
+  gdcm::Scanner scanner;
+  for (const auto& tag : {seriesUid, orientation, position, instance, rows, columns, spacing,
+                          thickness, patientName, patientId, studyDate, description, modality})
+    scanner.AddTag(tag);
+  if (!scanner.Scan(sound))
+    throw CtReadError("Could not scan " + folder.string() + " for DICOM files.");
+  const auto value = [&](const std::string& file, const gdcm::Tag& tag) {
+    const char* v = scanner.GetValue(file.c_str(), tag);
+    return v ? trim(v) : std::string();
+  };
+  const auto numbers = [](const std::string& text) {
+    std::vector<double> out;
+    std::stringstream in(text);
+    std::string item;
+    while (std::getline(in, item, '\\'))
+      out.push_back(std::atof(item.c_str()));
+    return out;
+  };
+
+  // Group like ITK's "series details": same UID, orientation and matrix.
+  std::map<std::string, std::vector<std::string>> groups;
+  std::vector<std::string> order;
+  for (const auto& file : sound)
+  {
+    if (!scanner.IsKey(file.c_str()))
     {
-      DicomSeriesInfo info;
-      info.files = names->GetFileNames(uid);
-      if (info.files.empty())
-        continue;
-      info.sliceCount = static_cast<int>(info.files.size());
-      auto io = itk::GDCMImageIO::New();
-      io->SetFileName(info.files.front());
-      try
-      {
-        io->ReadImageInformation();
-      }
-      catch (const itk::ExceptionObject&)
-      {
-        continue; // a header GDCM grouped but cannot read: not a usable series
-      }
-      info.seriesUid = tagValue(io, "0020|000e");
-      if (info.seriesUid.empty())
-        info.seriesUid = uid;
-      info.patientName = tagValue(io, "0010|0010");
-      info.patientId = tagValue(io, "0010|0020");
-      info.studyDate = tagValue(io, "0008|0020");
-      info.seriesDescription = tagValue(io, "0008|103e");
-      info.modality = tagValue(io, "0008|0060");
-      info.pixelSpacing[0] = io->GetSpacing(1);
-      info.pixelSpacing[1] = io->GetSpacing(0);
-      const std::string thickness = tagValue(io, "0018|0050");
-      info.sliceThickness = thickness.empty() ? 0.0 : std::atof(thickness.c_str());
-      result.push_back(std::move(info));
+      scan.damaged.emplace_back(fs::path(file).filename().string(), "GDCM cannot parse it");
+      continue;
     }
+    const std::string key = value(file, seriesUid) + "|" + value(file, orientation) + "|" +
+                            value(file, rows) + "x" + value(file, columns);
+    if (!groups.count(key))
+      order.push_back(key);
+    groups[key].push_back(file);
   }
-  catch (const itk::ExceptionObject& e)
+
+  for (const auto& key : order)
   {
-    throw CtReadError("Could not scan " + folder.string() + " for DICOM files (" + itkReason(e) +
-                      ").");
+    auto& group = groups[key];
+    const std::string& first = group.front();
+    // Sort along the slice normal (row x column direction), by instance
+    // number when positions are missing.
+    const auto iop = numbers(value(first, orientation));
+    double normal[3] = {0, 0, 1};
+    if (iop.size() == 6)
+    {
+      normal[0] = iop[1] * iop[5] - iop[2] * iop[4];
+      normal[1] = iop[2] * iop[3] - iop[0] * iop[5];
+      normal[2] = iop[0] * iop[4] - iop[1] * iop[3];
+    }
+    const auto along = [&](const std::string& file) {
+      const auto ipp = numbers(value(file, position));
+      if (ipp.size() != 3)
+        return std::atof(value(file, instance).c_str());
+      return ipp[0] * normal[0] + ipp[1] * normal[1] + ipp[2] * normal[2];
+    };
+    std::stable_sort(group.begin(), group.end(),
+                     [&](const auto& a, const auto& b) { return along(a) < along(b); });
+
+    DicomSeriesInfo info;
+    info.files = group;
+    info.sliceCount = static_cast<int>(group.size());
+    info.seriesUid = value(first, seriesUid);
+    info.patientName = value(first, patientName);
+    info.patientId = value(first, patientId);
+    info.studyDate = value(first, studyDate);
+    info.seriesDescription = value(first, description);
+    info.modality = value(first, modality);
+    const auto pixel = numbers(value(first, spacing));
+    if (pixel.size() == 2)
+    {
+      info.pixelSpacing[0] = pixel[0];
+      info.pixelSpacing[1] = pixel[1];
+    }
+    info.sliceThickness = std::atof(value(first, thickness).c_str());
+    scan.series.push_back(std::move(info));
   }
-  std::stable_sort(result.begin(), result.end(), [](const auto& a, const auto& b) {
+  std::stable_sort(scan.series.begin(), scan.series.end(), [](const auto& a, const auto& b) {
     return a.sliceCount > b.sliceCount;
   });
-  return result;
+  return scan;
+}
+
+std::vector<DicomSeriesInfo> listDicomSeries(const fs::path& folder)
+{
+  return scanDicomFolder(folder).series;
 }
 
 std::string describeSeries(const DicomSeriesInfo& s, int index)
@@ -374,6 +417,8 @@ std::string describeSeries(const DicomSeriesInfo& s, int index)
 
 CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
 {
+  // Our messages replace ITK's warnings on the console (e.g. uneven slices).
+  itk::Object::GlobalWarningDisplayOff();
   std::error_code ec;
   if (!fs::exists(path, ec))
     throw CtReadError("No such file or folder: " + path.string() + ".");
@@ -385,9 +430,13 @@ CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
     throw CtReadError(path.string() + " is empty (0 bytes). Choose the CT series folder or an "
                                       "image file.");
 
-  // DICOM first: a slice stands for the series it belongs to, as in a PACS viewer.
-  auto gdcm = itk::GDCMImageIO::New();
-  if (gdcm->CanReadFile(path.string().c_str()))
+  // DICOM first: a slice stands for the series it belongs to, as in a PACS
+  // viewer. A damaged file must not reach GDCM at all (DicomFileCheck.h).
+  const DicomFileCheck check = checkDicomFile(path);
+  if (check.kind == DicomFileKind::Damaged)
+    throw CtReadError(path.string() + " is a damaged DICOM file: " + check.problem +
+                      ". Export it again from the scanner or PACS.");
+  if (check.kind == DicomFileKind::Sound)
     return readDicomFolder(path.parent_path().empty() ? fs::path(".") : path.parent_path(), path,
                            options);
 

@@ -1,0 +1,88 @@
+// Plugin loading: the real volumes plugin, and every way a plugin file can
+// be wrong, each reported with its reason.
+
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "app/ModuleManager.h"
+#include "app/Session.h"
+#include "TestPaths.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path testPlugin(const char* name)
+{
+  return fs::path(CAPS_TEST_PLUGIN_DIR) / (std::string("libcaps_test_") + name + ".so");
+}
+
+} // namespace
+
+TEST(ModuleManager, LoadsTheVolumesPluginFromItsFile)
+{
+  caps::ModuleManager manager;
+  manager.loadFolder(CAPS_MODULE_DIR);
+  const caps::Module* volumes = manager.find("volumes");
+  ASSERT_NE(volumes, nullptr) << manager.report();
+  EXPECT_EQ(volumes->title(), "Volumes");
+  EXPECT_NE(manager.findCommand("info").second, nullptr);
+  EXPECT_EQ(manager.findCommand("info").first, volumes);
+  EXPECT_EQ(manager.findCommand("no-such-command").second, nullptr);
+  EXPECT_NE(manager.report().find("libcaps_module_volumes.so"), std::string::npos);
+  EXPECT_TRUE(manager.failures().empty()) << manager.report();
+}
+
+TEST(ModuleManager, ReportsEveryBadPluginWithItsReason)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  fs::copy_file(testPlugin("probe_module"), folder / "a_probe.so");
+  fs::copy_file(testPlugin("probe_module"), folder / "b_probe_again.so");
+  fs::copy_file(testPlugin("not_a_module"), folder / "c_not_a_module.so");
+  fs::copy_file(testPlugin("wrong_api_module"), folder / "d_wrong_api.so");
+  std::ofstream(folder / "e_text.so") << "this is text, not a library\n";
+  std::ofstream(folder / "readme.txt") << "ignored: not a .so\n";
+
+  caps::ModuleManager manager;
+  manager.loadFolder(folder);
+  ASSERT_EQ(manager.modules().size(), 1u) << manager.report();
+  EXPECT_EQ(manager.modules()[0].module->name(), "probe");
+  ASSERT_EQ(manager.failures().size(), 4u) << manager.report();
+  const auto reason = [&](const char* file) {
+    for (const auto& f : manager.failures())
+      if (f.file.filename() == file)
+        return f.reason;
+    return std::string("(not reported)");
+  };
+  EXPECT_NE(reason("b_probe_again.so").find("repeats module 'probe'"), std::string::npos);
+  EXPECT_NE(reason("c_not_a_module.so").find("is not a CAPS module"), std::string::npos);
+  EXPECT_NE(reason("d_wrong_api.so").find("rebuild the module"), std::string::npos);
+  EXPECT_NE(reason("e_text.so").find("cannot be loaded"), std::string::npos);
+}
+
+TEST(ModuleManager, CommandsRunOnTheSessionsLogic)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  fs::copy_file(testPlugin("probe_module"), folder / "probe.so");
+  caps::ModuleManager manager;
+  manager.loadFolder(folder);
+  auto [module, command] = manager.findCommand("probe");
+  ASSERT_NE(command, nullptr);
+  caps::Session session(manager);
+  std::ostringstream out, err;
+  EXPECT_EQ(command->run(session.logic(*module), {"x", "y"}, out, err), 7);
+  EXPECT_EQ(out.str(), "nodes=0 args=2");
+  // The logic is made once per session.
+  EXPECT_EQ(&session.logic(*module), &session.logic(*module));
+}
+
+TEST(ModuleManager, MissingFolderIsNotAnError)
+{
+  caps::ModuleManager manager;
+  manager.loadFolder("/no/such/plugin/folder");
+  EXPECT_TRUE(manager.modules().empty());
+  EXPECT_TRUE(manager.failures().empty());
+  EXPECT_NE(manager.report().find("/no/such/plugin/folder"), std::string::npos);
+}
