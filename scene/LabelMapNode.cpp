@@ -1,0 +1,66 @@
+#include "scene/LabelMapNode.h"
+
+#include <vtkPointData.h>
+
+#include "scene/JsonFields.h"
+#include "scene/NrrdIO.h"
+#include "scene/SceneError.h"
+
+namespace caps {
+
+namespace {
+bool isLabelImage(vtkImageData* image) {
+  return image && image->GetScalarType() == VTK_UNSIGNED_CHAR && image->GetNumberOfScalarComponents() == 1;
+}
+}  // namespace
+
+void LabelMapNode::setImage(vtkSmartPointer<vtkImageData> image) {
+  if (image && !isLabelImage(image))
+    throw SceneError("label map '" + name() + "' needs a single-component unsigned char image, got " +
+                     image->GetScalarTypeAsString());
+  image_ = std::move(image);
+  modified();
+}
+
+void LabelMapNode::setReferenceVolumeId(NodeId id) {
+  referenceVolumeId_ = std::move(id);
+  modified();
+}
+
+void LabelMapNode::setLabels(std::map<int, Label> labels) {
+  labels_ = std::move(labels);
+  modified();
+}
+
+void LabelMapNode::setLabel(int value, Label label) {
+  labels_[value] = std::move(label);
+  modified();
+}
+
+std::string LabelMapNode::bulkFileExtension() const { return image_ ? ".nrrd" : ""; }
+
+void LabelMapNode::writeBulk(const std::filesystem::path& file) const { NrrdIO::writeImage(image_, file); }
+
+void LabelMapNode::readBulk(const std::filesystem::path& file) {
+  auto image = NrrdIO::readImage(file);
+  if (!isLabelImage(image))
+    throw SceneError(file.string() + " holds " + image->GetScalarTypeAsString() +
+                     " voxels; a label map must be unsigned char: re-save the scene or restore a backup");
+  image_ = image;
+}
+
+void LabelMapNode::writeFields(nlohmann::json& j) const {
+  j["referenceVolumeId"] = referenceVolumeId_;
+  auto& table = j["labels"] = nlohmann::json::array();
+  for (const auto& [value, label] : labels_) table.push_back({{"value", value}, {"name", label.name}, {"color", label.color}});
+}
+
+void LabelMapNode::readFields(const nlohmann::json& j) {
+  jsonfields::read(j, "referenceVolumeId", referenceVolumeId_);
+  if (auto it = j.find("labels"); it != j.end()) {
+    labels_.clear();
+    for (const auto& e : *it) labels_[e.at("value").get<int>()] = Label{e.value("name", ""), e.at("color").get<std::array<double, 3>>()};
+  }
+}
+
+}  // namespace caps

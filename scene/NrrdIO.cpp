@@ -1,0 +1,387 @@
+#include "scene/NrrdIO.h"
+
+#include <vtkMatrix3x3.h>
+#include <vtkPointData.h>
+#include <vtkDataArray.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <locale>
+#include <sstream>
+#include <vector>
+
+#include "scene/SceneError.h"
+
+namespace caps {
+
+namespace {
+
+using std::filesystem::path;
+
+struct TypeName {
+  int vtkType;
+  const char* canonical;
+  std::vector<std::string> aliases;
+};
+
+// NRRD type names (canonical first) and the VTK scalar type they map to.
+const std::vector<TypeName>& typeNames() {
+  static const std::vector<TypeName> names{
+      {VTK_SIGNED_CHAR, "signed char", {"signed char", "int8", "int8_t"}},
+      {VTK_UNSIGNED_CHAR, "unsigned char", {"uchar", "unsigned char", "uint8", "uint8_t"}},
+      {VTK_SHORT, "short", {"short", "short int", "signed short", "signed short int", "int16", "int16_t"}},
+      {VTK_UNSIGNED_SHORT, "unsigned short", {"ushort", "unsigned short", "unsigned short int", "uint16", "uint16_t"}},
+      {VTK_INT, "int", {"int", "signed int", "int32", "int32_t"}},
+      {VTK_UNSIGNED_INT, "unsigned int", {"uint", "unsigned int", "uint32", "uint32_t"}},
+      {VTK_FLOAT, "float", {"float"}},
+      {VTK_DOUBLE, "double", {"double"}},
+  };
+  return names;
+}
+
+int sizeOfVtkType(int t) {
+  switch (t) {
+    case VTK_SIGNED_CHAR: case VTK_UNSIGNED_CHAR: return 1;
+    case VTK_SHORT: case VTK_UNSIGNED_SHORT: return 2;
+    case VTK_INT: case VTK_UNSIGNED_INT: case VTK_FLOAT: return 4;
+    case VTK_DOUBLE: return 8;
+  }
+  return 0;
+}
+
+std::string num(double v) {
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+std::string vec3(const double v[3]) { return "(" + num(v[0]) + "," + num(v[1]) + "," + num(v[2]) + ")"; }
+
+// Writes header + data; gzip streams the data through zlib at the fast level
+// (CT volumes compress well enough, and saving must stay quick).
+void writeNrrd(const path& file, const std::string& header, const void* data, std::size_t bytes,
+               NrrdIO::Encoding encoding) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  if (!out) throw SceneError("cannot create " + file.string() + ": check the folder exists and is writable");
+  out << header;
+  if (encoding == NrrdIO::Encoding::Raw) {
+    out.write(static_cast<const char*>(data), static_cast<std::streamsize>(bytes));
+  } else {
+    z_stream zs{};
+    if (deflateInit2(&zs, Z_BEST_SPEED, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+      throw SceneError("cannot start gzip compression for " + file.string());
+    std::vector<unsigned char> buf(1 << 18);
+    const auto* in = static_cast<const unsigned char*>(data);
+    std::size_t left = bytes;
+    int flush = Z_NO_FLUSH;
+    do {
+      if (zs.avail_in == 0 && flush != Z_FINISH) {
+        const std::size_t chunk = std::min<std::size_t>(left, 1u << 30);
+        zs.next_in = const_cast<unsigned char*>(in);
+        zs.avail_in = static_cast<uInt>(chunk);
+        in += chunk;
+        left -= chunk;
+        if (left == 0) flush = Z_FINISH;
+      }
+      zs.next_out = buf.data();
+      zs.avail_out = static_cast<uInt>(buf.size());
+      const int rc = deflate(&zs, flush);
+      if (rc == Z_STREAM_ERROR) {
+        deflateEnd(&zs);
+        throw SceneError("gzip compression failed while writing " + file.string());
+      }
+      out.write(reinterpret_cast<const char*>(buf.data()),
+                static_cast<std::streamsize>(buf.size() - zs.avail_out));
+      if (rc == Z_STREAM_END) break;
+    } while (out);
+    deflateEnd(&zs);
+  }
+  out.close();
+  if (!out) throw SceneError("could not write " + file.string() + ": check free disk space and permissions");
+}
+
+struct Nrrd {
+  int vtkType = 0;
+  int dimension = 0;
+  std::vector<std::size_t> sizes;
+  bool hasSpace = false;
+  std::array<double, 3> origin{0, 0, 0};
+  std::array<std::array<double, 3>, 3> dirs{};  // dirs[axis] = direction * spacing
+  std::vector<double> spacings;
+  std::vector<char> data;
+};
+
+std::string trim(std::string s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  const auto e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+std::vector<double> numbers(std::string text, const path& file, const char* field) {
+  for (char& c : text)
+    if (c == '(' || c == ')' || c == ',') c = ' ';
+  std::istringstream s(text);
+  s.imbue(std::locale::classic());
+  std::vector<double> v;
+  std::string tok;
+  while (s >> tok) {
+    if (tok == "none" || tok == "nan" || tok == "NaN") {
+      v.push_back(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    std::istringstream t(tok);
+    t.imbue(std::locale::classic());
+    double d;
+    if (!(t >> d)) throw SceneError(file.string() + ": cannot read the NRRD field '" + field + "': " + text);
+    v.push_back(d);
+  }
+  return v;
+}
+
+void inflateInto(const char* src, std::size_t srcBytes, std::vector<char>& dst, const path& file) {
+  z_stream zs{};
+  if (inflateInit2(&zs, 15 + 32) != Z_OK) throw SceneError("cannot start gzip decompression for " + file.string());
+  std::size_t inLeft = srcBytes, outDone = 0;
+  const auto* in = reinterpret_cast<const unsigned char*>(src);
+  int rc = Z_OK;
+  while (rc != Z_STREAM_END) {
+    if (zs.avail_in == 0) {
+      if (inLeft == 0) break;
+      const std::size_t chunk = std::min<std::size_t>(inLeft, 1u << 30);
+      zs.next_in = const_cast<unsigned char*>(in);
+      zs.avail_in = static_cast<uInt>(chunk);
+      in += chunk;
+      inLeft -= chunk;
+    }
+    if (outDone == dst.size()) break;  // got everything we need
+    const std::size_t outChunk = std::min<std::size_t>(dst.size() - outDone, 1u << 30);
+    zs.next_out = reinterpret_cast<unsigned char*>(dst.data() + outDone);
+    zs.avail_out = static_cast<uInt>(outChunk);
+    rc = inflate(&zs, Z_NO_FLUSH);
+    outDone += outChunk - zs.avail_out;
+    if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR) {
+      inflateEnd(&zs);
+      throw SceneError(file.string() + " is damaged (gzip data corrupt): restore it from a backup");
+    }
+    if (rc == Z_BUF_ERROR && zs.avail_in == 0 && inLeft == 0) break;
+  }
+  inflateEnd(&zs);
+  if (outDone != dst.size())
+    throw SceneError(file.string() + " is truncated (" + std::to_string(outDone) + " of " +
+                     std::to_string(dst.size()) + " bytes of image data): restore it from a backup or re-save the scene");
+}
+
+Nrrd parseNrrd(const path& file);
+
+// std::stoi and friends throw std::invalid_argument on a garbled header.
+Nrrd readNrrd(const path& file) {
+  try {
+    return parseNrrd(file);
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw SceneError(file.string() + ": malformed NRRD header (" + e.what() + "); it is not a file CAPS can read");
+  }
+}
+
+Nrrd parseNrrd(const path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw SceneError("cannot open " + file.string() + ": the file is missing or unreadable");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.rfind("NRRD000", 0) != 0)
+    throw SceneError(file.string() + " is not a NRRD file (no NRRD000x magic): choose a .nrrd file written by CAPS, 3D Slicer or teem");
+
+  Nrrd n;
+  std::string encoding = "raw", endian = "little", space;
+  bool haveDirs = false;
+  std::size_t pos = bytes.find('\n');
+  std::size_t dataStart = std::string::npos;
+  while (pos != std::string::npos && pos + 1 <= bytes.size()) {
+    const std::size_t next = bytes.find('\n', pos + 1);
+    if (next == std::string::npos) break;
+    std::string line = bytes.substr(pos + 1, next - pos - 1);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    pos = next;
+    if (line.empty()) {
+      dataStart = next + 1;
+      break;
+    }
+    if (line[0] == '#') continue;
+    if (line.find(":=") != std::string::npos) continue;  // key/value pairs: not ours
+    const auto colon = line.find(": ");
+    if (colon == std::string::npos) throw SceneError(file.string() + ": malformed NRRD header line '" + line + "'");
+    std::string key = trim(line.substr(0, colon)), value = trim(line.substr(colon + 2));
+    std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (key == "type") {
+      for (const auto& t : typeNames())
+        if (std::find(t.aliases.begin(), t.aliases.end(), value) != t.aliases.end()) n.vtkType = t.vtkType;
+      if (!n.vtkType) throw SceneError(file.string() + ": NRRD type '" + value + "' is not supported by CAPS");
+    } else if (key == "dimension") {
+      n.dimension = std::stoi(value);
+    } else if (key == "sizes") {
+      for (double d : numbers(value, file, "sizes")) n.sizes.push_back(static_cast<std::size_t>(d));
+    } else if (key == "encoding") {
+      encoding = value;
+    } else if (key == "endian") {
+      endian = value;
+    } else if (key == "space") {
+      space = value;
+    } else if (key == "space dimension") {
+      // implied by "space"
+    } else if (key == "space directions") {
+      const auto v = numbers(value, file, "space directions");
+      if (v.size() < 9) throw SceneError(file.string() + ": 'space directions' must give 3 vectors of 3 numbers");
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c) n.dirs[a][c] = v[static_cast<std::size_t>(a * 3 + c)];
+      haveDirs = true;
+    } else if (key == "space origin") {
+      const auto v = numbers(value, file, "space origin");
+      if (v.size() != 3) throw SceneError(file.string() + ": 'space origin' must have 3 numbers");
+      n.origin = {v[0], v[1], v[2]};
+    } else if (key == "spacings") {
+      n.spacings = numbers(value, file, "spacings");
+    } else if (key == "data file" || key == "datafile") {
+      throw SceneError(file.string() + " is a detached-header NRRD; CAPS reads attached data only: re-save it as a single .nrrd file");
+    } else if (key == "line skip" || key == "lineskip" || key == "byte skip" || key == "byteskip") {
+      if (std::stol(value) != 0) throw SceneError(file.string() + ": NRRD '" + key + "' is not supported");
+    }
+  }
+  if (dataStart == std::string::npos) throw SceneError(file.string() + " is truncated (the NRRD header does not end)");
+  if (!n.vtkType || n.dimension < 1 || n.sizes.size() != static_cast<std::size_t>(n.dimension))
+    throw SceneError(file.string() + ": NRRD header lacks a valid type, dimension or sizes");
+
+  // Bring the geometry to LPS, the patient frame of CAPS.
+  if (!space.empty()) {
+    n.hasSpace = true;
+    std::array<double, 3> flip{1, 1, 1};
+    if (space == "right-anterior-superior" || space == "RAS") flip = {-1, -1, 1};
+    else if (space == "left-anterior-superior" || space == "LAS") flip = {1, -1, 1};
+    else if (space != "left-posterior-superior" && space != "LPS")
+      throw SceneError(file.string() + ": NRRD space '" + space + "' is not supported; convert it to LPS or RAS");
+    for (int c = 0; c < 3; ++c) {
+      n.origin[c] *= flip[c];
+      for (int a = 0; a < 3; ++a) n.dirs[a][c] *= flip[c];
+    }
+    if (!haveDirs && n.dimension == 3) throw SceneError(file.string() + ": NRRD has a space but no 'space directions'");
+  }
+
+  std::size_t count = 1;
+  for (auto s : n.sizes) count *= s;
+  const int elem = sizeOfVtkType(n.vtkType);
+  n.data.resize(count * static_cast<std::size_t>(elem));
+  const char* payload = bytes.data() + dataStart;
+  const std::size_t payloadBytes = bytes.size() - dataStart;
+  if (encoding == "raw") {
+    if (payloadBytes < n.data.size())
+      throw SceneError(file.string() + " is truncated (" + std::to_string(payloadBytes) + " of " +
+                       std::to_string(n.data.size()) + " bytes of image data): restore it from a backup or re-save the scene");
+    std::memcpy(n.data.data(), payload, n.data.size());
+  } else if (encoding == "gzip" || encoding == "gz") {
+    inflateInto(payload, payloadBytes, n.data, file);
+  } else {
+    throw SceneError(file.string() + ": NRRD encoding '" + encoding + "' is not supported; use raw or gzip");
+  }
+  if (endian == "big" && elem > 1) {
+    for (std::size_t i = 0; i < count; ++i) std::reverse(n.data.begin() + i * elem, n.data.begin() + (i + 1) * elem);
+  }
+  return n;
+}
+
+}  // namespace
+
+void NrrdIO::writeImage(vtkImageData* image, const path& file, Encoding encoding) {
+  if (!image || !image->GetPointData()->GetScalars())
+    throw SceneError("cannot write " + file.string() + ": the image is empty");
+  vtkDataArray* scalars = image->GetPointData()->GetScalars();
+  if (scalars->GetNumberOfComponents() != 1)
+    throw SceneError("cannot write " + file.string() + ": NRRD writing supports single-component images only");
+  const auto& names = typeNames();
+  auto it = std::find_if(names.begin(), names.end(), [&](const TypeName& t) { return t.vtkType == image->GetScalarType(); });
+  if (it == names.end())
+    throw SceneError("cannot write " + file.string() + ": scalar type " + image->GetScalarTypeAsString() + " is not supported");
+
+  int dims[3];
+  image->GetDimensions(dims);
+  double spacing[3], origin[3];
+  image->GetSpacing(spacing);
+  // The first voxel's position: handles extents that do not start at 0.
+  const int* ext = image->GetExtent();
+  image->TransformIndexToPhysicalPoint(ext[0], ext[2], ext[4], origin);
+  vtkMatrix3x3* d = image->GetDirectionMatrix();
+  double cols[3][3];
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c) cols[a][c] = d->GetElement(c, a) * spacing[a];
+
+  std::string h = "NRRD0004\n# Complete NRRD file format specification at:\n# http://teem.sourceforge.net/nrrd/format.html\n";
+  h += std::string("type: ") + it->canonical + "\n";
+  h += "dimension: 3\n";
+  h += "space: left-posterior-superior\n";
+  h += "sizes: " + std::to_string(dims[0]) + " " + std::to_string(dims[1]) + " " + std::to_string(dims[2]) + "\n";
+  h += "space directions: " + vec3(cols[0]) + " " + vec3(cols[1]) + " " + vec3(cols[2]) + "\n";
+  h += "kinds: domain domain domain\n";
+  h += "endian: little\n";
+  h += std::string("encoding: ") + (encoding == Encoding::Gzip ? "gzip" : "raw") + "\n";
+  h += "space origin: " + vec3(origin) + "\n\n";
+  const std::size_t bytes = static_cast<std::size_t>(scalars->GetNumberOfTuples()) * static_cast<std::size_t>(scalars->GetDataTypeSize());
+  writeNrrd(file, h, scalars->GetVoidPointer(0), bytes, encoding);
+}
+
+vtkSmartPointer<vtkImageData> NrrdIO::readImage(const path& file) {
+  Nrrd n = readNrrd(file);
+  if (n.dimension != 2 && n.dimension != 3)
+    throw SceneError(file.string() + " holds a " + std::to_string(n.dimension) + "D NRRD; a 2D or 3D scalar image was expected");
+  auto image = vtkSmartPointer<vtkImageData>::New();
+  const int nz = n.dimension == 3 ? static_cast<int>(n.sizes[2]) : 1;
+  image->SetDimensions(static_cast<int>(n.sizes[0]), static_cast<int>(n.sizes[1]), nz);
+  double spacing[3] = {1, 1, 1};
+  double dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  if (n.hasSpace) {
+    const int axes = std::min(n.dimension, 3);
+    for (int a = 0; a < axes; ++a) {
+      const double len = std::sqrt(n.dirs[a][0] * n.dirs[a][0] + n.dirs[a][1] * n.dirs[a][1] + n.dirs[a][2] * n.dirs[a][2]);
+      if (!(len > 0)) throw SceneError(file.string() + ": 'space directions' has a zero or invalid vector");
+      spacing[a] = len;
+      for (int c = 0; c < 3; ++c) dir[c * 3 + a] = n.dirs[a][c] / len;  // row c, column a
+    }
+  } else {
+    for (std::size_t a = 0; a < n.spacings.size() && a < 3; ++a)
+      if (n.spacings[a] > 0) spacing[a] = n.spacings[a];
+  }
+  image->SetSpacing(spacing);
+  image->SetOrigin(n.origin.data());
+  image->SetDirectionMatrix(dir);
+  image->AllocateScalars(n.vtkType, 1);
+  std::memcpy(image->GetScalarPointer(), n.data.data(), n.data.size());
+  return image;
+}
+
+void NrrdIO::writeMatrix(const Eigen::MatrixXf& values, const path& file, Encoding encoding) {
+  std::string h = "NRRD0004\n";
+  h += "type: float\n";
+  h += "dimension: 2\n";
+  h += "sizes: " + std::to_string(values.rows()) + " " + std::to_string(values.cols()) + "\n";
+  h += "kinds: domain domain\n";
+  h += "endian: little\n";
+  h += std::string("encoding: ") + (encoding == Encoding::Gzip ? "gzip" : "raw") + "\n\n";
+  writeNrrd(file, h, values.data(), static_cast<std::size_t>(values.size()) * sizeof(float), encoding);
+}
+
+Eigen::MatrixXf NrrdIO::readMatrix(const path& file) {
+  Nrrd n = readNrrd(file);
+  if (n.dimension != 2 || n.vtkType != VTK_FLOAT)
+    throw SceneError(file.string() + " is not a 2D float NRRD as a range map must be: re-save the scene or restore a backup");
+  Eigen::MatrixXf m(static_cast<Eigen::Index>(n.sizes[0]), static_cast<Eigen::Index>(n.sizes[1]));
+  std::memcpy(m.data(), n.data.data(), n.data.size());
+  return m;
+}
+
+}  // namespace caps

@@ -1,0 +1,73 @@
+#include "scene/PlanNode.h"
+
+#include "scene/JsonFields.h"
+#include "scene/SceneError.h"
+
+namespace caps {
+
+void PlanNode::setProcedure(std::string procedure) {
+  procedure_ = std::move(procedure);
+  modified();
+}
+
+void PlanNode::setParameters(std::map<std::string, double> parameters) {
+  parameters_ = std::move(parameters);
+  modified();
+}
+
+void PlanNode::setParameter(const std::string& key, double value) {
+  parameters_[key] = value;
+  modified();
+}
+
+void PlanNode::setCutPath(std::vector<Eigen::Vector2d> path) {
+  cutPath_ = std::move(path);
+  modified();
+}
+
+void PlanNode::setCutPoint(std::size_t index, const Eigen::Vector2d& p) {
+  if (index >= cutPath_.size())
+    throw SceneError("plan '" + name() + "' has " + std::to_string(cutPath_.size()) + " cut points; point " +
+                     std::to_string(index) + " does not exist");
+  cutPath_[index] = p;
+  modified();
+}
+
+void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures) {
+  sutures_ = std::move(sutures);
+  modified();
+}
+
+void PlanNode::setNotes(std::string notes) {
+  notes_ = std::move(notes);
+  modified();
+}
+
+void PlanNode::setRangeMapId(NodeId id) {
+  rangeMapId_ = std::move(id);
+  modified();
+}
+
+void PlanNode::writeFields(nlohmann::json& j) const {
+  j["procedure"] = procedure_;
+  j["parameters"] = parameters_;
+  auto& path = j["cutPath"] = nlohmann::json::array();
+  for (const auto& p : cutPath_) path.push_back({p.x(), p.y()});
+  j["sutures"] = sutures_;
+  j["notes"] = notes_;
+  j["rangeMapId"] = rangeMapId_;
+}
+
+void PlanNode::readFields(const nlohmann::json& j) {
+  jsonfields::read(j, "procedure", procedure_);
+  jsonfields::read(j, "parameters", parameters_);
+  if (auto it = j.find("cutPath"); it != j.end()) {
+    cutPath_.clear();
+    for (const auto& p : *it) cutPath_.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
+  }
+  jsonfields::read(j, "sutures", sutures_);
+  jsonfields::read(j, "notes", notes_);
+  jsonfields::read(j, "rangeMapId", rangeMapId_);
+}
+
+}  // namespace caps

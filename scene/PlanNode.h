@@ -1,0 +1,58 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "scene/Node.h"
+
+namespace caps {
+
+/// @brief A surgical plan: procedure, its parameters and the cut drawn on the
+/// skin. JSON only (no bulk file); edits go through ScopedEdit for undo.
+class PlanNode : public Node {
+ public:
+  NodeType type() const override { return NodeType::Plan; }
+
+  /// "elliptical-excision", "z-plasty", "multiple-z-plasty", ...
+  const std::string& procedure() const { return procedure_; }
+  void setProcedure(std::string procedure);
+
+  /// Named numbers of the procedure (lengths in mm, angles in radians).
+  const std::map<std::string, double>& parameters() const { return parameters_; }
+  void setParameters(std::map<std::string, double> parameters);
+  void setParameter(const std::string& key, double value);
+
+  /// The incision as points in normalised cylindrical space (θ, z) in [-1, 1].
+  const std::vector<Eigen::Vector2d>& cutPath() const { return cutPath_; }
+  void setCutPath(std::vector<Eigen::Vector2d> path);
+  /// Moves one point; throws SceneError when @a index is out of range.
+  void setCutPoint(std::size_t index, const Eigen::Vector2d& p);
+
+  /// Each suture joins two hole-border edges {a0, a1, b0, b1} (cut path point indices).
+  const std::vector<std::array<int, 4>>& sutures() const { return sutures_; }
+  void setSutures(std::vector<std::array<int, 4>> sutures);
+
+  const std::string& notes() const { return notes_; }
+  void setNotes(std::string notes);
+
+  /// The skin range map the cut path is drawn on.
+  const NodeId& rangeMapId() const { return rangeMapId_; }
+  void setRangeMapId(NodeId id);
+
+ protected:
+  void writeFields(nlohmann::json& j) const override;
+  void readFields(const nlohmann::json& j) override;
+
+ private:
+  std::string procedure_;
+  std::map<std::string, double> parameters_;
+  std::vector<Eigen::Vector2d> cutPath_;
+  std::vector<std::array<int, 4>> sutures_;
+  std::string notes_;
+  NodeId rangeMapId_;
+};
+
+}  // namespace caps

@@ -1,0 +1,100 @@
+#include "scene/Scene.h"
+
+#include <algorithm>
+
+#include "scene/SceneError.h"
+
+namespace caps {
+
+Scene::Scene() = default;
+
+Scene::~Scene() {
+  for (auto& n : nodes_) n->scene_ = nullptr;
+}
+
+NodeId Scene::uniqueId(NodeType type) {
+  int& last = lastIndex_[static_cast<std::size_t>(type)];
+  const std::string prefix = nodeTypeToString(type);
+  NodeId id;
+  do {
+    id = prefix + std::to_string(++last);
+  } while (byId_.count(id));
+  return id;
+}
+
+Node* Scene::addNode(std::unique_ptr<Node> node) {
+  if (!node) throw SceneError("cannot add an empty node to the scene");
+  if (node->scene_) throw SceneError("node '" + node->id() + "' is already in a scene");
+  if (node->id_.empty()) node->id_ = uniqueId(node->type());
+  if (byId_.count(node->id_))
+    throw SceneError("the scene already has a node with id '" + node->id_ + "'; ids must be unique");
+  Node* raw = node.get();
+  raw->scene_ = this;
+  byId_[raw->id_] = raw;
+  nodes_.push_back(std::move(node));
+  const NodeId id = raw->id_;
+  notify(SceneEvent::NodeAdded, *raw);
+  return this->node(id);  // an observer may have removed it again
+}
+
+Node* Scene::node(const NodeId& id) const {
+  auto it = byId_.find(id);
+  return it == byId_.end() ? nullptr : it->second;
+}
+
+std::vector<Node*> Scene::nodes() const {
+  std::vector<Node*> out;
+  out.reserve(nodes_.size());
+  for (const auto& n : nodes_) out.push_back(n.get());
+  return out;
+}
+
+std::vector<Node*> Scene::nodesOfType(NodeType type) const {
+  std::vector<Node*> out;
+  for (const auto& n : nodes_)
+    if (n->type() == type) out.push_back(n.get());
+  return out;
+}
+
+bool Scene::removeNode(const NodeId& id) {
+  Node* raw = node(id);
+  if (!raw) return false;
+  notify(SceneEvent::NodeAboutToBeRemoved, *raw);
+  // Look it up again: an observer may have removed it already.
+  auto it = std::find_if(nodes_.begin(), nodes_.end(), [&](const auto& n) { return n->id() == id; });
+  if (it == nodes_.end()) return true;
+  undo_.removeEntriesFor(id);
+  byId_.erase(id);
+  std::unique_ptr<Node> dead = std::move(*it);
+  nodes_.erase(it);
+  dead->scene_ = nullptr;
+  return true;
+}
+
+void Scene::clear() {
+  while (!nodes_.empty()) removeNode(nodes_.back()->id());
+  undo_.clear();
+}
+
+int Scene::addObserver(Observer observer) {
+  const int tag = nextObserverTag_++;
+  observers_.emplace_back(tag, std::make_shared<Observer>(std::move(observer)));
+  return tag;
+}
+
+void Scene::removeObserver(int tag) {
+  std::erase_if(observers_, [tag](const auto& o) { return o.first == tag; });
+}
+
+void Scene::notify(SceneEvent event, const Node& node) {
+  // Iterate over a copy so callbacks may add or remove observers; an observer
+  // removed during this notification is not called afterwards.
+  const auto snapshot = observers_;
+  for (const auto& [tag, fn] : snapshot) {
+    const bool stillThere =
+        std::any_of(observers_.begin(), observers_.end(), [t = tag](const auto& o) { return o.first == t; });
+    if (stillThere) (*fn)(event, node);
+  }
+}
+
+}  // namespace caps

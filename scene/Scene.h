@@ -1,0 +1,77 @@
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "scene/Node.h"
+#include "scene/SceneEvent.h"
+#include "scene/UndoStack.h"
+
+namespace caps {
+
+/// @brief The one shared scene: owns every node, gives them stable ids and
+/// tells observers about additions, removals and modifications (the MRML
+/// scene of CAPS). Modules keep node ids, never pointers into each other.
+class Scene {
+ public:
+  using Observer = std::function<void(SceneEvent, const Node&)>;
+
+  Scene();
+  ~Scene();
+  Scene(const Scene&) = delete;
+  Scene& operator=(const Scene&) = delete;
+
+  /// Takes ownership. An empty id becomes TypeN ("Volume1", ...); a duplicate
+  /// id or a null node throws SceneError. Fires NodeAdded.
+  Node* addNode(std::unique_ptr<Node> node);
+
+  /// Creates a T, adds it and returns it: `auto* v = scene.add<VolumeNode>();`.
+  template <class T, class... Args>
+  T* add(Args&&... args) {
+    return static_cast<T*>(addNode(std::make_unique<T>(std::forward<Args>(args)...)));
+  }
+
+  /// nullptr when there is no such node.
+  Node* node(const NodeId& id) const;
+  /// nullptr when there is no such node or it is not a T.
+  template <class T>
+  T* nodeAs(const NodeId& id) const {
+    return dynamic_cast<T*>(node(id));
+  }
+
+  /// Nodes in insertion order.
+  std::vector<Node*> nodes() const;
+  std::vector<Node*> nodesOfType(NodeType type) const;
+  std::size_t size() const { return nodes_.size(); }
+
+  /// Fires NodeAboutToBeRemoved, drops the node's undo entries, destroys it.
+  /// False when there is no such node.
+  bool removeNode(const NodeId& id);
+  /// Removes every node (last added first) and clears the undo stack.
+  void clear();
+
+  /// Observers may add or remove observers (themselves included) while called.
+  int addObserver(Observer observer);
+  void removeObserver(int tag);
+
+  UndoStack& undoStack() { return undo_; }
+  const UndoStack& undoStack() const { return undo_; }
+
+ private:
+  friend class Node;
+  void notify(SceneEvent event, const Node& node);
+  NodeId uniqueId(NodeType type);
+
+  std::vector<std::unique_ptr<Node>> nodes_;
+  std::unordered_map<NodeId, Node*> byId_;
+  std::array<int, 8> lastIndex_{};  // per NodeType, so ids are not reused soon
+  std::vector<std::pair<int, std::shared_ptr<Observer>>> observers_;
+  int nextObserverTag_ = 1;
+  UndoStack undo_{*this};
+};
+
+}  // namespace caps
