@@ -458,6 +458,14 @@ void MainWindow::openScene(const fs::path& bundle)
 
 void MainWindow::saveScene(bool askForName)
 {
+  // The save reads the scene while it runs; work that would change it must
+  // finish first.
+  if (task_thread_)
+  {
+    showError("Not saved yet", "Wait for '" + progress_label_->text().toStdString() +
+                                 "' to finish, or cancel it, then save again.");
+    return;
+  }
   fs::path target = scene_path_;
   if (askForName || target.empty())
   {

@@ -49,10 +49,11 @@ int main(int argc, char** argv)
     caps::Session session(modules);
     caps::MainWindow window(session);
     window.show();
-    if (!path.empty())
-      window.openPath(path);
+    // Unattended mode first, so messages of the opening go to stderr.
     if (!screenshot.empty())
       window.screenshotWhenIdle(screenshot);
+    if (!path.empty())
+      window.openPath(path);
     code = QApplication::exec();
   }
   return code;

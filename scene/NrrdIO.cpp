@@ -64,7 +64,12 @@ std::string num(double v) {
   return s.str();
 }
 
-std::string vec3(const double v[3]) { return "(" + num(v[0]) + "," + num(v[1]) + "," + num(v[2]) + ")"; }
+std::string vec3(const double v[3]) {
+  // Built with append, not "(" + ...: GCC 12 warns falsely (-Wrestrict) on the latter.
+  std::string text(1, '(');
+  text.append(num(v[0])).append(1, ',').append(num(v[1])).append(1, ',').append(num(v[2]));
+  return text.append(1, ')');
+}
 
 // Writes header + data; gzip streams the data through zlib at the fast level
 // (CT volumes compress well enough, and saving must stay quick).

@@ -56,6 +56,20 @@ RegionStats stats(const QImage& image, double x0, double y0, double x1, double y
 
 } // namespace
 
+// The axial view sits top right, the sagittal view bottom right: both show
+// CT (many grey levels, air around the head, tissue in the soft-tissue window).
+static void expectCtInSliceViews(const QImage& image)
+{
+  EXPECT_GE(image.width(), 1000);
+  for (auto [name, y0, y1] : {std::tuple{"axial", 0.12, 0.5}, std::tuple{"sagittal", 0.55, 0.92}})
+  {
+    const RegionStats s = stats(image, 0.66, y0, 0.98, y1);
+    EXPECT_GT(s.greyLevels, 100) << name;
+    EXPECT_GT(s.darkFraction, 0.05) << name;
+    EXPECT_GT(s.brightFraction, 0.15) << name;
+  }
+}
+
 TEST(GuiSmoke, WorkstationShowsTheSampleInTheSliceViews)
 {
   const fs::path shot = caps::test::artifacts() / "workstation-sample.png";
@@ -66,17 +80,26 @@ TEST(GuiSmoke, WorkstationShowsTheSampleInTheSliceViews)
   ASSERT_FALSE(r.crashed);
   QImage image(QString::fromStdString(shot.string()));
   ASSERT_FALSE(image.isNull()) << "no screenshot at " << shot;
-  EXPECT_GE(image.width(), 1000);
-
-  // The axial view sits top right, the sagittal view bottom right.
-  for (auto [name, y0, y1] : {std::tuple{"axial", 0.12, 0.5}, std::tuple{"sagittal", 0.55, 0.92}})
-  {
-    const RegionStats s = stats(image, 0.66, y0, 0.98, y1);
-    EXPECT_GT(s.greyLevels, 100) << name;
-    EXPECT_GT(s.darkFraction, 0.05) << name;
-    EXPECT_GT(s.brightFraction, 0.15) << name;
-  }
+  expectCtInSliceViews(image);
   EXPECT_NE(r.output.find("Loaded 'Neck"), std::string::npos) << r.output;
+}
+
+// A scene saved by `caps demo` opens again in the workstation with its CT.
+TEST(GuiSmoke, SavedSceneReopens)
+{
+  const fs::path demo = caps::test::scratchFolder() / "demo";
+  const auto made = caps::test::runProcess(quoted(CAPS_EXECUTABLE) + " demo --out " +
+                                           quoted(demo.string()));
+  ASSERT_EQ(made.exitCode, 0) << made.output;
+  const fs::path shot = caps::test::artifacts() / "workstation-scene.png";
+  fs::remove(shot);
+  const auto r = runWorkstation(quoted((demo / "sample.caps").string()) + " --screenshot " +
+                                quoted(shot.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  QImage image(QString::fromStdString(shot.string()));
+  ASSERT_FALSE(image.isNull());
+  expectCtInSliceViews(image);
+  EXPECT_NE(r.output.find("Opened scene"), std::string::npos) << r.output;
 }
 
 TEST(GuiSmoke, EmptyWorkstationHasBlankSliceViews)
