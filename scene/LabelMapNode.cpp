@@ -57,9 +57,11 @@ void LabelMapNode::writeFields(nlohmann::json& j) const {
 
 void LabelMapNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "referenceVolumeId", referenceVolumeId_);
-  if (auto it = j.find("labels"); it != j.end()) {
-    labels_.clear();
-    for (const auto& e : *it) labels_[e.at("value").get<int>()] = Label{e.value("name", ""), e.at("color").get<std::array<double, 3>>()};
+  if (const auto* table = jsonfields::find(j, "labels")) {
+    std::map<int, Label> labels;
+    for (const auto& e : jsonfields::list(*table, "labels"))
+      labels[jsonfields::toInt(e.at("value"), "a label value")] = Label{e.value("name", ""), e.at("color").get<std::array<double, 3>>()};
+    labels_ = std::move(labels);
   }
 }
 

@@ -7,12 +7,11 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <climits>
 #include <cmath>
 #include <limits>
-#include <cstring>
 #include <fstream>
-#include <iterator>
 #include <locale>
 #include <sstream>
 #include <vector>
@@ -114,6 +113,7 @@ void writeNrrd(const path& file, const std::string& header, const void* data, st
   if (!out) throw SceneError("could not write " + file.string() + ": check free disk space and permissions");
 }
 
+// What the header says; the image data follow it in the file.
 struct Nrrd {
   int vtkType = 0;
   int dimension = 0;
@@ -122,7 +122,9 @@ struct Nrrd {
   std::array<double, 3> origin{0, 0, 0};
   std::array<std::array<double, 3>, 3> dirs{};  // dirs[axis] = direction * spacing
   std::vector<double> spacings;
-  std::vector<char> data;
+  bool gzip = false;
+  bool bigEndian = false;
+  std::size_t bytes = 0;  // of decoded image data: product of the sizes times the element size
 };
 
 std::string trim(std::string s) {
@@ -131,14 +133,19 @@ std::string trim(std::string s) {
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
 }
 
-std::vector<double> numbers(std::string text, const path& file, const char* field) {
+std::vector<std::string> tokens(std::string text) {
   for (char& c : text)
     if (c == '(' || c == ')' || c == ',') c = ' ';
   std::istringstream s(text);
-  s.imbue(std::locale::classic());
-  std::vector<double> v;
+  std::vector<std::string> out;
   std::string tok;
-  while (s >> tok) {
+  while (s >> tok) out.push_back(tok);
+  return out;
+}
+
+std::vector<double> numbers(const std::string& text, const path& file, const char* field) {
+  std::vector<double> v;
+  for (const std::string& tok : tokens(text)) {
     if (tok == "none" || tok == "nan" || tok == "NaN") {
       v.push_back(std::numeric_limits<double>::quiet_NaN());
       continue;
@@ -152,72 +159,62 @@ std::vector<double> numbers(std::string text, const path& file, const char* fiel
   return v;
 }
 
-void inflateInto(const char* src, std::size_t srcBytes, std::vector<char>& dst, const path& file) {
+// A whole non-negative decimal integer, or SceneError.
+std::size_t integer(const std::string& tok, const path& file, const char* field) {
+  std::size_t v = 0;
+  const char* end = tok.data() + tok.size();
+  const auto [p, ec] = std::from_chars(tok.data(), end, v);
+  if (ec != std::errc() || p != end || tok.empty())
+    throw SceneError(file.string() + ": the NRRD field '" + field + "' must be a whole number, got '" + tok + "'");
+  return v;
+}
+
+// Reads the gzip stream at the current position of @a in into dst[0, bytes).
+void inflateInto(std::istream& in, char* dst, std::size_t bytes, const path& file) {
   z_stream zs{};
   if (inflateInit2(&zs, 15 + 32) != Z_OK) throw SceneError("cannot start gzip decompression for " + file.string());
-  std::size_t inLeft = srcBytes, outDone = 0;
-  const auto* in = reinterpret_cast<const unsigned char*>(src);
+  std::vector<char> buf(1 << 18);
+  std::size_t done = 0;
   int rc = Z_OK;
-  while (rc != Z_STREAM_END) {
+  while (done < bytes && rc != Z_STREAM_END) {
     if (zs.avail_in == 0) {
-      if (inLeft == 0) break;
-      const std::size_t chunk = std::min<std::size_t>(inLeft, 1u << 30);
-      zs.next_in = const_cast<unsigned char*>(in);
-      zs.avail_in = static_cast<uInt>(chunk);
-      in += chunk;
-      inLeft -= chunk;
+      in.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+      if (in.gcount() <= 0) break;
+      zs.next_in = reinterpret_cast<unsigned char*>(buf.data());
+      zs.avail_in = static_cast<uInt>(in.gcount());
     }
-    if (outDone == dst.size()) break;  // got everything we need
-    const std::size_t outChunk = std::min<std::size_t>(dst.size() - outDone, 1u << 30);
-    zs.next_out = reinterpret_cast<unsigned char*>(dst.data() + outDone);
-    zs.avail_out = static_cast<uInt>(outChunk);
+    const std::size_t chunk = std::min<std::size_t>(bytes - done, 1u << 30);
+    zs.next_out = reinterpret_cast<unsigned char*>(dst + done);
+    zs.avail_out = static_cast<uInt>(chunk);
     rc = inflate(&zs, Z_NO_FLUSH);
-    outDone += outChunk - zs.avail_out;
+    done += chunk - zs.avail_out;
     if (rc != Z_OK && rc != Z_STREAM_END && rc != Z_BUF_ERROR) {
       inflateEnd(&zs);
       throw SceneError(file.string() + " is damaged (gzip data corrupt): restore it from a backup");
     }
-    if (rc == Z_BUF_ERROR && zs.avail_in == 0 && inLeft == 0) break;
   }
   inflateEnd(&zs);
-  if (outDone != dst.size())
-    throw SceneError(file.string() + " is truncated (" + std::to_string(outDone) + " of " +
-                     std::to_string(dst.size()) + " bytes of image data): restore it from a backup or re-save the scene");
+  if (done != bytes)
+    throw SceneError(file.string() + " is truncated (" + std::to_string(done) + " of " + std::to_string(bytes) +
+                     " bytes of image data): restore it from a backup or re-save the scene");
 }
 
-Nrrd parseNrrd(const path& file);
-
-// std::stoi and friends throw std::invalid_argument on a garbled header.
-Nrrd readNrrd(const path& file) {
-  try {
-    return parseNrrd(file);
-  } catch (const SceneError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw SceneError(file.string() + ": malformed NRRD header (" + e.what() + "); it is not a file CAPS can read");
-  }
-}
-
-Nrrd parseNrrd(const path& file) {
-  std::ifstream in(file, std::ios::binary);
+// Parses the header of @a in line by line and leaves @a in at the image data.
+// Checks that the file can hold what the sizes ask for before anyone allocates.
+Nrrd readHeader(std::ifstream& in, const path& file) {
   if (!in) throw SceneError("cannot open " + file.string() + ": the file is missing or unreadable");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.rfind("NRRD000", 0) != 0)
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("NRRD000", 0) != 0)
     throw SceneError(file.string() + " is not a NRRD file (no NRRD000x magic): choose a .nrrd file written by CAPS, 3D Slicer or teem");
 
   Nrrd n;
-  std::string encoding = "raw", endian = "little", space;
-  bool haveDirs = false;
-  std::size_t pos = bytes.find('\n');
-  std::size_t dataStart = std::string::npos;
-  while (pos != std::string::npos && pos + 1 <= bytes.size()) {
-    const std::size_t next = bytes.find('\n', pos + 1);
-    if (next == std::string::npos) break;
-    std::string line = bytes.substr(pos + 1, next - pos - 1);
+  std::string encoding = "raw", endian = "little", space, spaceField;
+  std::vector<double> dirs;
+  bool ended = false;
+  while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    pos = next;
     if (line.empty()) {
-      dataStart = next + 1;
+      ended = true;
       break;
     }
     if (line[0] == '#') continue;
@@ -231,9 +228,10 @@ Nrrd parseNrrd(const path& file) {
         if (std::find(t.aliases.begin(), t.aliases.end(), value) != t.aliases.end()) n.vtkType = t.vtkType;
       if (!n.vtkType) throw SceneError(file.string() + ": NRRD type '" + value + "' is not supported by CAPS");
     } else if (key == "dimension") {
-      n.dimension = std::stoi(value);
+      n.dimension = static_cast<int>(std::min<std::size_t>(integer(value, file, "dimension"), 16));
     } else if (key == "sizes") {
-      for (double d : numbers(value, file, "sizes")) n.sizes.push_back(static_cast<std::size_t>(d));
+      n.sizes.clear();
+      for (const std::string& tok : tokens(value)) n.sizes.push_back(integer(tok, file, "sizes"));
     } else if (key == "encoding") {
       encoding = value;
     } else if (key == "endian") {
@@ -241,30 +239,33 @@ Nrrd parseNrrd(const path& file) {
     } else if (key == "space") {
       space = value;
     } else if (key == "space dimension") {
-      // implied by "space"
+      spaceField = key;  // implied by "space"
     } else if (key == "space directions") {
-      const auto v = numbers(value, file, "space directions");
-      if (v.size() < 9) throw SceneError(file.string() + ": 'space directions' must give 3 vectors of 3 numbers");
-      for (int a = 0; a < 3; ++a)
-        for (int c = 0; c < 3; ++c) n.dirs[a][c] = v[static_cast<std::size_t>(a * 3 + c)];
-      haveDirs = true;
+      dirs = numbers(value, file, "space directions");
+      spaceField = key;
     } else if (key == "space origin") {
       const auto v = numbers(value, file, "space origin");
       if (v.size() != 3) throw SceneError(file.string() + ": 'space origin' must have 3 numbers");
       n.origin = {v[0], v[1], v[2]};
+      spaceField = key;
     } else if (key == "spacings") {
       n.spacings = numbers(value, file, "spacings");
     } else if (key == "data file" || key == "datafile") {
       throw SceneError(file.string() + " is a detached-header NRRD; CAPS reads attached data only: re-save it as a single .nrrd file");
     } else if (key == "line skip" || key == "lineskip" || key == "byte skip" || key == "byteskip") {
-      if (std::stol(value) != 0) throw SceneError(file.string() + ": NRRD '" + key + "' is not supported");
+      if (value != "0") throw SceneError(file.string() + ": NRRD '" + key + "' is not supported");
     }
   }
-  if (dataStart == std::string::npos) throw SceneError(file.string() + " is truncated (the NRRD header does not end)");
+  if (!ended) throw SceneError(file.string() + " is truncated (the NRRD header does not end)");
   if (!n.vtkType || n.dimension < 1 || n.sizes.size() != static_cast<std::size_t>(n.dimension))
     throw SceneError(file.string() + ": NRRD header lacks a valid type, dimension or sizes");
+  for (std::size_t s : n.sizes)
+    if (s < 1) throw SceneError(file.string() + ": NRRD sizes must be 1 or more");
 
   // Bring the geometry to LPS, the patient frame of CAPS.
+  if (space.empty() && !spaceField.empty())
+    throw SceneError(file.string() + " gives '" + spaceField + "' but no 'space', so its patient frame is unknown: "
+                     "re-save it with space LPS or RAS (3D Slicer does)");
   if (!space.empty()) {
     n.hasSpace = true;
     std::array<double, 3> flip{1, 1, 1};
@@ -272,33 +273,73 @@ Nrrd parseNrrd(const path& file) {
     else if (space == "left-anterior-superior" || space == "LAS") flip = {1, -1, 1};
     else if (space != "left-posterior-superior" && space != "LPS")
       throw SceneError(file.string() + ": NRRD space '" + space + "' is not supported; convert it to LPS or RAS");
-    for (int c = 0; c < 3; ++c) {
+    const std::size_t axes = static_cast<std::size_t>(std::min(n.dimension, 3));
+    if (dirs.empty() && n.dimension >= 2) throw SceneError(file.string() + ": NRRD has a space but no 'space directions'");
+    if (!dirs.empty() && dirs.size() != static_cast<std::size_t>(n.dimension) * 3)
+      throw SceneError(file.string() + ": 'space directions' must give " + std::to_string(n.dimension) +
+                       " vectors of 3 numbers");
+    for (std::size_t a = 0; a < axes && !dirs.empty(); ++a)
+      for (std::size_t c = 0; c < 3; ++c) n.dirs[a][c] = dirs[a * 3 + c];
+    for (std::size_t c = 0; c < 3; ++c) {
       n.origin[c] *= flip[c];
-      for (int a = 0; a < 3; ++a) n.dirs[a][c] *= flip[c];
+      for (std::size_t a = 0; a < 3; ++a) n.dirs[a][c] *= flip[c];
     }
-    if (!haveDirs && n.dimension == 3) throw SceneError(file.string() + ": NRRD has a space but no 'space directions'");
   }
 
-  std::size_t count = 1;
-  for (auto s : n.sizes) count *= s;
-  const int elem = sizeOfVtkType(n.vtkType);
-  n.data.resize(count * static_cast<std::size_t>(elem));
-  const char* payload = bytes.data() + dataStart;
-  const std::size_t payloadBytes = bytes.size() - dataStart;
-  if (encoding == "raw") {
-    if (payloadBytes < n.data.size())
-      throw SceneError(file.string() + " is truncated (" + std::to_string(payloadBytes) + " of " +
-                       std::to_string(n.data.size()) + " bytes of image data): restore it from a backup or re-save the scene");
-    std::memcpy(n.data.data(), payload, n.data.size());
-  } else if (encoding == "gzip" || encoding == "gz") {
-    inflateInto(payload, payloadBytes, n.data, file);
-  } else {
+  if (encoding == "gzip" || encoding == "gz") n.gzip = true;
+  else if (encoding != "raw")
     throw SceneError(file.string() + ": NRRD encoding '" + encoding + "' is not supported; use raw or gzip");
+  n.bigEndian = endian == "big";
+
+  // Sizes come from the file: check the product and that the data can be there.
+  const std::size_t maxBytes = std::numeric_limits<std::size_t>::max();
+  n.bytes = static_cast<std::size_t>(sizeOfVtkType(n.vtkType));
+  for (std::size_t s : n.sizes) {
+    if (s > maxBytes / n.bytes) throw SceneError(file.string() + ": NRRD sizes are too large (damaged header?)");
+    n.bytes *= s;
   }
-  if (endian == "big" && elem > 1) {
-    for (std::size_t i = 0; i < count; ++i) std::reverse(n.data.begin() + i * elem, n.data.begin() + (i + 1) * elem);
-  }
+  const std::streamoff start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff end = in.tellg();
+  in.seekg(start);
+  if (start < 0 || end < start) throw SceneError("cannot read " + file.string() + ": the file could not be measured");
+  const auto payload = static_cast<std::size_t>(end - start);
+  if (!n.gzip && n.bytes > payload)
+    throw SceneError(file.string() + " is truncated (" + std::to_string(payload) + " of " + std::to_string(n.bytes) +
+                     " bytes of image data): restore it from a backup or re-save the scene");
+  constexpr std::size_t kMaxGzipRatio = 1032;  // deflate never compresses better than this
+  if (n.gzip && payload <= maxBytes / kMaxGzipRatio && n.bytes > payload * kMaxGzipRatio)
+    throw SceneError(file.string() + " is truncated or damaged: its header asks for " + std::to_string(n.bytes) +
+                     " bytes of image data, more than its " + std::to_string(payload) +
+                     " bytes of gzip data can hold; restore it from a backup or re-save the scene");
   return n;
+}
+
+// Reads the image data at the current position of @a in into dst[0, n.bytes), little endian.
+void readData(std::ifstream& in, const Nrrd& n, char* dst, const path& file) {
+  if (n.gzip) {
+    inflateInto(in, dst, n.bytes, file);
+  } else {
+    in.read(dst, static_cast<std::streamsize>(n.bytes));
+    if (static_cast<std::size_t>(in.gcount()) != n.bytes)
+      throw SceneError(file.string() + " is truncated (" + std::to_string(in.gcount()) + " of " +
+                       std::to_string(n.bytes) + " bytes of image data): restore it from a backup or re-save the scene");
+  }
+  const auto elem = static_cast<std::size_t>(sizeOfVtkType(n.vtkType));
+  if (n.bigEndian && elem > 1)
+    for (std::size_t i = 0; i < n.bytes; i += elem) std::reverse(dst + i, dst + i + elem);
+}
+
+// Non-SceneError failures (out of memory, stream errors) still name the file.
+template <class F>
+auto withFileErrors(const path& file, F read) {
+  try {
+    return read();
+  } catch (const SceneError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw SceneError("cannot read " + file.string() + " (" + e.what() + "); it is not a file CAPS can read");
+  }
 }
 
 }  // namespace
@@ -341,32 +382,52 @@ void NrrdIO::writeImage(vtkImageData* image, const path& file, Encoding encoding
 }
 
 vtkSmartPointer<vtkImageData> NrrdIO::readImage(const path& file) {
-  Nrrd n = readNrrd(file);
-  if (n.dimension != 2 && n.dimension != 3)
-    throw SceneError(file.string() + " holds a " + std::to_string(n.dimension) + "D NRRD; a 2D or 3D scalar image was expected");
-  auto image = vtkSmartPointer<vtkImageData>::New();
-  const int nz = n.dimension == 3 ? static_cast<int>(n.sizes[2]) : 1;
-  image->SetDimensions(static_cast<int>(n.sizes[0]), static_cast<int>(n.sizes[1]), nz);
-  double spacing[3] = {1, 1, 1};
-  double dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  if (n.hasSpace) {
-    const int axes = std::min(n.dimension, 3);
-    for (int a = 0; a < axes; ++a) {
-      const double len = std::sqrt(n.dirs[a][0] * n.dirs[a][0] + n.dirs[a][1] * n.dirs[a][1] + n.dirs[a][2] * n.dirs[a][2]);
-      if (!(len > 0)) throw SceneError(file.string() + ": 'space directions' has a zero or invalid vector");
-      spacing[a] = len;
-      for (int c = 0; c < 3; ++c) dir[c * 3 + a] = n.dirs[a][c] / len;  // row c, column a
+  return withFileErrors(file, [&] {
+    std::ifstream in(file, std::ios::binary);
+    const Nrrd n = readHeader(in, file);
+    if (n.dimension != 2 && n.dimension != 3)
+      throw SceneError(file.string() + " holds a " + std::to_string(n.dimension) + "D NRRD; a 2D or 3D scalar image was expected");
+    for (std::size_t s : n.sizes)
+      if (s > static_cast<std::size_t>(INT_MAX))
+        throw SceneError(file.string() + ": image size " + std::to_string(s) + " is more than CAPS can hold on one axis");
+    auto image = vtkSmartPointer<vtkImageData>::New();
+    const int nz = n.dimension == 3 ? static_cast<int>(n.sizes[2]) : 1;
+    image->SetDimensions(static_cast<int>(n.sizes[0]), static_cast<int>(n.sizes[1]), nz);
+    double spacing[3] = {1, 1, 1};
+    double dir[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    if (n.hasSpace) {
+      for (int a = 0; a < n.dimension; ++a) {
+        const auto& d = n.dirs[static_cast<std::size_t>(a)];
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(len > 0) || !std::isfinite(len))
+          throw SceneError(file.string() + ": 'space directions' has a zero or invalid vector");
+        spacing[a] = len;
+        for (int c = 0; c < 3; ++c) dir[c * 3 + a] = d[static_cast<std::size_t>(c)] / len;  // row c, column a
+      }
+      if (n.dimension == 2) {  // the third column: normal to the plane of the first two
+        const double x = dir[3] * dir[7] - dir[6] * dir[4], y = dir[6] * dir[1] - dir[0] * dir[7],
+                     z = dir[0] * dir[4] - dir[3] * dir[1];
+        const double len = std::sqrt(x * x + y * y + z * z);
+        if (!(len > 0)) throw SceneError(file.string() + ": 'space directions' gives two parallel vectors");
+        dir[2] = x / len;
+        dir[5] = y / len;
+        dir[8] = z / len;
+      }
+    } else {
+      for (std::size_t a = 0; a < n.spacings.size() && a < 3; ++a)
+        if (n.spacings[a] > 0) spacing[a] = n.spacings[a];
     }
-  } else {
-    for (std::size_t a = 0; a < n.spacings.size() && a < 3; ++a)
-      if (n.spacings[a] > 0) spacing[a] = n.spacings[a];
-  }
-  image->SetSpacing(spacing);
-  image->SetOrigin(n.origin.data());
-  image->SetDirectionMatrix(dir);
-  image->AllocateScalars(n.vtkType, 1);
-  std::memcpy(image->GetScalarPointer(), n.data.data(), n.data.size());
-  return image;
+    image->SetSpacing(spacing);
+    image->SetOrigin(n.origin.data());
+    image->SetDirectionMatrix(dir);
+    image->AllocateScalars(n.vtkType, 1);
+    const auto elem = static_cast<std::size_t>(sizeOfVtkType(n.vtkType));
+    if (!image->GetScalarPointer() || static_cast<std::size_t>(image->GetNumberOfPoints()) * elem != n.bytes)
+      throw SceneError("cannot read " + file.string() + ": not enough memory for its " + std::to_string(n.bytes) +
+                       " bytes of image data");
+    readData(in, n, static_cast<char*>(image->GetScalarPointer()), file);
+    return image;
+  });
 }
 
 void NrrdIO::writeMatrix(const Eigen::MatrixXf& values, const path& file, Encoding encoding) {
@@ -381,12 +442,16 @@ void NrrdIO::writeMatrix(const Eigen::MatrixXf& values, const path& file, Encodi
 }
 
 Eigen::MatrixXf NrrdIO::readMatrix(const path& file) {
-  Nrrd n = readNrrd(file);
-  if (n.dimension != 2 || n.vtkType != VTK_FLOAT)
-    throw SceneError(file.string() + " is not a 2D float NRRD as a range map must be: re-save the scene or restore a backup");
-  Eigen::MatrixXf m(static_cast<Eigen::Index>(n.sizes[0]), static_cast<Eigen::Index>(n.sizes[1]));
-  std::memcpy(m.data(), n.data.data(), n.data.size());
-  return m;
+  return withFileErrors(file, [&] {
+    std::ifstream in(file, std::ios::binary);
+    const Nrrd n = readHeader(in, file);
+    if (n.dimension != 2 || n.vtkType != VTK_FLOAT)
+      throw SceneError(file.string() + " is not a 2D float NRRD as a range map must be: re-save the scene or restore a backup");
+    // The sizes are at most the file size (checked by readHeader), so they fit an Eigen::Index.
+    Eigen::MatrixXf m(static_cast<Eigen::Index>(n.sizes[0]), static_cast<Eigen::Index>(n.sizes[1]));
+    readData(in, n, reinterpret_cast<char*>(m.data()), file);
+    return m;
+  });
 }
 
 }  // namespace caps

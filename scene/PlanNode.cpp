@@ -61,11 +61,20 @@ void PlanNode::writeFields(nlohmann::json& j) const {
 void PlanNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "procedure", procedure_);
   jsonfields::read(j, "parameters", parameters_);
-  if (auto it = j.find("cutPath"); it != j.end()) {
-    cutPath_.clear();
-    for (const auto& p : *it) cutPath_.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
+  if (const auto* points = jsonfields::find(j, "cutPath")) {
+    std::vector<Eigen::Vector2d> path;
+    for (const auto& p : jsonfields::list(*points, "cutPath")) path.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
+    cutPath_ = std::move(path);
   }
-  jsonfields::read(j, "sutures", sutures_);
+  if (const auto* given = jsonfields::find(j, "sutures")) {
+    std::vector<std::array<int, 4>> sutures;
+    for (const auto& s : jsonfields::list(*given, "sutures")) {
+      if (jsonfields::list(s, "a suture").size() != 4) throw SceneError("a suture must have 4 numbers, not " + s.dump());
+      sutures.push_back({jsonfields::toInt(s[0], "a suture"), jsonfields::toInt(s[1], "a suture"),
+                         jsonfields::toInt(s[2], "a suture"), jsonfields::toInt(s[3], "a suture")});
+    }
+    sutures_ = std::move(sutures);
+  }
   jsonfields::read(j, "notes", notes_);
   jsonfields::read(j, "rangeMapId", rangeMapId_);
 }

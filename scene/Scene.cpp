@@ -1,6 +1,7 @@
 #include "scene/Scene.h"
 
 #include <algorithm>
+#include <set>
 
 #include "scene/SceneError.h"
 
@@ -56,13 +57,13 @@ std::vector<Node*> Scene::nodesOfType(NodeType type) const {
   return out;
 }
 
-bool Scene::removeNode(const NodeId& id) {
+bool Scene::removeNode(NodeId id) {
   Node* raw = node(id);
   if (!raw) return false;
   notify(SceneEvent::NodeAboutToBeRemoved, *raw);
-  // Look it up again: an observer may have removed it already.
-  auto it = std::find_if(nodes_.begin(), nodes_.end(), [&](const auto& n) { return n->id() == id; });
-  if (it == nodes_.end()) return true;
+  // An observer may have removed it already (raw then dangles: compare only).
+  if (!holds(id, raw)) return true;
+  auto it = std::find_if(nodes_.begin(), nodes_.end(), [&](const auto& n) { return n.get() == raw; });
   undo_.removeEntriesFor(id);
   byId_.erase(id);
   std::unique_ptr<Node> dead = std::move(*it);
@@ -76,6 +77,41 @@ void Scene::clear() {
   undo_.clear();
 }
 
+void Scene::replaceAll(std::vector<std::unique_ptr<Node>> nodes) {
+  std::set<NodeId> ids;
+  for (const auto& n : nodes) {
+    if (!n) throw SceneError("cannot add an empty node to the scene");
+    if (n->scene_) throw SceneError("node '" + n->id() + "' is already in a scene");
+    if (!n->id_.empty() && !ids.insert(n->id_).second)
+      throw SceneError("the new nodes have the id '" + n->id_ + "' twice; ids must be unique");
+  }
+
+  // Install everything first, then tell the observers.
+  std::vector<std::unique_ptr<Node>> old = std::move(nodes_);
+  nodes_.clear();
+  byId_.clear();
+  undo_.clear();
+  for (auto& n : old) n->scene_ = nullptr;
+  for (auto& n : nodes)
+    if (!n->id_.empty()) byId_[n->id_] = n.get();
+  std::vector<std::pair<NodeId, Node*>> added;
+  for (auto& n : nodes) {
+    if (n->id_.empty()) {
+      n->id_ = uniqueId(n->type());
+      byId_[n->id_] = n.get();
+    }
+    n->scene_ = this;
+    added.emplace_back(n->id_, n.get());
+    nodes_.push_back(std::move(n));
+  }
+
+  for (auto it = old.rbegin(); it != old.rend(); ++it) notify(SceneEvent::NodeAboutToBeRemoved, **it);
+  old.clear();
+  // An observer may remove a new node before it is announced: skip those.
+  for (const auto& [id, raw] : added)
+    if (holds(id, raw)) notify(SceneEvent::NodeAdded, *raw);
+}
+
 int Scene::addObserver(Observer observer) {
   const int tag = nextObserverTag_++;
   observers_.emplace_back(tag, std::make_shared<Observer>(std::move(observer)));
@@ -86,11 +122,22 @@ void Scene::removeObserver(int tag) {
   std::erase_if(observers_, [tag](const auto& o) { return o.first == tag; });
 }
 
+bool Scene::holds(const NodeId& id, const Node* node) const {
+  auto it = byId_.find(id);
+  return it != byId_.end() && it->second == node;
+}
+
 void Scene::notify(SceneEvent event, const Node& node) {
+  // An observer may remove (destroy) the node: the others are then not told.
+  // Nodes already out of the scene (replaceAll's old ones) are kept alive by
+  // the caller, so everybody is told about them.
+  const NodeId id = node.id();
+  const bool inScene = holds(id, &node);
   // Iterate over a copy so callbacks may add or remove observers; an observer
   // removed during this notification is not called afterwards.
   const auto snapshot = observers_;
   for (const auto& [tag, fn] : snapshot) {
+    if (inScene && !holds(id, &node)) return;
     const bool stillThere =
         std::any_of(observers_.begin(), observers_.end(), [t = tag](const auto& o) { return o.first == t; });
     if (stillThere) (*fn)(event, node);

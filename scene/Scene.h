@@ -49,10 +49,20 @@ class Scene {
   std::size_t size() const { return nodes_.size(); }
 
   /// Fires NodeAboutToBeRemoved, drops the node's undo entries, destroys it.
-  /// False when there is no such node.
-  bool removeNode(const NodeId& id);
+  /// False when there is no such node. The id is taken by value: callers
+  /// often pass node.id(), which dies with the node.
+  bool removeNode(NodeId id);
   /// Removes every node (last added first) and clears the undo stack.
   void clear();
+
+  /// Replaces every node by @a nodes at once (loading a scene), then clears
+  /// the undo stack. All nodes are installed before anyone is told, so an
+  /// observer adding nodes cannot make the replacement fail half-way; then
+  /// NodeAboutToBeRemoved fires for each old node (last added first; it is
+  /// already out of the scene but still alive) and NodeAdded for each new one.
+  /// Empty ids get TypeN ids. A null node, a node already in a scene or
+  /// duplicate ids throw SceneError and leave the scene unchanged.
+  void replaceAll(std::vector<std::unique_ptr<Node>> nodes);
 
   /// Observers may add or remove observers (themselves included) while called.
   int addObserver(Observer observer);
@@ -64,6 +74,8 @@ class Scene {
  private:
   friend class Node;
   void notify(SceneEvent event, const Node& node);
+  /// True while @a node is the scene's node of that id (not removed since).
+  bool holds(const NodeId& id, const Node* node) const;
   NodeId uniqueId(NodeType type);
 
   std::vector<std::unique_ptr<Node>> nodes_;

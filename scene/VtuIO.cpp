@@ -3,6 +3,7 @@
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
 #include <vtkCellType.h>
+#include <vtkDataArray.h>
 #include <vtkIdList.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -25,6 +26,35 @@ int surfaceCategory(int cellType) {
     case VTK_TRIANGLE_STRIP: return 3;
   }
   return -1;
+}
+
+// VTK reads a cell's point ids as they are: a damaged file can name points
+// that do not exist, which crashes whoever follows them later. Check them here.
+void checkCells(vtkUnstructuredGrid* grid, const std::filesystem::path& file) {
+  vtkCellArray* cells = grid->GetCells();
+  if (!cells) return;
+  auto damaged = [&](const std::string& what) {
+    return SceneError(file.string() + " is damaged (" + what + "): restore it from a backup");
+  };
+  vtkDataArray* offsets = cells->GetOffsetsArray();
+  vtkDataArray* connectivity = cells->GetConnectivityArray();
+  const auto ids = static_cast<double>(connectivity->GetNumberOfValues());
+  double previous = 0;
+  for (vtkIdType i = 0; i < offsets->GetNumberOfValues(); ++i) {
+    const double o = offsets->GetComponent(i, 0);
+    if ((i == 0 && o != 0) || o < previous || o > ids) throw damaged("invalid cell offsets");
+    previous = o;
+  }
+  if (previous != ids) throw damaged("invalid cell offsets");
+  if (grid->GetCellTypesArray() && grid->GetCellTypesArray()->GetNumberOfValues() != cells->GetNumberOfCells())
+    throw damaged("as many cell types as cells expected");
+  const vtkIdType points = grid->GetNumberOfPoints();
+  for (vtkIdType i = 0; i < connectivity->GetNumberOfValues(); ++i) {
+    const double id = connectivity->GetComponent(i, 0);
+    if (!(id >= 0 && id < static_cast<double>(points)))
+      throw damaged("a cell refers to point " + std::to_string(static_cast<long long>(id)) + " of " +
+                    std::to_string(points) + " points");
+  }
 }
 
 }  // namespace
@@ -56,6 +86,7 @@ vtkSmartPointer<vtkUnstructuredGrid> VtuIO::readGrid(const std::filesystem::path
                      errors.message() + ")");
   auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
   grid->ShallowCopy(reader->GetOutput());
+  checkCells(grid, file);
   return grid;
 }
 

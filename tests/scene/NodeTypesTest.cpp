@@ -189,6 +189,36 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
   EXPECT_EQ(q.toJson(), p.toJson());
 }
 
+// A missing or null key keeps the field (the JsonFields rule) for lists too,
+// and numbers that do not fit an int throw SceneError instead of being cast.
+TEST(NodeTypes, NullKeepsListsAndOutOfRangeNumbersThrow) {
+  LabelMapNode l;
+  l.setLabels({{1, {"skin", {1.0, 0.8, 0.7}}}});
+  l.fromJson({{"labels", nullptr}});
+  EXPECT_EQ(l.labels().size(), 1u);
+  for (const auto& value : {nlohmann::json(1e20), nlohmann::json(2.5), nlohmann::json(4294967296LL),
+                            nlohmann::json(18446744073709551615ULL), nlohmann::json("1")}) {
+    nlohmann::json j{{"labels", {{{"value", value}, {"name", "x"}, {"color", {0, 0, 0}}}}}};
+    EXPECT_THROW(l.fromJson(j), std::exception) << value;
+  }
+  EXPECT_THROW(l.fromJson({{"labels", {{"value", 1}}}}), std::exception);  // not a list of labels
+  EXPECT_EQ(l.labels().size(), 1u);
+  l.fromJson({{"labels", {{{"value", 7.0}, {"name", "x"}, {"color", {0, 0, 0}}}}}});
+  ASSERT_EQ(l.labels().count(7), 1u);
+
+  PlanNode p;
+  p.setCutPath({{0.0, 0.1}});
+  p.setSutures({{0, 1, 2, 3}});
+  p.fromJson({{"cutPath", nullptr}, {"sutures", nullptr}});
+  EXPECT_EQ(p.cutPath().size(), 1u);
+  EXPECT_EQ(p.sutures().size(), 1u);
+  EXPECT_THROW(p.fromJson({{"sutures", {{0, 1, 2, 1e20}}}}), SceneError);
+  EXPECT_THROW(p.fromJson({{"sutures", {{0, 1, 2}}}}), SceneError);
+  EXPECT_EQ(p.sutures(), (std::vector<std::array<int, 4>>{{0, 1, 2, 3}}));
+  p.fromJson({{"sutures", {{-4, 5, 6, 2147483647}}}});
+  EXPECT_EQ(p.sutures(), (std::vector<std::array<int, 4>>{{-4, 5, 6, 2147483647}}));
+}
+
 TEST(NodeTypes, FeMeshAndSolutionRoundTripKeepArrays) {
   TempDir tmp;
   FeMeshNode m;

@@ -159,5 +159,89 @@ TEST(NrrdIO, TruncatedOrForeignFilesThrowNamingTheFile) {
   expectError(raw, "truncated");
 }
 
+// Writes @a header followed by @a payloadBytes zero bytes (sparse on disk, so
+// a file of gigabytes costs nothing).
+void writeHeaderAndZeros(const std::filesystem::path& p, const std::string& header, std::uintmax_t payloadBytes) {
+  { std::ofstream(p, std::ios::binary) << header; }
+  std::filesystem::resize_file(p, header.size() + payloadBytes);
+}
+
+void expectReadError(const std::filesystem::path& p, const std::string& what) {
+  try {
+    NrrdIO::readImage(p);
+    ADD_FAILURE() << "no error for " << p;
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find(p.filename().string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+  }
+}
+
+// A size above INT_MAX used to be cast to int for vtkImageData and the whole
+// payload then copied into the smaller image: a heap overflow.
+TEST(NrrdIO, SizesAboveIntMaxAreRejected) {
+  TempDir tmp;
+  const auto p = tmp.path() / "wide.nrrd";
+  writeHeaderAndZeros(p, "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2147483648 1 1\nencoding: raw\n\n", 2147483648u);
+  expectReadError(p, "more than CAPS can hold");
+}
+
+// Sizes come from the file: they must be whole numbers >= 1 whose product
+// does not overflow, and the file must be able to hold that much data before
+// anything is allocated (a 200-byte header must not claim terabytes).
+TEST(NrrdIO, HeaderSizesAreCheckedBeforeAllocating) {
+  TempDir tmp;
+  const std::string head = "NRRD0004\ntype: float\ndimension: 3\nencoding: raw\n";
+  int i = 0;
+  for (const char* sizes : {"-1 2 2", "nan 2 2", "1e30 2 2", "2.5 2 2", "0 2 2", "2 2"}) {
+    const auto p = tmp.path() / ("bad" + std::to_string(i++) + ".nrrd");
+    writeHeaderAndZeros(p, head + "sizes: " + sizes + "\n\n", 64);
+    expectReadError(p, "NRRD");
+  }
+  // 2^32 * 2^32 * 4 bytes wraps to 0 in 64 bits.
+  writeHeaderAndZeros(tmp.path() / "wrap.nrrd", head + "sizes: 4294967296 4294967296 1\n\n", 64);
+  expectReadError(tmp.path() / "wrap.nrrd", "too large");
+  // 2^50 bytes asked, 100 given.
+  writeHeaderAndZeros(tmp.path() / "huge.nrrd", head + "sizes: 65536 65536 65536\n\n", 100);
+  expectReadError(tmp.path() / "huge.nrrd", "truncated");
+  const std::string gzHead = "NRRD0004\ntype: float\ndimension: 3\nencoding: gzip\nsizes: 65536 65536 65536\n\n";
+  writeHeaderAndZeros(tmp.path() / "huge-gz.nrrd", gzHead, 100);
+  expectReadError(tmp.path() / "huge-gz.nrrd", "truncated or damaged");
+  EXPECT_THROW(NrrdIO::readMatrix(tmp.path() / "huge-gz.nrrd"), SceneError);
+}
+
+// "space dimension" and "space directions" without "space": the frame is
+// unknown, so do not silently load at 1 mm identity.
+TEST(NrrdIO, SpaceDirectionsWithoutSpaceAreRejected) {
+  TempDir tmp;
+  const auto p = tmp.path() / "nospace.nrrd";
+  writeHeaderAndZeros(p, "NRRD0004\ntype: uchar\ndimension: 3\nspace dimension: 3\nsizes: 2 1 1\n"
+                         "space directions: (2,0,0) (0,2,0) (0,0,2)\nencoding: raw\n\n", 2);
+  expectReadError(p, "no 'space'");
+}
+
+TEST(NrrdIO, Reads2DImageWithSpaceAndTwoDirections) {
+  TempDir tmp;
+  const auto p = tmp.path() / "slice.nrrd";
+  {
+    std::ofstream f(p, std::ios::binary);
+    f << "NRRD0004\ntype: uchar\ndimension: 2\nspace: left-posterior-superior\nsizes: 3 2\n"
+         "space directions: (0,2,0) (-3,0,0)\nspace origin: (1,2,3)\nencoding: raw\n\n";
+    f << std::string("\x01\x02\x03\x04\x05\x06", 6);
+  }
+  auto image = NrrdIO::readImage(p);
+  int dims[3];
+  image->GetDimensions(dims);
+  EXPECT_EQ(dims[0], 3);
+  EXPECT_EQ(dims[1], 2);
+  EXPECT_EQ(dims[2], 1);
+  EXPECT_DOUBLE_EQ(image->GetSpacing()[0], 2);
+  EXPECT_DOUBLE_EQ(image->GetSpacing()[1], 3);
+  EXPECT_DOUBLE_EQ(image->GetOrigin()[2], 3);
+  const double expected[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};  // rows; the third column is the normal
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(r, c), expected[r][c]);
+  EXPECT_EQ(*static_cast<unsigned char*>(image->GetScalarPointer(2, 1, 0)), 6);
+}
+
 }  // namespace
 }  // namespace caps

@@ -2,8 +2,11 @@
 // saves killed with SIGKILL mid-way), recovery, and load errors that leave
 // the scene untouched.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <linux/fs.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -72,6 +75,14 @@ std::vector<fs::path> entriesStartingWith(const fs::path& dir, const std::string
   return out;
 }
 
+// What a save may leave beside bundle NAME: nothing but its lock file.
+std::vector<fs::path> leftovers(const fs::path& dir, const std::string& name) {
+  std::vector<fs::path> out;
+  for (const auto& p : entriesStartingWith(dir, "." + name))
+    if (p.filename() != "." + name + ".lock") out.push_back(p);
+  return out;
+}
+
 TEST(SceneBundle, RoundTripKeepsIdsAndReportsProgress) {
   TempDir tmp;
   Scene scene;
@@ -99,7 +110,7 @@ TEST(SceneBundle, RoundTripKeepsIdsAndReportsProgress) {
   expectSameScene(scene, loaded);
   EXPECT_TRUE(loaded.node("Plan2"));
   EXPECT_EQ(loaded.add<VolumeNode>()->id(), "Volume2");  // new ids never collide with loaded ones
-  EXPECT_TRUE(entriesStartingWith(tmp.path(), ".head.caps").empty());
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
 }
 
 TEST(SceneBundle, SaveOverwritesAndFallbackSwapWorks) {
@@ -120,7 +131,7 @@ TEST(SceneBundle, SaveOverwritesAndFallbackSwapWorks) {
   detail::setSceneBundleForceRenameFallback(false);
   loadSceneBundle(loaded, bundle);
   expectSameScene(a, loaded);
-  EXPECT_TRUE(entriesStartingWith(tmp.path(), ".head.caps").empty());
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
 }
 
 TEST(SceneBundle, LoadRecoversAsideCopyOfInterruptedFallbackSwap) {
@@ -145,7 +156,7 @@ TEST(SceneBundle, RefusesToReplaceAFolderThatIsNotABundle) {
   fillOldScene(a);
   EXPECT_THROW(saveSceneBundle(a, tmp.path() / "thesis.caps"), SceneError);
   EXPECT_TRUE(fs::exists(tmp.path() / "thesis.caps" / "chapter1.txt"));
-  EXPECT_TRUE(entriesStartingWith(tmp.path(), ".thesis.caps").empty());
+  EXPECT_TRUE(leftovers(tmp.path(), "thesis.caps").empty());
 }
 
 // (a) A save killed from outside as soon as its temp folder appears.
@@ -197,7 +208,7 @@ TEST(SceneBundle, SaveKilledMidwayLeavesOldBundleThenNextSaveCleansUp) {
   Scene next;
   next.add<PlanNode>()->setNotes("after the crash");
   saveSceneBundle(next, bundle);
-  EXPECT_TRUE(entriesStartingWith(tmp.path(), ".head.caps").empty());
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
   loadSceneBundle(loaded, bundle);
   expectSameScene(next, loaded);
 }
@@ -241,9 +252,155 @@ TEST(SceneBundle, SaveDyingAfterFirstNodeFileLeavesOldBundle) {
   EXPECT_EQ(loaded.node("Volume1")->name(), "old CT");
 
   saveSceneBundle(changed, bundle);  // (c) again
-  EXPECT_TRUE(entriesStartingWith(tmp.path(), ".head.caps").empty());
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
   loadSceneBundle(loaded, bundle);
   expectSameScene(changed, loaded);
+}
+
+// Files the user put into the bundle (a report, screenshots) survive saving,
+// with either swap; the old scene's node files do not.
+TEST(SceneBundle, UserFilesInTheBundleSurviveSaving) {
+  TempDir tmp;
+  const fs::path bundle = tmp.path() / "head.caps";
+  Scene a, b;
+  fillOldScene(a);
+  b.add<PlanNode>()->setNotes("second");
+  saveSceneBundle(a, bundle);
+  std::ofstream(bundle / "report.txt") << "my report";
+  fs::create_directories(bundle / "shots");
+  std::ofstream(bundle / "shots" / "front.png") << "png";
+  for (bool fallback : {false, true}) {
+    detail::setSceneBundleForceRenameFallback(fallback);
+    saveSceneBundle(b, bundle);
+    detail::setSceneBundleForceRenameFallback(false);
+    std::ifstream report(bundle / "report.txt");
+    std::string text;
+    std::getline(report, text);
+    EXPECT_EQ(text, "my report") << "fallback " << fallback;
+    EXPECT_TRUE(fs::exists(bundle / "shots" / "front.png")) << "fallback " << fallback;
+    EXPECT_FALSE(fs::exists(bundle / "Volume1.nrrd"));  // a node file of the old scene
+    EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
+  }
+  Scene loaded;
+  loadSceneBundle(loaded, bundle);
+  expectSameScene(b, loaded);
+}
+
+// Sets or clears the immutable flag (root only, on filesystems that have it).
+bool setImmutable(const fs::path& p, bool on) {
+  const int fd = ::open(p.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  int flags = 0;
+  bool ok = ::ioctl(fd, FS_IOC_GETFLAGS, &flags) == 0;
+  if (ok) {
+    flags = on ? (flags | FS_IMMUTABLE_FL) : (flags & ~FS_IMMUTABLE_FL);
+    ok = ::ioctl(fd, FS_IOC_SETFLAGS, &flags) == 0;
+  }
+  ::close(fd);
+  return ok;
+}
+
+// Makes the previous copy undeletable (its scene.json immutable as root, the
+// folder read-only otherwise); false where that cannot be done.
+bool pin(const fs::path& dir, bool on) {
+  if (::geteuid() != 0) {
+    fs::permissions(dir, on ? fs::perms::owner_read | fs::perms::owner_exec : fs::perms::owner_all);
+    return true;
+  }
+  return setImmutable(dir / "scene.json", on);
+}
+
+// Once the new bundle is in place the save has succeeded: failing to delete
+// the previous copy afterwards must not be reported as a failed save.
+TEST(SceneBundle, FailureToDeleteThePreviousCopyIsNoError) {
+  TempDir tmp;
+  const fs::path bundle = tmp.path() / "head.caps";
+  Scene a, b;
+  fillOldScene(a);
+  b.add<PlanNode>()->setNotes("second");
+  for (bool fallback : {false, true}) {
+    saveSceneBundle(a, bundle);
+    if (!pin(bundle, true)) GTEST_SKIP() << "cannot make a folder undeletable here";
+    detail::setSceneBundleForceRenameFallback(fallback);
+    EXPECT_NO_THROW(saveSceneBundle(b, bundle)) << "fallback " << fallback;
+    detail::setSceneBundleForceRenameFallback(false);
+    EXPECT_FALSE(leftovers(tmp.path(), "head.caps").empty());  // the previous copy could not go
+    for (const auto& p : leftovers(tmp.path(), "head.caps")) pin(p, false);
+    Scene loaded;
+    loadSceneBundle(loaded, bundle);
+    expectSameScene(b, loaded);
+  }
+  saveSceneBundle(a, bundle);  // removes what is left of the previous copies
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
+}
+
+// Two saves of one process to one bundle: the second waits for the first
+// instead of deleting its temporary folder.
+TEST(SceneBundle, TwoSavesInOneProcessDoNotClobberEachOther) {
+  TempDir tmp;
+  const fs::path bundle = tmp.path() / "head.caps";
+  Scene old, big, small;
+  fillOldScene(old);
+  saveSceneBundle(old, bundle);
+  big.add<VolumeNode>()->setImage(bigVolume());
+  small.add<PlanNode>()->setNotes("small");
+  std::string firstError = "not finished";
+  std::thread first([&] {
+    try {
+      saveSceneBundle(big, bundle);
+      firstError.clear();
+    } catch (const std::exception& e) {
+      firstError = e.what();
+    }
+  });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (entriesStartingWith(tmp.path(), ".head.caps.saving-").empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::microseconds(200));
+  EXPECT_NO_THROW(saveSceneBundle(small, bundle));
+  first.join();
+  EXPECT_EQ(firstError, "");
+  Scene loaded;
+  loadSceneBundle(loaded, bundle);
+  expectSameScene(small, loaded);  // the second save came last
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
+}
+
+// Leftovers with odd suffixes (a huge "pid", another host's save) must not
+// make saving fail; with the lock free they are stale and go.
+TEST(SceneBundle, OddTempFolderNamesDoNotBreakSaving) {
+  TempDir tmp;
+  const fs::path bundle = tmp.path() / "head.caps";
+  Scene a;
+  fillOldScene(a);
+  saveSceneBundle(a, bundle);
+  for (const char* n : {".head.caps.saving-99999999999999999999999", ".head.caps.old-99999999999999999999999",
+                        ".head.caps.saving-otherhost-4242-0123abcd", ".head.caps.saving-host-99999999999999999999-x"})
+    fs::create_directories(tmp.path() / n);
+  EXPECT_NO_THROW(saveSceneBundle(a, bundle));
+  EXPECT_TRUE(leftovers(tmp.path(), "head.caps").empty());
+}
+
+// An observer adding nodes while the loaded ones are announced must not make
+// the load fail half-way (it used to take an id the bundle still had to add).
+TEST(SceneBundle, LoadIsAllOrNothingWhenObserversAddNodes) {
+  TempDir tmp;
+  const fs::path bundle = tmp.path() / "head.caps";
+  Scene saved;
+  fillOldScene(saved);  // Volume1, Plan1, RangeMap1
+  saveSceneBundle(saved, bundle);
+  Scene target;
+  bool added = false;
+  target.addObserver([&](SceneEvent e, const Node& n) {
+    if (e == SceneEvent::NodeAdded && n.type() == NodeType::Volume && !added) {
+      added = true;
+      target.add<PlanNode>()->setNotes("made by an observer");
+    }
+  });
+  ASSERT_NO_THROW(loadSceneBundle(target, bundle));
+  ASSERT_EQ(target.size(), 4u);
+  EXPECT_EQ(target.nodeAs<PlanNode>("Plan1")->procedure(), "elliptical-excision");
+  EXPECT_TRUE(target.node("RangeMap1"));
+  EXPECT_EQ(target.nodes().back()->id(), "Plan2");
 }
 
 // Load errors: a clear SceneError naming the file, and the scene untouched.
@@ -325,6 +482,34 @@ TEST_F(BundleLoadErrors, TruncatedVtu) {
 TEST_F(BundleLoadErrors, UnknownNodeType) {
   editSceneJson([](nlohmann::json& d) { d["nodes"][1]["type"] = "Hologram"; });
   expectLoadError({"scene.json", "Hologram", "update CAPS"});
+}
+
+TEST_F(BundleLoadErrors, FormatOfTheWrongKind) {
+  editSceneJson([](nlohmann::json& d) { d["format"] = 5; });
+  expectLoadError({"scene.json"});
+}
+
+TEST_F(BundleLoadErrors, NodeFileOfTheWrongKind) {
+  editSceneJson([](nlohmann::json& d) { d["nodes"][0]["file"] = nullptr; });
+  expectLoadError({"scene.json", "damaged", "Volume1"});
+  editSceneJson([](nlohmann::json& d) { d["nodes"][0]["file"] = 5; });
+  expectLoadError({"scene.json", "damaged", "Volume1"});
+}
+
+TEST_F(BundleLoadErrors, NodeFileOutsideTheBundle) {
+  const std::string absolute = (bundle / "Volume1.nrrd").string();
+  editSceneJson([](nlohmann::json& d) { d["nodes"][0]["file"] = "../head.caps/Volume1.nrrd"; });
+  expectLoadError({"scene.json", "not a file of the bundle"});
+  editSceneJson([&](nlohmann::json& d) { d["nodes"][0]["file"] = absolute; });
+  expectLoadError({"scene.json", "not a file of the bundle"});
+  editSceneJson([&](nlohmann::json& d) { d["nodes"][0]["file"] = ".."; });
+  expectLoadError({"scene.json", "not a file of the bundle"});
+}
+
+// Ids name the node files of the next save: "../x" would write outside it.
+TEST_F(BundleLoadErrors, NodeIdThatIsNotAFileName) {
+  editSceneJson([](nlohmann::json& d) { d["nodes"][1]["id"] = "../x"; });
+  expectLoadError({"scene.json", "../x"});
 }
 
 TEST_F(BundleLoadErrors, MissingBundle) {

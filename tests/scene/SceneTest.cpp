@@ -120,6 +120,103 @@ TEST(Scene, ObserverRemovingTheNodeBeingAdded) {
   EXPECT_EQ(scene.size(), 0u);
 }
 
+// The first observer removes (destroys) the node it is told about: the next
+// observers must not be called with the dead node, and removeNode must not
+// read the id of the dead node it was given by reference.
+TEST(Scene, ObserverRemovingTheNodeItIsToldAboutStopsTheNotification) {
+  Scene scene;
+  bool removing = false;
+  scene.addObserver([&](SceneEvent e, const Node& n) {
+    if (e != SceneEvent::NodeAdded && !removing) {
+      removing = true;
+      scene.removeNode(n.id());
+    }
+  });
+  std::vector<std::pair<SceneEvent, std::string>> seen;
+  scene.addObserver([&](SceneEvent e, const Node& n) { seen.emplace_back(e, n.id() + "/" + n.name()); });
+
+  auto* p = scene.add<PlanNode>();
+  p->setName("a");  // NodeModified: the first observer removes Plan1
+  EXPECT_EQ(scene.size(), 0u);
+  // Not NodeModified: the node was gone by the time the second observer's turn came.
+  const std::vector<std::pair<SceneEvent, std::string>> expected{{SceneEvent::NodeAdded, "Plan1/"},
+                                                                 {SceneEvent::NodeAboutToBeRemoved, "Plan1/a"}};
+  EXPECT_EQ(seen, expected);
+}
+
+TEST(Scene, ObserverRemovingTheNodeFromItsOwnRemoval) {
+  Scene scene;
+  scene.add<PlanNode>()->setName("a");
+  bool removing = false;
+  scene.addObserver([&](SceneEvent e, const Node& n) {
+    if (e == SceneEvent::NodeAboutToBeRemoved && !removing) {
+      removing = true;
+      scene.removeNode(n.id());  // nested: the inner call tells everybody and destroys it
+    }
+  });
+  int told = 0;
+  scene.addObserver([&](SceneEvent e, const Node& n) {
+    if (e == SceneEvent::NodeAboutToBeRemoved && n.name() == "a") ++told;
+  });
+  const Node* p = scene.node("Plan1");
+  EXPECT_TRUE(scene.removeNode(p->id()));  // a reference into the node that dies mid-call
+  EXPECT_EQ(told, 1);
+  EXPECT_EQ(scene.size(), 0u);
+  EXPECT_EQ(scene.node("Plan1"), nullptr);
+}
+
+TEST(Scene, ReplaceAllInstallsEverythingThenNotifies) {
+  Scene scene;
+  scene.add<VolumeNode>()->setName("old CT");
+  scene.add<PlanNode>();
+  std::vector<std::pair<SceneEvent, std::string>> seen;
+  std::size_t sizeWhenFirstTold = 0;
+  scene.addObserver([&](SceneEvent e, const Node& n) {
+    if (seen.empty()) sizeWhenFirstTold = scene.size();
+    seen.emplace_back(e, n.id() + "/" + n.name());
+    // An observer adding a node while the new ones are announced.
+    if (e == SceneEvent::NodeAdded && n.id() == "Volume1") scene.add<PlanNode>()->setName("from observer");
+  });
+  std::vector<std::unique_ptr<Node>> fresh;
+  fresh.push_back(std::make_unique<VolumeNode>());
+  fresh.back()->setId("Volume1");  // the same id as an old node
+  fresh.back()->setName("new CT");
+  fresh.push_back(std::make_unique<PlanNode>());
+  fresh.back()->setId("Plan1");
+  fresh.push_back(std::make_unique<SurfaceNode>());  // no id: gets one
+  scene.replaceAll(std::move(fresh));
+
+  EXPECT_EQ(sizeWhenFirstTold, 3u);
+  ASSERT_EQ(scene.size(), 4u);
+  EXPECT_EQ(scene.node("Volume1")->name(), "new CT");
+  EXPECT_EQ(scene.node("Plan1")->scene(), &scene);
+  EXPECT_EQ(scene.nodes()[2]->id(), "Surface1");
+  EXPECT_EQ(scene.nodes()[3]->name(), "from observer");
+  EXPECT_EQ(scene.nodes()[3]->id(), "Plan2");
+  const std::vector<std::pair<SceneEvent, std::string>> expected{
+      {SceneEvent::NodeAboutToBeRemoved, "Plan1/"},       {SceneEvent::NodeAboutToBeRemoved, "Volume1/old CT"},
+      {SceneEvent::NodeAdded, "Volume1/new CT"},          {SceneEvent::NodeAdded, "Plan2/"},
+      {SceneEvent::NodeModified, "Plan2/from observer"},  {SceneEvent::NodeAdded, "Plan1/"},
+      {SceneEvent::NodeAdded, "Surface1/"}};
+  EXPECT_EQ(seen, expected);
+}
+
+TEST(Scene, ReplaceAllRejectsBadNodesAndLeavesTheSceneUnchanged) {
+  Scene scene;
+  auto* v = scene.add<VolumeNode>();
+  std::vector<std::unique_ptr<Node>> dup;
+  dup.push_back(std::make_unique<PlanNode>());
+  dup.back()->setId("P");
+  dup.push_back(std::make_unique<SurfaceNode>());
+  dup.back()->setId("P");
+  EXPECT_THROW(scene.replaceAll(std::move(dup)), SceneError);
+  std::vector<std::unique_ptr<Node>> withNull(1);
+  EXPECT_THROW(scene.replaceAll(std::move(withNull)), SceneError);
+  EXPECT_EQ(scene.nodes(), std::vector<Node*>{v});
+  scene.replaceAll({});
+  EXPECT_EQ(scene.size(), 0u);
+}
+
 TEST(Scene, NodeOutsideASceneNotifiesNobody) {
   PlanNode p;
   p.setNotes("free");  // must not crash
