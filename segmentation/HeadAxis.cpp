@@ -1,0 +1,236 @@
+#include "segmentation/HeadAxis.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <vtkImageData.h>
+#include <vtkType.h>
+
+#include "segmentation/RangeMapImageGeometry.h"
+
+namespace caps::seg {
+
+namespace {
+
+struct SliceSums
+{
+  long long count = 0;
+  Eigen::Vector3d indexSum = Eigen::Vector3d::Zero();
+  Eigen::Vector3i lo = Eigen::Vector3i::Constant(std::numeric_limits<int>::max());
+  Eigen::Vector3i hi = Eigen::Vector3i::Constant(std::numeric_limits<int>::min());
+};
+
+struct Line
+{
+  Eigen::Vector3d p = Eigen::Vector3d::Zero(); ///< point at s = 0
+  Eigen::Vector3d b = Eigen::Vector3d::Zero(); ///< change per unit s
+  double meanS = 0.0;
+};
+
+/// Weighted least squares of c(s) = p + s b; false if fewer than two distinct positions carry weight.
+bool fitLine(const std::vector<Eigen::Vector3d>& c, const std::vector<double>& s,
+             const std::vector<double>& w, Line& line)
+{
+  double sw = 0.0, ss = 0.0;
+  Eigen::Vector3d sc = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < c.size(); ++k)
+  {
+    sw += w[k];
+    ss += w[k] * s[k];
+    sc += w[k] * c[k];
+  }
+  if (!(sw > 0.0))
+    return false;
+  const double meanS = ss / sw;
+  const Eigen::Vector3d meanC = sc / sw;
+  double sxx = 0.0;
+  Eigen::Vector3d sxc = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < c.size(); ++k)
+  {
+    sxx += w[k] * (s[k] - meanS) * (s[k] - meanS);
+    sxc += w[k] * (s[k] - meanS) * (c[k] - meanC);
+  }
+  if (!(sxx > 1e-9 * sw))
+    return false;
+  line.b = sxc / sxx;
+  line.p = meanC - meanS * line.b;
+  line.meanS = meanS;
+  return true;
+}
+
+double median(std::vector<double> v)
+{
+  if (v.empty())
+    return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+} // namespace
+
+HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
+{
+  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
+      bodyMask->GetNumberOfScalarComponents() != 1)
+    throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
+  const ImageGeometry g = ImageGeometry::of(bodyMask);
+  const auto dims = g.dimensions();
+  const auto* mask = static_cast<const unsigned char*>(bodyMask->GetScalarPointer());
+  if (!mask)
+    throw std::invalid_argument("The body mask has no voxels.");
+
+  // Slices across the index axis that points most nearly superior.
+  int sliceAxis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(g.direction(2, a)) > std::abs(g.direction(2, sliceAxis)))
+      sliceAxis = a;
+  const Eigen::Vector3d sliceNormal =
+    g.direction.col(sliceAxis).normalized() * (g.direction(2, sliceAxis) < 0 ? -1.0 : 1.0);
+  const int inPlane[2] = {(sliceAxis + 1) % 3, (sliceAxis + 2) % 3};
+  const double voxelArea = g.spacing[inPlane[0]] * g.spacing[inPlane[1]];
+
+  std::vector<SliceSums> sums(static_cast<std::size_t>(dims[sliceAxis]));
+  std::size_t offset = 0;
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i, ++offset)
+      {
+        if (!mask[offset])
+          continue;
+        const Eigen::Vector3i idx(i, j, k);
+        SliceSums& s = sums[static_cast<std::size_t>(idx[sliceAxis])];
+        ++s.count;
+        s.indexSum += idx.cast<double>();
+        s.lo = s.lo.cwiseMin(idx);
+        s.hi = s.hi.cwiseMax(idx);
+      }
+
+  const Eigen::Vector3d extentStart(g.extent[0], g.extent[2], g.extent[4]);
+  struct Slice
+  {
+    Eigen::Vector3d centroid;
+    double area;
+    double s;
+    std::size_t index;
+  };
+  std::vector<Slice> slices;
+  for (std::size_t k = 0; k < sums.size(); ++k)
+    if (sums[k].count > 0)
+    {
+      const Eigen::Vector3d c = g.indexToWorld(extentStart + sums[k].indexSum / sums[k].count);
+      slices.push_back({c, sums[k].count * voxelArea, c.dot(sliceNormal), k});
+    }
+  std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.s < b.s; });
+  if (slices.size() < 2)
+    throw std::invalid_argument("The body mask covers fewer than two slices: no head axis can be fitted.");
+
+  // Reference (head) area: median over the upper half of the body's extent.
+  const double sMid = 0.5 * (slices.front().s + slices.back().s);
+  std::vector<double> upper;
+  for (const Slice& s : slices)
+    if (s.s >= sMid)
+      upper.push_back(s.area);
+  const double referenceArea = median(upper);
+
+  const std::size_t n = slices.size();
+  std::vector<Eigen::Vector3d> c(n);
+  std::vector<double> s(n), area(n), use(n, 0.0);
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    c[k] = slices[k].centroid;
+    s[k] = slices[k].s;
+    area[k] = slices[k].area;
+  }
+  double widest = 0.0;
+  double narrowest = std::numeric_limits<double>::max(); // since the widest
+  for (std::size_t k = n; k-- > 0;)
+  {
+    if (area[k] > widest)
+      narrowest = widest = area[k];
+    else
+      narrowest = std::min(narrowest, area[k]);
+    const bool pastNeck = area[k] > options.shoulderGrowth * narrowest && narrowest < options.neckRatio * widest;
+    if (area[k] > options.shoulderAreaRatio * referenceArea || pastNeck)
+      break; // the shoulders: this slice and all below are out
+    if (area[k] >= options.minimumAreaRatio * referenceArea)
+      use[k] = 1.0;
+  }
+
+  std::vector<double> w(n);
+  for (std::size_t k = 0; k < n; ++k)
+    w[k] = use[k] * area[k];
+  Line line;
+  if (!fitLine(c, s, w, line))
+    throw std::invalid_argument(
+      "The body mask has fewer than two head slices (below the shoulders' area) to fit the head axis.");
+
+  // Tukey biweight reweighting on the distance from the line.
+  for (int iteration = 0; iteration < options.reweightIterations; ++iteration)
+  {
+    std::vector<double> d(n), used;
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      d[k] = (c[k] - (line.p + s[k] * line.b)).norm();
+      if (use[k] > 0.0)
+        used.push_back(d[k]);
+    }
+    const double scale = std::max(1.4826 * median(used), options.minimumResidualScale);
+    const double cutoff = 4.685 * scale;
+    std::vector<double> trial(n);
+    for (std::size_t k = 0; k < n; ++k)
+    {
+      const double u = d[k] / cutoff;
+      trial[k] = use[k] * area[k] * (u < 1.0 ? (1 - u * u) * (1 - u * u) : 0.0);
+    }
+    Line next;
+    if (!fitLine(c, s, trial, next))
+      break;
+    line = next;
+    w = trial;
+  }
+
+  Eigen::Vector3d direction = line.b.normalized();
+  if (direction.z() < 0.0)
+    direction = -direction;
+  const Eigen::Vector3d origin = line.p + line.meanS * line.b;
+
+  // z range: every mask slice's bounding rectangle projected on the axis.
+  double zMin = std::numeric_limits<double>::max();
+  double zMax = std::numeric_limits<double>::lowest();
+  for (const Slice& sl : slices)
+  {
+    const SliceSums& sum = sums[sl.index];
+    for (int corner = 0; corner < 4; ++corner)
+    {
+      Eigen::Vector3i idx = sum.lo;
+      idx[inPlane[0]] = corner & 1 ? sum.hi[inPlane[0]] : sum.lo[inPlane[0]];
+      idx[inPlane[1]] = corner & 2 ? sum.hi[inPlane[1]] : sum.lo[inPlane[1]];
+      const double z = (g.indexToWorld(extentStart + idx.cast<double>()) - origin).dot(direction);
+      zMin = std::min(zMin, z);
+      zMax = std::max(zMax, z);
+    }
+  }
+
+  HeadAxisFit fit;
+  fit.frame = CylindricalFrame(origin, direction, zMin, zMax, options.nTheta, options.nZ);
+  double sw = 0.0, sd = 0.0;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    fit.centroids.push_back(c[k]);
+    fit.areas.push_back(area[k]);
+    fit.weights.push_back(w[k]);
+    if (w[k] > 0.0)
+    {
+      ++fit.slicesUsed;
+      sw += w[k];
+      sd += w[k] * (c[k] - (line.p + s[k] * line.b)).squaredNorm();
+    }
+  }
+  fit.rmsResidual = sw > 0.0 ? std::sqrt(sd / sw) : 0.0;
+  return fit;
+}
+
+} // namespace caps::seg
