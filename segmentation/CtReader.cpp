@@ -9,13 +9,13 @@
 #include <sstream>
 
 #include <gdcmScanner.h>
+#include <gdcmTrace.h>
 #include <itkCommand.h>
 #include <itkGDCMImageIO.h>
 #include <itkImage.h>
 #include <itkImageFileReader.h>
 #include <itkImageIOFactory.h>
 #include <itkImageSeriesReader.h>
-#include <itkMetaDataObject.h>
 #include <vtkMatrix3x3.h>
 
 namespace fs = std::filesystem;
@@ -118,7 +118,6 @@ CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
   auto reader = itk::ImageSeriesReader<Image>::New();
   reader->SetImageIO(io);
   reader->SetFileNames(series.files);
-  reader->MetaDataDictionaryArrayUpdateOn();
   watchProgress(reader, options.progress, "Reading " + std::to_string(series.sliceCount) + " slices");
   try
   {
@@ -143,15 +142,34 @@ CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
     if (!value.empty())
       volume.metadata[field.keyword] = value;
   }
-  // ITK notes when the slice positions are not evenly spaced (missing slices).
-  const auto& dict = reader->GetOutput()->GetMetaDataDictionary();
-  double deviation = 0.0;
-  if (itk::ExposeMetaData<double>(dict, "ITK_non_uniform_sampling_deviation", deviation))
+  // ITK stacks the slices with one spacing; check every position and make
+  // the grid regular when the stack is not (SliceStack.h).
+  if (series.geometry.positions.size() == series.files.size() && series.files.size() > 1)
   {
-    std::ostringstream w;
-    w << "The slices are not evenly spaced (largest deviation " << deviation
-      << " mm): slices may be missing; distances along the slice axis may be wrong.";
-    volume.warnings.push_back(w.str());
+    const SliceStackReport report = analyseSliceStack(series.geometry);
+    if (!report.refusal.empty())
+      throw CtReadError("The DICOM series '" + series.seriesDescription + "' in " +
+                        folder.string() + " cannot be used: " + report.refusal +
+                        ". Export the complete series again from the scanner or PACS.");
+    if (report.needsResampling)
+    {
+      double range[2];
+      volume.image->GetScalarRange(range);
+      volume.image = resampleSliceStack(volume.image, series.geometry, report,
+                                        std::min(range[0], -1024.0));
+      std::string text = "The slices were resampled to a regular grid of " +
+                         std::to_string(volume.image->GetDimensions()[2]) + " slices because ";
+      for (size_t i = 0; i < report.problems.size(); ++i)
+        text += (i ? "; " : "") + report.problems[i];
+      text += ". Values there are interpolated; check the slices concerned.";
+      volume.warnings.push_back(text);
+    }
+    else
+    {
+      // Regular: keep ITK's voxels, with the spacing of the positions.
+      const double* spacing = volume.image->GetSpacing();
+      volume.image->SetSpacing(spacing[0], spacing[1], report.spacing);
+    }
   }
   return volume;
 }
@@ -244,6 +262,16 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   {
     chosen = &series.front();
   }
+  else if (!options.requireSingleSeries)
+  {
+    // As a PACS viewer would: the CT series with the most slices (the list
+    // is sorted largest first), else the largest series.
+    for (const auto& s : series)
+      if (!chosen && s.modality == "CT")
+        chosen = &s;
+    if (!chosen)
+      chosen = &series.front();
+  }
   else
   {
     std::ostringstream m;
@@ -278,9 +306,21 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
     volume.warnings.push_back(describeDamage(scan.damaged) +
                               " and were skipped. If they are slices of this series, the volume "
                               "has gaps: export the series again.");
-  if (series.size() > 1)
+  if (series.size() > 1 && options.seriesUid.empty() && options.seriesIndex < 0)
+  {
+    std::string others;
+    for (size_t i = 0; i < series.size(); ++i)
+      if (&series[i] != chosen)
+        others += "\n  " + describeSeries(series[i], static_cast<int>(i) + 1);
     volume.warnings.push_back("The folder holds " + std::to_string(series.size()) +
-                              " series; loaded '" + chosen->seriesDescription + "'.");
+                              " series; loaded '" + chosen->seriesDescription + "' (" +
+                              std::to_string(chosen->sliceCount) +
+                              " slices). The others:" + others);
+  }
+  if (!chosen->modality.empty() && chosen->modality != "CT")
+    volume.warnings.push_back("This is a " + chosen->modality +
+                              " series, not CT: its values are not Hounsfield units, so the skin "
+                              "and bone thresholds will not find skin and bone.");
   return volume;
 }
 
@@ -288,6 +328,9 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
 
 DicomFolderScan scanDicomFolder(const fs::path& folder)
 {
+  // GDCM's console warnings (odd VRs in private tags) mean nothing to a user;
+  // what matters is reported through our own messages.
+  gdcm::Trace::WarningOff();
   DicomFolderScan scan;
   std::vector<fs::path> files;
   std::error_code ec;
@@ -391,6 +434,29 @@ DicomFolderScan scanDicomFolder(const fs::path& folder)
       info.pixelSpacing[1] = pixel[1];
     }
     info.sliceThickness = std::atof(value(first, thickness).c_str());
+    // DICOM Pixel Spacing is (between rows, between columns).
+    if (pixel.size() == 2)
+    {
+      info.geometry.pixelSpacing[0] = pixel[1];
+      info.geometry.pixelSpacing[1] = pixel[0];
+    }
+    if (iop.size() == 6)
+    {
+      info.geometry.row = {iop[0], iop[1], iop[2]};
+      info.geometry.column = {iop[3], iop[4], iop[5]};
+    }
+    for (const auto& file : group)
+    {
+      const auto ipp = numbers(value(file, position));
+      if (ipp.size() != 3)
+      {
+        info.geometry.positions.clear();
+        break;
+      }
+      info.geometry.positions.push_back({ipp[0], ipp[1], ipp[2]});
+    }
+    if (info.geometry.positions.size() > 1)
+      info.sliceSpacing = analyseSliceStack(info.geometry).spacing;
     scan.series.push_back(std::move(info));
   }
   std::stable_sort(scan.series.begin(), scan.series.end(), [](const auto& a, const auto& b) {
@@ -410,12 +476,16 @@ std::string describeSeries(const DicomSeriesInfo& s, int index)
   out << index << ": " << (s.modality.empty() ? "?" : s.modality) << " '" << s.seriesDescription
       << "' " << s.sliceCount << " slice" << (s.sliceCount == 1 ? "" : "s") << ", "
       << s.pixelSpacing[1] << " x " << s.pixelSpacing[0] << " mm pixels, " << s.sliceThickness
-      << " mm thick, patient " << s.patientName << ", study date " << s.studyDate
+      << " mm thick";
+  if (s.sliceSpacing > 0)
+    out << " every " << s.sliceSpacing << " mm";
+  out << ", patient " << s.patientName << ", study date " << s.studyDate
       << ", UID " << s.seriesUid;
   return out.str();
 }
 
-CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
+// readCtVolume without the deidentification step.
+static CtVolume readCtVolumeAsStored(const fs::path& path, const CtReadOptions& options)
 {
   // Our messages replace ITK's warnings on the console (e.g. uneven slices).
   itk::Object::GlobalWarningDisplayOff();
@@ -466,6 +536,27 @@ CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
   const auto component = io->GetComponentType();
   const bool fitsShort = component == C::CHAR || component == C::UCHAR || component == C::SHORT;
   return fitsShort ? readFile<short>(path, io, options) : readFile<float>(path, io, options);
+}
+
+const std::vector<std::string>& identifyingFields()
+{
+  static const std::vector<std::string> fields = {
+    "PatientName", "PatientID", "PatientBirthDate", "AccessionNumber", "InstitutionName",
+    "StudyInstanceUID", "SeriesInstanceUID", "StudyDate"};
+  return fields;
+}
+
+CtVolume readCtVolume(const fs::path& path, const CtReadOptions& options)
+{
+  CtVolume volume = readCtVolumeAsStored(path, options);
+  if (options.deidentify && !volume.metadata.empty())
+  {
+    for (const auto& field : identifyingFields())
+      volume.metadata.erase(field);
+    volume.metadata["PatientName"] = "Anonymous";
+    volume.metadata["Deidentified"] = "yes";
+  }
+  return volume;
 }
 
 } // namespace caps::seg

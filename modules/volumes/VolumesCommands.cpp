@@ -14,7 +14,7 @@ namespace caps {
 namespace {
 
 const char* kInfoUsage =
-  "usage: caps info PATH [--series N|UID]\n"
+  "usage: caps info PATH [--series N|UID] [--deidentify]\n"
   "\n"
   "Prints what CAPS reads from a CT: dimensions, spacing, origin, orientation,\n"
   "HU range and the DICOM patient, study and series fields.\n"
@@ -23,11 +23,14 @@ const char* kInfoUsage =
   "                NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file\n"
   "  --series N    in a folder with several series, load the N-th (as listed)\n"
   "  --series UID  ... or the one with this series instance UID\n"
+  "                (a folder with several series and no --series lists them and stops)\n"
+  "  --deidentify  leave out the fields that identify the patient\n"
   "\n"
   "Exit status: 0 when read, 1 when the data cannot be read, 2 on wrong usage.\n";
 
 const char* kSlicesUsage =
   "usage: caps slices PATH [--out DIR] [--preset NAME | --window W --level L] [--series N|UID]\n"
+  "                   (a folder with several series gives its largest CT series)\n"
   "\n"
   "Writes the middle axial, coronal and sagittal slices of a CT as PNG pictures\n"
   "(radiological orientation, square pixels) into DIR (default: the current folder).\n"
@@ -57,6 +60,8 @@ std::optional<std::string> parse(const std::vector<std::string>& args, bool with
     };
     if (a == "--help" || a == "-h")
       parsed.help = true;
+    else if (a == "--deidentify")
+      parsed.read.deidentify = true;
     else if (a == "--series")
     {
       auto v = value();
@@ -133,6 +138,8 @@ int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostre
     out << kInfoUsage;
     return 0;
   }
+  // info describes one series: with several and none named, list them.
+  args.read.requireSingleSeries = true;
   try
   {
     VolumeNode* volume = loadFor(static_cast<VolumesLogic&>(logic), args, err);

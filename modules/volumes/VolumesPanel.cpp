@@ -24,14 +24,8 @@ void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host, const fs::pat
 {
   const std::string title = "Loading " + path.filename().string();
   host.runTask(title, [&logic, &host, path, options](const TaskProgress& progress) mutable {
+    // A folder of several series gives its largest CT series, with a warning.
     options.progress = progress;
-    std::error_code ec;
-    if (fs::is_directory(path, ec) && options.seriesUid.empty() && options.seriesIndex < 0)
-    {
-      // Several series: take the largest, as a PACS viewer would, and say so.
-      if (seg::listDicomSeries(path).size() > 1)
-        options.seriesIndex = 0;
-    }
     auto volume = std::make_shared<seg::CtVolume>(VolumesLogic::read(path, options));
     return std::function<void()>([&logic, &host, volume]() {
       std::string warnings;

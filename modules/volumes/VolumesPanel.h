@@ -20,8 +20,8 @@ class ModuleHost;
 class VolumesLogic;
 
 /// Loads @a path in the background with progress and cancel, then adds the
-/// volume to the scene. A folder with several series loads its largest one
-/// unless @a options names another.
+/// volume to the scene. A folder with several series loads its largest CT
+/// series unless @a options names another.
 void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host,
                             const std::filesystem::path& path, seg::CtReadOptions options = {});
 
