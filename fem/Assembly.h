@@ -1,0 +1,36 @@
+#pragma once
+
+#include "fem/Mesh.h"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+namespace caps::fem {
+
+struct AssemblyOptions {
+  int threads = 2;                 ///< worker threads over elements (>= 1)
+  int gaussPointsPerDirection = 3; ///< 3 (Table 4.6, default) or 2
+};
+
+/**
+ * @brief Global stiffness K (3N x 3N, upper triangle incl. diagonal, compressed).
+ *
+ * Elements are split into contiguous ranges, one per thread; each thread
+ * fills its own triplet list in element order, and the lists are merged in
+ * element order, so the matrix is bit-identical for any thread count.
+ * Rethrows the ElementError of the lowest-numbered bad element.
+ * The mesh is assumed validated (validateMesh).
+ */
+Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
+                                              const AssemblyOptions& options = {});
+
+/**
+ * @brief Gravity loads (eq. 4.35-4.39): each element's density times
+ *        @a acceleration (mm/s^2, e.g. (0, 0, -9810)) integrated over its
+ *        volume. Returns a vector of size 3N (N).
+ */
+Eigen::VectorXd assembleGravityLoad(const Mesh& mesh, const MaterialTable& materials,
+                                    const Eigen::Vector3d& acceleration,
+                                    const AssemblyOptions& options = {});
+
+}  // namespace caps::fem

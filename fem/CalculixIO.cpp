@@ -1,0 +1,230 @@
+#include "fem/CalculixIO.h"
+
+#include "fem/ElementNumbering.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace caps::fem {
+
+namespace {
+
+std::string regionName(const char* prefix, int region) {
+  std::ostringstream name;
+  name << prefix << (region < 0 ? "M" : "") << (region < 0 ? -region : region);
+  return name.str();
+}
+
+}  // namespace
+
+std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
+                          const LoadCase& load) {
+  validateMesh(mesh, materials);
+  const ConstraintMap map = resolveConstraints(mesh, constraints);
+  const Eigen::Index n = mesh.nodeCount();
+  std::ostringstream o;
+  // ccx reads at most 20 characters per field: 14 significant digits fit.
+  o.precision(14);
+  o << "*HEADING\nCAPS finite element model (Bathe 8-to-20 node elements as C3D20)\n";
+  o << "*NODE, NSET=NALLNODES\n";
+  for (Eigen::Index i = 0; i < n; ++i)
+    o << i + 1 << ", " << mesh.nodes(0, i) << ", " << mesh.nodes(1, i) << ", " << mesh.nodes(2, i) << "\n";
+  // Representative DOF of each reduced DOF in the *EQUATIONs. ccx 2.20
+  // mis-assembles an equation whose dependent DOF belongs to a node repeated
+  // in a degenerate (wedge) C3D20, so such a node is made the independent one.
+  std::vector<char> repeated(std::size_t(n), 0);
+  for (const Element& el : mesh.elements)
+    for (int a = 0; a < kHex20NodeCount; ++a)
+      for (int b = a + 1; b < kHex20NodeCount; ++b)
+        if (el.nodes[a] >= 0 && el.nodes[a] == el.nodes[b]) repeated[std::size_t(el.nodes[a])] = 1;
+  std::vector<int> representative(map.masterOf);
+  for (std::size_t d = 0; d < map.reduced.size(); ++d) {
+    const int r = map.reduced[d];
+    if (r >= 0 && repeated[d / 3] && !repeated[std::size_t(representative[std::size_t(r)] / 3)])
+      representative[std::size_t(r)] = int(d);
+  }
+  bool needAux = false;
+  for (std::size_t d = 0; d < map.reduced.size(); ++d) {
+    const int r = map.reduced[d];
+    if (r >= 0 && representative[std::size_t(r)] != int(d) &&
+        map.offset[Eigen::Index(d)] != map.offset[representative[std::size_t(r)]])
+      needAux = true;
+  }
+  const Eigen::Index aux = n + 1;
+  if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
+
+  // Elements, grouped by region and type.
+  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;  // (region, type 20/8) -> elements
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    const Element& el = mesh.elements[e];
+    int present = 0;
+    for (int k = kHex20CornerCount; k < kHex20NodeCount; ++k) present += el.nodes[k] >= 0;
+    if (present != 0 && present != 12)
+      throw std::invalid_argument("element " + std::to_string(e) + " has " + std::to_string(present) +
+                                  " of 12 mid-side nodes; CalculiX needs all (C3D20) or none (C3D8)");
+    groups[{el.region, present == 12 ? 20 : 8}].push_back(e);
+  }
+  const auto& toC3D20 = batheToC3D20Table();
+  for (const auto& [key, elements] : groups) {
+    o << "*ELEMENT, TYPE=" << (key.second == 20 ? "C3D20" : "C3D8") << ", ELSET=" << regionName("R", key.first)
+      << "\n";
+    for (std::size_t e : elements) {
+      const Element& el = mesh.elements[e];
+      int c3d[kHex20NodeCount];
+      const int count = key.second;
+      for (int k = 0; k < count; ++k) c3d[toC3D20[k] - 1] = el.nodes[k] + 1;
+      // At most 16 entries per line; a trailing comma continues the record.
+      o << e + 1;
+      for (int j = 0; j < count; ++j) o << (j == 15 ? ",\n" : ", ") << c3d[j];
+      o << "\n";
+    }
+  }
+  std::set<int> usedRegions;
+  for (const Element& el : mesh.elements) usedRegions.insert(el.region);
+  for (int region : usedRegions) {
+    const LinearElasticMaterial& m = materials.at(region);
+    o << "*MATERIAL, NAME=" << regionName("M", region) << "\n*ELASTIC\n"
+      << m.youngsModulus << ", " << m.poissonRatio << "\n";
+    if (m.density > 0.0) o << "*DENSITY\n" << m.density << "\n";
+    o << "*SOLID SECTION, ELSET=" << regionName("R", region) << ", MATERIAL=" << regionName("M", region)
+      << "\n";
+  }
+  // Sutures (resolved): u_i - u_m - beta u_aux = 0, beta = g_i - g_m.
+  bool equationHeader = false;
+  for (std::size_t d = 0; d < map.reduced.size(); ++d) {
+    if (map.reduced[d] < 0) continue;
+    const int master = representative[std::size_t(map.reduced[d])];
+    if (master == int(d)) continue;
+    if (!equationHeader) o << "*EQUATION\n";
+    equationHeader = true;
+    const double beta = map.offset[Eigen::Index(d)] - map.offset[master];
+    o << (beta != 0.0 ? 3 : 2) << "\n"
+      << d / 3 + 1 << ", " << d % 3 + 1 << ", 1.0, " << master / 3 + 1 << ", " << master % 3 + 1 << ", -1.0";
+    if (beta != 0.0) o << ", " << aux << ", 1, " << -beta;
+    o << "\n";
+  }
+  o << "*STEP\n*STATIC\n*BOUNDARY\n";
+  if (needAux) o << aux << ", 1, 1, 1.0\n" << aux << ", 2, 3, 0.0\n";
+  for (std::size_t d = 0; d < map.reduced.size(); ++d)
+    if (map.reduced[d] < 0)
+      o << d / 3 + 1 << ", " << d % 3 + 1 << ", " << d % 3 + 1 << ", " << map.offset[Eigen::Index(d)] << "\n";
+  if (!load.nodalForces.empty()) {
+    // Sum forces per node so each (node, direction) appears once.
+    std::map<int, Eigen::Vector3d> forces;
+    for (const auto& [node, f] : load.nodalForces) {
+      if (node < 0 || node >= n)
+        throw std::invalid_argument("a nodal force is applied to node " + std::to_string(node) +
+                                    ", outside the mesh");
+      auto it = forces.emplace(node, Eigen::Vector3d::Zero()).first;
+      it->second += f;
+    }
+    o << "*CLOAD\n";
+    for (const auto& [node, f] : forces)
+      for (int d = 0; d < 3; ++d)
+        if (f[d] != 0.0) o << node + 1 << ", " << d + 1 << ", " << f[d] << "\n";
+  }
+  const double g = load.gravity.norm();
+  if (g > 0.0) {
+    const Eigen::Vector3d dir = load.gravity / g;
+    bool header = false;
+    for (int region : usedRegions) {
+      if (materials.at(region).density <= 0.0) continue;
+      if (!header) o << "*DLOAD\n";
+      header = true;
+      o << regionName("R", region) << ", GRAV, " << g << ", " << dir[0] << ", " << dir[1] << ", " << dir[2]
+        << "\n";
+    }
+  }
+  o << "*NODE FILE\nU\n*NODE PRINT, NSET=NALLNODES\nU\n*END STEP\n";
+  return o.str();
+}
+
+void writeCalculixInput(const std::string& path, const Mesh& mesh, const MaterialTable& materials,
+                        const Constraints& constraints, const LoadCase& load) {
+  const std::string text = calculixInput(mesh, materials, constraints, load);
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write the CalculiX input " + path);
+  f << text;
+  if (!f) throw std::runtime_error("error while writing the CalculiX input " + path);
+}
+
+namespace {
+
+Eigen::Matrix3Xd collect(const std::map<long, Eigen::Vector3d>& values, Eigen::Index nodeCount,
+                         const std::string& path) {
+  Eigen::Matrix3Xd u(3, nodeCount);
+  for (Eigen::Index i = 0; i < nodeCount; ++i) {
+    auto it = values.find(long(i + 1));
+    if (it == values.end())
+      throw std::runtime_error(path + " has no displacement for node " + std::to_string(i + 1) +
+                               " (CAPS node " + std::to_string(i) + ")");
+    u.col(i) = it->second;
+  }
+  return u;
+}
+
+}  // namespace
+
+Eigen::Matrix3Xd readFrdDisplacements(const std::string& path, Eigen::Index nodeCount) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot read the CalculiX result " + path);
+  std::map<long, Eigen::Vector3d> last, current;
+  bool inDisp = false, found = false;
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.rfind(" -4", 0) == 0) {
+      inDisp = line.find("DISP") != std::string::npos;
+      if (inDisp) current.clear();
+      continue;
+    }
+    if (!inDisp) continue;
+    if (line.rfind(" -3", 0) == 0) {
+      last = current;
+      found = true;
+      inDisp = false;
+      continue;
+    }
+    if (line.rfind(" -1", 0) != 0) continue;
+    // Fixed format: " -1", I10 node, then 12-character E12.5 fields.
+    if (line.size() < 13 + 36) throw std::runtime_error(path + ": short displacement line: " + line);
+    const long node = std::strtol(line.substr(3, 10).c_str(), nullptr, 10);
+    Eigen::Vector3d v;
+    for (int d = 0; d < 3; ++d) v[d] = std::strtod(line.substr(13 + 12 * std::size_t(d), 12).c_str(), nullptr);
+    current[node] = v;
+  }
+  if (!found) throw std::runtime_error(path + " has no DISP block (was *NODE FILE U requested?)");
+  return collect(last, nodeCount, path);
+}
+
+Eigen::Matrix3Xd readDatDisplacements(const std::string& path, Eigen::Index nodeCount) {
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error("cannot read the CalculiX result " + path);
+  std::map<long, Eigen::Vector3d> values;
+  bool inTable = false, found = false;
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.find("displacements (vx,vy,vz)") != std::string::npos) {
+      inTable = true;
+      found = true;
+      values.clear();
+      continue;
+    }
+    if (!inTable) continue;
+    std::istringstream s(line);
+    long node;
+    Eigen::Vector3d v;
+    if (s >> node >> v[0] >> v[1] >> v[2]) {
+      values[node] = v;
+    } else if (line.find_first_not_of(" \t\r") != std::string::npos) {
+      inTable = false;
+    }
+  }
+  if (!found) throw std::runtime_error(path + " has no displacement table (was *NODE PRINT U requested?)");
+  return collect(values, nodeCount, path);
+}
+
+}  // namespace caps::fem

@@ -1,0 +1,85 @@
+#pragma once
+
+#include "fem/Assembly.h"
+#include "fem/Constraints.h"
+#include "fem/Mesh.h"
+#include "fem/SparseCholeskySolver.h"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace caps::fem {
+
+/// One load condition (§4.6.1 step 3): nodal forces and gravity.
+struct LoadCase {
+  std::vector<std::pair<int, Eigen::Vector3d>> nodalForces;  ///< (node, force N)
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();          ///< acceleration, mm/s^2
+};
+
+/// Wall-clock seconds of each phase of the last prepare()/solve().
+struct PhaseTimes {
+  double assemble = 0.0;   ///< element stiffnesses and the global K
+  double constrain = 0.0;  ///< master-slave map, K̄ = T^T K T, K g
+  double analyse = 0.0;    ///< ordering and symbolic factorization
+  double factor = 0.0;     ///< numeric factorization
+  double solve = 0.0;      ///< loads, reduction, substitution, expansion (last solve())
+};
+
+/**
+ * @brief Linear static analysis K U = R with constraints by master-slave
+ *        elimination, factored once and solved for any number of load cases.
+ *
+ * prepare() validates the mesh, assembles K, builds U = T Ubar + g, reduces
+ * to K̄ = T^T K T and factors it with CHOLMOD. It returns the solver status;
+ * a model left with rigid-body freedom gives NotPositiveDefinite and a
+ * message naming the node and direction that is free. Bad input throws
+ * (std::invalid_argument, ElementError) with a message naming the culprit;
+ * status() is then InvalidInput and message() the same text.
+ */
+class LinearStaticAnalysis {
+public:
+  LinearStaticAnalysis(Mesh mesh, MaterialTable materials, Constraints constraints,
+                       AssemblyOptions options = {});
+
+  SolverStatus prepare();
+  SolverStatus status() const { return status_; }
+  const std::string& message() const { return message_; }
+
+  /// Full load vector R (3N) of @a load.
+  Eigen::VectorXd loadVector(const LoadCase& load) const;
+  /// Displacements U (3N x cases) for full load vectors @a r (3N x cases).
+  /// Throws std::logic_error unless prepare() succeeded.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& r);
+  /// Displacements (3N) of one load case.
+  Eigen::VectorXd solve(const LoadCase& load);
+
+  const PhaseTimes& times() const { return times_; }
+  const Mesh& mesh() const { return mesh_; }
+  const MaterialTable& materials() const { return materials_; }
+  const ConstraintMap& constraintMap() const { return map_; }
+  /// Upper triangle of the full K (3N x 3N).
+  const Eigen::SparseMatrix<double>& stiffness() const { return k_; }
+  /// Upper triangle of K̄.
+  const Eigen::SparseMatrix<double>& reducedStiffness() const { return kbar_; }
+
+private:
+  SolverStatus prepareStages();
+
+  Mesh mesh_;
+  MaterialTable materials_;
+  Constraints constraints_;
+  AssemblyOptions options_;
+  Eigen::SparseMatrix<double> k_, kbar_;
+  ConstraintMap map_;
+  Eigen::VectorXd kg_;  ///< K g
+  SparseCholeskySolver solver_;
+  SolverStatus status_ = SolverStatus::InvalidInput;
+  std::string message_ = "prepare() has not been called";
+  PhaseTimes times_;
+};
+
+}  // namespace caps::fem

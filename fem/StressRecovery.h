@@ -1,0 +1,40 @@
+#pragma once
+
+#include "fem/LinearElasticMaterial.h"
+#include "fem/Mesh.h"
+
+#include <Eigen/Core>
+
+#include <vector>
+
+namespace caps::fem {
+
+/// Strain and stress at one point (Voigt xx, yy, zz, xy, yz, zx; engineering
+/// shear strain; stress in MPa).
+struct StressPoint {
+  Eigen::Vector3d natural;  ///< (r, s, t)
+  Eigen::Vector3d world;    ///< x(r, s, t), undeformed, mm
+  Vector6d strain;
+  Vector6d stress;
+
+  /// von Mises equivalent stress (MPa).
+  double vonMises() const;
+  /// Mean stress (sigma_xx + sigma_yy + sigma_zz) / 3 (MPa); pressure is its negative.
+  double meanStress() const;
+};
+
+/**
+ * @brief Strain and stress at body coordinate (element, r, s, t) (thesis
+ *        eq. 4.47-4.48): epsilon = B U^(m), sigma = C epsilon.
+ *        @a u holds the 3N nodal displacements. Throws ElementError if the
+ *        Jacobian is bad there.
+ */
+StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
+                          int element, const Eigen::Vector3d& rst);
+
+/// The same at every point of the Gauss rule with @a pointsPerDirection points.
+std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const MaterialTable& materials,
+                                                   const Eigen::VectorXd& u, int element,
+                                                   int pointsPerDirection = 3);
+
+}  // namespace caps::fem
