@@ -1,7 +1,9 @@
 #include "app/CommandLine.h"
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <sstream>
 
@@ -20,8 +22,18 @@ const char* kDemoUsage =
   "\n"
   "Runs the CAPS pipeline on the embedded sample head CT and writes its results\n"
   "into DIR (default out/demo): info.txt (what was read), axial.png, coronal.png,\n"
-  "sagittal.png (middle slices, soft-tissue window) and sample.caps (the scene,\n"
-  "which `caps` opens and ParaView or 3D Slicer can read file by file).\n";
+  "sagittal.png (middle slices, soft-tissue window); the skin and bone\n"
+  "label map (labels.nrrd, as `caps segment`; its surfaces are in the scene); the\n"
+  "range and thickness maps (skin-range, bone-range, thickness, thickness-normal\n"
+  ".nrrd, and the thickness review pictures skin-range.png, thickness.png,\n"
+  "thickness-normal.png, as `caps rangemap`); and sample.caps (the scene, which\n"
+  "`caps` opens and ParaView or 3D Slicer can read file by file).\n";
+
+// Seconds since @a start, for the demo's step times.
+double secondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
 
 // Runs a module command on the session's logic.
 int runModuleCommand(Session& session, const std::string& name,
@@ -104,19 +116,42 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
   out << "CAPS demo on the sample CT " << sample.string() << "\n"
       << "Head and neck CT from the Weasis demo archive (N. Roduit), CC BY 4.0\n\n";
 
+  auto start = std::chrono::steady_clock::now();
+  auto stepDone = [&](const char* step) {
+    out << std::fixed << std::setprecision(1) << "[" << step << ": " << secondsSince(start)
+        << " s]\n\n";
+    out.unsetf(std::ios::floatfield);
+    start = std::chrono::steady_clock::now();
+  };
+
   // 1. Read and describe the CT.
   std::ostringstream info;
   if (int code = runModuleCommand(session, "info", {sample.string()}, info, err))
     return code;
   std::ofstream(folder / "info.txt") << info.str();
-  out << info.str() << "\n";
+  out << info.str();
+  stepDone("read");
 
   // 2. The middle slices as pictures.
   if (int code = runModuleCommand(
         session, "slices", {sample.string(), "--out", folder.string()}, out, err))
     return code;
+  stepDone("slices");
 
-  // 3. The scene, as the workstation would save it.
+  // 3. Skin and bone (the CT read in step 1 is reused: same session).
+  if (int code = runModuleCommand(
+        session, "segment", {sample.string(), "--out", folder.string(), "--surfaces", "none"}, out,
+        err))
+    return code;
+  stepDone("segment");
+
+  // 4. Range maps and the thickness review pictures (on step 3's label map).
+  if (int code = runModuleCommand(
+        session, "rangemap", {sample.string(), "--out", folder.string()}, out, err))
+    return code;
+  stepDone("rangemap");
+
+  // 5. The scene, as the workstation would save it.
   const fs::path bundle = folder / "sample.caps";
   try
   {
@@ -128,7 +163,8 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
     return 1;
   }
   out << "wrote " << bundle.string() << "\n";
-  out << "\nDemo finished: results in " << folder.string() << "\n";
+  stepDone("save scene");
+  out << "Demo finished: results in " << folder.string() << "\n";
   return 0;
 }
 

@@ -1,0 +1,62 @@
+#pragma once
+
+#include "fem/Constraints.h"
+#include "fem/LinearElasticMaterial.h"
+#include "fem/Mesh.h"
+#include "fem/StaticAnalysis.h"
+
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace caps::fem {
+
+/// A deck that cannot be read: names the file, the line and the culprit.
+class InputDeckError : public std::runtime_error {
+public:
+  InputDeckError(const std::string& source, int line, const std::string& what)
+      : std::runtime_error(source + ":" + std::to_string(line) + ": " + what), line_(line) {}
+  int line() const { return line_; }
+
+private:
+  int line_;
+};
+
+/// A model read from a CalculiX/Abaqus input deck.
+struct CalculixModel {
+  Mesh mesh;
+  MaterialTable materials;     ///< region id = index of the material in the deck (0, 1, ...)
+  Constraints constraints;
+  LoadCase load;
+  std::vector<long> nodeIds;     ///< deck number of each CAPS node
+  std::vector<long> elementIds;  ///< deck number of each CAPS element
+  std::vector<std::string> materialNames;  ///< by region id
+};
+
+/**
+ * @brief Reads the CalculiX/Abaqus `.inp` subset that calculixInput() writes,
+ *        and hand-written decks of the same kind.
+ *
+ * Keywords (case-insensitive; `**` comments; a keyword line ending in a
+ * comma continues on the next line): *HEADING, *NODE, *ELEMENT with TYPE
+ * C3D20, C3D20R (read as C3D20: full 3x3x3 integration), C3D15 (a degenerate
+ * 20-node wedge, Fig. 3.2) or C3D8 (corners only); *NSET and *ELSET (with
+ * GENERATE); *MATERIAL with *ELASTIC (isotropic) and *DENSITY; *SOLID
+ * SECTION; *BOUNDARY (node or set, first and last DOF, value; DOFs above 3
+ * are ignored for solids); *CLOAD; *DLOAD GRAV (one acceleration for every
+ * element with a density); *EQUATION of two terms u_a,i - u_b,i = 0 tying
+ * all three directions of two coincident nodes (a suture), or three terms
+ * u_a,i - u_b,i + c u_aux,1 = 0 with an auxiliary node prescribed to
+ * (1, 0, 0) where -c equals the coordinate difference (a suture as written
+ * by calculixInput()); one *STEP with *STATIC; *NODE FILE, *EL FILE,
+ * *NODE PRINT, *EL PRINT accepted and ignored. Any other keyword, element
+ * type or load (e.g. face pressure P1..P6) throws InputDeckError naming it
+ * and its line. Nodes in no element (e.g. the auxiliary node) are kept.
+ */
+CalculixModel parseCalculixInput(const std::string& text, const std::string& sourceName = "input");
+
+/// Reads @a path; throws std::runtime_error if unreadable, InputDeckError if bad.
+CalculixModel readCalculixInput(const std::string& path);
+
+}  // namespace caps::fem

@@ -1,0 +1,222 @@
+#include "modules/rangemap/RangeMapCommands.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+#include <optional>
+
+#include "modules/rangemap/RangeMapLogic.h"
+#include "modules/rangemap/RangeMapPreview.h"
+#include "modules/segment/SegmentCommands.h"
+#include "scene/NrrdIO.h"
+#include "scene/RangeMapNode.h"
+#include "scene/Scene.h"
+#include "scene/VolumeNode.h"
+
+namespace fs = std::filesystem;
+
+namespace caps {
+namespace {
+
+const char* kRangeMapUsage =
+  "usage: caps rangemap CT --out DIR [--size NTHETAxNZ] [--smooth] [--series N|UID]\n"
+  "\n"
+  "Unwraps the skin and the bone of a head CT into cylindrical range maps r(theta, z)\n"
+  "around an axis fitted to the head (segmenting the CT first, with the default\n"
+  "thresholds), and the soft-tissue thickness, and writes into DIR:\n"
+  "  skin-range.nrrd, bone-range.nrrd   r of the skin and the bone (mm; NaN: none)\n"
+  "  thickness.nrrd                     r_skin - r_bone, along the ray from the axis\n"
+  "  thickness-normal.nrrd              thickness along the inward skin normal\n"
+  "  skin-range.png, thickness.png,     previews: the face in the middle, z up,\n"
+  "  thickness-normal.png               a colour bar in mm\n"
+  "The NRRD files are 2D float images, theta fastest (rows of the map: theta from\n"
+  "-180 deg, -90 deg at the face; columns: z from the bottom of the scan up).\n"
+  "Prints the axis and the thickness statistics (mm).\n"
+  "\n"
+  "  --size NTHETAxNZ   samples around the head and along the axis (default 512x256)\n"
+  "  --smooth           3x3 box smoothing of the skin and bone maps (thesis eq. 4.2)\n"
+  "  --series N|UID     in a folder with several series, the one to use\n"
+  "\n"
+  "Exit status: 0 when written, 1 when the CT cannot be read or processed or the\n"
+  "files cannot be written, 2 on wrong usage.\n";
+
+struct RangeMapArgs
+{
+  fs::path ct;
+  fs::path out;
+  seg::CtReadOptions read;
+  RangeMapLogic::Parameters parameters;
+  bool help = false;
+};
+
+std::optional<std::string> parse(const std::vector<std::string>& args, RangeMapArgs& parsed)
+{
+  for (size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    const bool hasValue = i + 1 < args.size();
+    if (a == "--help" || a == "-h")
+      parsed.help = true;
+    else if (a == "--out")
+    {
+      if (!hasValue)
+        return "--out needs a folder";
+      parsed.out = args[++i];
+    }
+    else if (a == "--series")
+    {
+      if (!hasValue)
+        return "--series needs a number or a series UID";
+      if (auto problem = cli::parseSeries(args[++i], parsed.read))
+        return problem;
+    }
+    else if (a == "--size")
+    {
+      int nTheta = 0, nZ = 0;
+      char tail = 0;
+      if (!hasValue || std::sscanf(args[++i].c_str(), "%dx%d%c", &nTheta, &nZ, &tail) != 2 ||
+          nTheta < 8 || nZ < 4 || nTheta > 8192 || nZ > 8192)
+        return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
+      parsed.parameters.nTheta = nTheta;
+      parsed.parameters.nZ = nZ;
+    }
+    else if (a == "--smooth")
+      parsed.parameters.smooth = true;
+    else if (!a.empty() && a[0] == '-')
+      return "unknown option " + a;
+    else if (parsed.ct.empty())
+      parsed.ct = a;
+    else
+      return "one CT only (got '" + parsed.ct.string() + "' and '" + a + "')";
+  }
+  if (parsed.help)
+    return std::nullopt;
+  if (parsed.ct.empty())
+    return "CT missing";
+  if (parsed.out.empty())
+    return "--out DIR missing: where should the results go?";
+  return std::nullopt;
+}
+
+void printStatistics(std::ostream& out, const char* what, const seg::ThicknessStatistics& s,
+                     std::size_t samples)
+{
+  out << "  " << what << std::fixed << std::setprecision(1) << std::setw(7) << s.min
+      << std::setw(8) << s.median << std::setw(8) << s.mean << std::setw(8) << s.p95
+      << "   (" << s.count << " of " << samples << " samples)\n";
+  out.unsetf(std::ios::floatfield);
+}
+
+// Colour range of the skin preview: the 2nd..98th percentile, to 10 mm.
+PreviewStyle skinStyle(const seg::RangeMap& skin)
+{
+  PreviewStyle style;
+  style.title = "Skin range r(theta, z): distance from the head axis";
+  const double lo = seg::thicknessPercentile(skin, 2.0), hi = seg::thicknessPercentile(skin, 98.0);
+  style.low = std::isfinite(lo) ? 10.0 * std::floor(lo / 10.0) : 0.0;
+  style.high = std::isfinite(hi) ? 10.0 * std::ceil(hi / 10.0) : 100.0;
+  if (style.high <= style.low)
+    style.high = style.low + 10.0;
+  return style;
+}
+
+int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
+                std::ostream& err)
+{
+  RangeMapArgs args;
+  if (auto problem = parse(argv, args))
+  {
+    err << "caps rangemap: " << *problem << "\n" << kRangeMapUsage;
+    return 2;
+  }
+  if (args.help)
+  {
+    out << kRangeMapUsage;
+    return 0;
+  }
+  auto& logic = static_cast<RangeMapLogic&>(moduleLogic);
+  try
+  {
+    std::error_code ec;
+    fs::create_directories(args.out, ec);
+    if (ec || !fs::is_directory(args.out))
+      throw std::runtime_error("Cannot create the output folder " + args.out.string() + ": " +
+                               (ec ? ec.message() : "a file of that name exists"));
+    const auto start = std::chrono::steady_clock::now();
+    args.read.progress = cli::consoleProgress(err);
+    VolumeNode* volume = cli::loadCt(logic, args.ct, args.read, err);
+    RangeMapOutput maps;
+    const RangeMapResult ids =
+      logic.run(*volume, args.parameters, cli::consoleProgress(err), &maps);
+    const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    const seg::CylindricalFrame& frame = maps.skin.frame();
+    out << "Range maps of '" << volume->name() << "' (" << frame.nTheta() << " x " << frame.nZ()
+        << (args.parameters.smooth ? ", smoothed" : "") << ") in " << std::fixed
+        << std::setprecision(1) << seconds << " s"
+        << (ids.segmented ? ", after segmenting it with the default thresholds" : "") << "\n";
+    out.unsetf(std::ios::floatfield);
+    out << RangeMapLogic::describeAxis(maps.axis);
+    const std::size_t samples = maps.skin.values().size();
+    out << "Skin found at " << maps.skin.validCount() << " of " << samples << " samples, bone at "
+        << maps.bone.validCount() << " (" << maps.skinFromMaskEdge << " and "
+        << maps.boneFromMaskEdge << " from the mask edge)\n";
+    out << "Soft-tissue thickness (mm):     min  median    mean     p95\n";
+    printStatistics(out, "radial r_skin - r_bone", maps.radialStatistics, samples);
+    printStatistics(out, "along the skin normal  ", maps.normalStatistics, samples);
+
+    struct Output
+    {
+      const std::string& id;
+      const char* nrrd;
+      const char* png;
+    };
+    const Output files[] = {{ids.skinId, "skin-range.nrrd", "skin-range.png"},
+                            {ids.boneId, "bone-range.nrrd", nullptr},
+                            {ids.thicknessId, "thickness.nrrd", "thickness.png"},
+                            {ids.thicknessNormalId, "thickness-normal.nrrd", "thickness-normal.png"}};
+    for (const Output& file : files)
+    {
+      const auto* node = logic.scene().nodeAs<RangeMapNode>(file.id);
+      NrrdIO::writeMatrix(node->values(), args.out / file.nrrd);
+      out << "wrote " << (args.out / file.nrrd).string() << "\n";
+      if (!file.png)
+        continue;
+      PreviewStyle style;
+      if (node->role() == "skin")
+        style = skinStyle(maps.skin);
+      else
+      {
+        // One fixed scale for thickness, so pictures of two patients compare;
+        // the face lies within it (thicker neck and scalp regions saturate).
+        style.low = 0.0;
+        style.high = 30.0;
+        style.title = node->role() == "thickness"
+                        ? "Soft-tissue thickness, radial (r_skin - r_bone)"
+                        : "Soft-tissue thickness along the inward skin normal";
+      }
+      writeRangeMapPreview(node->values(), node->zMin(), node->zMax(), style, args.out / file.png);
+      out << "wrote " << (args.out / file.png).string() << "\n";
+    }
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    err << "caps rangemap: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+} // namespace
+
+std::vector<ModuleCommand> rangeMapCommands()
+{
+  return {{"rangemap",
+           "skin, bone and thickness range maps of a CT (NRRD) with PNG previews in mm",
+           kRangeMapUsage, runRangeMap}};
+}
+
+} // namespace caps

@@ -1,0 +1,183 @@
+#include "modules/rangemap/RangeMapLogic.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "modules/segment/SegmentLogic.h"
+#include "scene/LabelMapNode.h"
+#include "scene/RangeMapNode.h"
+#include "scene/Scene.h"
+#include "scene/VolumeNode.h"
+#include "segmentation/RangeMapBuilder.h"
+
+namespace caps {
+namespace {
+
+void report(const TaskProgress& progress, double fraction, const std::string& step)
+{
+  if (progress && !progress(fraction, step))
+    throw seg::Cancelled();
+}
+
+// The part [from, to] of the progress bar.
+seg::ProgressCallback part(const TaskProgress& progress, double from, double to)
+{
+  if (!progress)
+    return {};
+  return [&progress, from, to](double f, const std::string& step) {
+    return progress(from + (to - from) * f, step);
+  };
+}
+
+} // namespace
+
+RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
+                                      const Parameters& parameters, const TaskProgress& progress)
+{
+  if (!ct || !labels)
+    throw std::invalid_argument("A CT and its skin/bone label map are needed for range maps.");
+  if (parameters.nTheta < 4 || parameters.nZ < 2)
+    throw std::invalid_argument("The range map needs at least 4 x 2 samples (got " +
+                                std::to_string(parameters.nTheta) + " x " +
+                                std::to_string(parameters.nZ) + ").");
+  report(progress, 0.0, "Head axis");
+  const auto body = SegmentLogic::maskOf(labels, kSoftTissueLabel);
+  const auto bone = SegmentLogic::maskOf(labels, kBoneLabel);
+  seg::HeadAxisOptions axisOptions;
+  axisOptions.nTheta = parameters.nTheta;
+  axisOptions.nZ = parameters.nZ;
+  RangeMapOutput out;
+  out.axis = seg::fitHeadAxis(body, axisOptions);
+
+  report(progress, 0.05, "Skin and bone range maps");
+  seg::RangeMapBuildOptions build;
+  build.skinThreshold = parameters.skinThresholdHu;
+  build.boneThreshold = parameters.boneThresholdHu;
+  build.progress = part(progress, 0.05, 0.65);
+  seg::SkinBoneRangeMaps maps = seg::buildRangeMaps(ct, body, bone, out.axis.frame, build);
+  out.skinFromMaskEdge = maps.skinFromMaskEdge;
+  out.boneFromMaskEdge = maps.boneFromMaskEdge;
+  if (parameters.smooth)
+  {
+    report(progress, 0.65, "Smoothing");
+    out.skin = seg::boxSmooth(maps.skin);
+    out.bone = seg::boxSmooth(maps.bone);
+  }
+  else
+  {
+    out.skin = std::move(maps.skin);
+    out.bone = std::move(maps.bone);
+  }
+
+  report(progress, 0.67, "Radial thickness");
+  out.thickness = seg::radialThickness(out.skin, out.bone);
+  report(progress, 0.70, "Thickness along the skin normal");
+  seg::NormalThicknessOptions normal;
+  normal.progress = part(progress, 0.70, 0.98);
+  out.thicknessNormal = seg::normalThickness(out.skin, out.bone, normal);
+  out.radialStatistics = seg::thicknessStatistics(out.thickness);
+  out.normalStatistics = seg::thicknessStatistics(out.thicknessNormal);
+  report(progress, 1.0, "Done");
+  return out;
+}
+
+RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMapOutput& output)
+{
+  Scene& s = scene();
+  for (const auto& id : made_[volume.id()])
+    s.removeNode(id); // false when the user removed it already
+  made_[volume.id()].clear();
+
+  const seg::CylindricalFrame& frame = output.skin.frame();
+  auto add = [&](const seg::RangeMap& map, const char* role, const std::string& name) {
+    auto node = std::make_unique<RangeMapNode>();
+    node->setName(volume.name() + " " + name);
+    node->setValues(toMatrix(map));
+    node->setRole(role);
+    node->setAxis(frame.origin(), frame.direction());
+    node->setZRange(frame.zMin(), frame.zMax());
+    const std::string id = s.addNode(std::move(node))->id();
+    made_[volume.id()].push_back(id);
+    return id;
+  };
+  RangeMapResult result;
+  result.skinId = add(output.skin, "skin", "skin range");
+  result.boneId = add(output.bone, "bone", "bone range");
+  result.thicknessId = add(output.thickness, "thickness", "thickness (radial)");
+  result.thicknessNormalId =
+    add(output.thicknessNormal, "thickness-normal", "thickness (along the skin normal)");
+  return result;
+}
+
+RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& parameters,
+                                  const TaskProgress& progress, RangeMapOutput* output)
+{
+  SegmentLogic segment(scene());
+  LabelMapNode* labels = segment.findLabelMap(volume);
+  bool segmented = false;
+  if (!labels)
+  {
+    SegmentLogic::Parameters p;
+    p.skinThresholdHu = parameters.skinThresholdHu;
+    p.boneThresholdHu = parameters.boneThresholdHu;
+    const SegmentationResult made = segment.segment(volume, p, part(progress, 0.0, 0.5));
+    labels = scene().nodeAs<LabelMapNode>(made.labelMapId);
+    segmented = true;
+  }
+  RangeMapOutput computed = compute(volume.image(), labels->image(), parameters,
+                                    segmented ? part(progress, 0.5, 1.0) : progress);
+  RangeMapResult result = addToScene(volume, computed);
+  result.labelMapId = labels->id();
+  result.segmented = segmented;
+  if (output)
+    *output = std::move(computed);
+  return result;
+}
+
+Eigen::MatrixXf RangeMapLogic::toMatrix(const seg::RangeMap& map)
+{
+  Eigen::MatrixXf m(map.nTheta(), map.nZ());
+  for (int j = 0; j < map.nZ(); ++j)
+    for (int i = 0; i < map.nTheta(); ++i)
+      m(i, j) = map.at(i, j);
+  return m;
+}
+
+seg::RangeMap RangeMapLogic::toRangeMap(const RangeMapNode& node)
+{
+  const Eigen::MatrixXf& m = node.values();
+  const seg::CylindricalFrame frame(node.axisOrigin(), node.axisDirection(), node.zMin(),
+                                    node.zMax(), static_cast<int>(m.rows()),
+                                    static_cast<int>(m.cols()));
+  seg::RangeMap map(frame);
+  for (int j = 0; j < map.nZ(); ++j)
+    for (int i = 0; i < map.nTheta(); ++i)
+      map.at(i, j) = m(i, j);
+  return map;
+}
+
+std::string RangeMapLogic::describeAxis(const seg::HeadAxisFit& axis)
+{
+  const seg::CylindricalFrame& f = axis.frame;
+  const Eigen::Vector3d& o = f.origin();
+  const Eigen::Vector3d& d = f.direction();
+  const double tilt = std::acos(std::clamp(d.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1);
+  out << "Axis: through (" << o.x() << ", " << o.y() << ", " << o.z() << ") mm LPS, direction ("
+      << std::setprecision(3) << d.x() << ", " << d.y() << ", " << d.z() << "), "
+      << std::setprecision(1) << tilt << " deg from patient superior\n";
+  out << "      fitted to " << axis.slicesUsed << " of " << axis.centroids.size()
+      << " slice centroids, RMS residual " << std::setprecision(2) << axis.rmsResidual
+      << " mm; z from " << std::setprecision(1) << f.zMin() << " to " << f.zMax() << " mm, "
+      << f.nTheta() << " x " << f.nZ() << " samples (" << std::setprecision(2)
+      << 360.0 / f.nTheta() << " deg x " << f.zStep() << " mm)\n";
+  return out.str();
+}
+
+} // namespace caps

@@ -1,0 +1,101 @@
+#pragma once
+/// @file RangeMapLogic.h
+/// @brief Logic of the RangeMap module: a CT Volume node (and its skin/bone
+/// label map) in, skin, bone and thickness range maps out; no widgets.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <vtkImageData.h>
+
+#include "modules/core/Module.h"
+#include "segmentation/HeadAxis.h"
+#include "segmentation/RangeMap.h"
+#include "segmentation/Thickness.h"
+
+namespace caps {
+
+class RangeMapNode;
+class VolumeNode;
+
+/// Everything RangeMapLogic::compute() finds, before it goes into the scene.
+struct RangeMapOutput
+{
+  seg::HeadAxisFit axis;
+  seg::RangeMap skin;            ///< r of the skin (mm)
+  seg::RangeMap bone;            ///< r of the bone (mm)
+  seg::RangeMap thickness;       ///< r_skin − r_bone (mm), along the ray from the axis
+  seg::RangeMap thicknessNormal; ///< along the inward skin normal to the bone (mm)
+  seg::ThicknessStatistics radialStatistics;
+  seg::ThicknessStatistics normalStatistics;
+  /// Samples whose r is the mask edge (no HU crossing next to it).
+  std::size_t skinFromMaskEdge = 0;
+  std::size_t boneFromMaskEdge = 0;
+};
+
+/// The ids of the four RangeMap nodes, and the label map they came from.
+struct RangeMapResult
+{
+  std::string skinId, boneId, thicknessId, thicknessNormalId;
+  std::string labelMapId;
+  bool segmented = false; ///< the volume had no label map: run() segmented it first
+};
+
+/// @class RangeMapLogic
+/// @brief Cylindrical range maps of the skin and bone and the soft-tissue
+/// thickness (issue 3, items 3–5), as scene nodes with roles "skin", "bone",
+/// "thickness" and "thickness-normal".
+///
+/// run() = the label map of the volume (the Segment module's, made first if
+/// there is none) + compute() (no scene: the GUI runs it on a worker thread)
+/// + addToScene() (replaces the maps an earlier run made for the same volume).
+class RangeMapLogic : public ModuleLogic
+{
+public:
+  using ModuleLogic::ModuleLogic;
+
+  struct Parameters
+  {
+    int nTheta = 512; ///< samples around the head
+    int nZ = 256;     ///< samples along the axis
+    /// 3 × 3 box smoothing of the skin and bone maps (§4.2.1, eq. 4.2) before the thickness.
+    bool smooth = false;
+    /// HU of the skin and bone crossings; also the thresholds when run() has to segment.
+    double skinThresholdHu = -400.0;
+    double boneThresholdHu = 250.0;
+  };
+
+  /// Fits the head axis to the body (label ≥ 1) and builds the maps from the
+  /// CT and the label map (1 soft tissue, 2 bone). Touches no scene.
+  /// @throws std::invalid_argument (no body, other grids, ...), seg::Cancelled.
+  static RangeMapOutput compute(vtkImageData* ct, vtkImageData* labels,
+                                const Parameters& parameters, const TaskProgress& progress = {});
+
+  /// Adds the four RangeMap nodes for @a volume, removing the ones an earlier
+  /// run made for it.
+  RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output);
+
+  /// The whole pipeline on the scene (segmenting first when the volume has no
+  /// label map). @a output, when given, receives what compute() found.
+  RangeMapResult run(const VolumeNode& volume, const Parameters& parameters,
+                     const TaskProgress& progress = {}, RangeMapOutput* output = nullptr);
+
+  /// @name Conversions between the library's maps and the scene's nodes
+  ///@{
+  /// Rows θ, columns z (RangeMapNode's layout).
+  static Eigen::MatrixXf toMatrix(const seg::RangeMap& map);
+  /// The map a node holds, on its frame.
+  static seg::RangeMap toRangeMap(const RangeMapNode& node);
+  ///@}
+
+  /// One line per fact: the axis (origin, direction, tilt, slices, residual) and z range.
+  static std::string describeAxis(const seg::HeadAxisFit& axis);
+
+private:
+  /// Per volume id, the nodes made for it (to replace them on the next run).
+  std::map<std::string, std::vector<std::string>> made_;
+};
+
+} // namespace caps

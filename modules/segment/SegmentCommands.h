@@ -1,0 +1,47 @@
+#pragma once
+/// @file SegmentCommands.h
+/// @brief The Segment module's command `caps segment`, and the pieces the
+/// commands of modules built on it share (CT argument, console progress).
+
+#include <filesystem>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "modules/core/Module.h"
+#include "segmentation/CtReader.h"
+
+class vtkPolyData;
+
+namespace caps {
+
+class VolumeNode;
+
+std::vector<ModuleCommand> segmentCommands();
+
+namespace cli {
+
+/// Parses `--series N|UID` into @a options (N counts from 1); an error text on failure.
+std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOptions& options);
+
+/// Parses a number; false when @a text is not one.
+bool parseNumber(const std::string& text, double& value);
+
+/// Progress for a terminal: one line on @a err per step, with the percentage
+/// and the seconds since the callback was made.
+TaskProgress consoleProgress(std::ostream& err);
+
+/// Reads the CT at @a path into @a logic's scene (reusing a volume already
+/// read from it), printing the reader's warnings on @a err.
+VolumeNode* loadCt(ModuleLogic& logic, const std::filesystem::path& path,
+                   const seg::CtReadOptions& options, std::ostream& err);
+
+/// Writes a triangle surface as binary STL (mm, patient LPS).
+/// @throws std::runtime_error naming the file when it cannot be written.
+void writeStl(vtkPolyData* surface, const std::filesystem::path& file);
+/// Writes a surface as VTK XML PolyData (.vtp, compressed).
+void writeVtp(vtkPolyData* surface, const std::filesystem::path& file);
+
+} // namespace cli
+} // namespace caps

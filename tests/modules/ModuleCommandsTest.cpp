@@ -1,0 +1,207 @@
+// `caps segment` and `caps rangemap` run as a user would, on a synthetic head
+// CT written as NRRD (fast; the sample CT is covered by SampleThicknessTest
+// and `caps demo`): files written, NRRD headers, PNG sizes, exit codes.
+
+#include <cstdint>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <vtkPNGReader.h>
+
+#include "HeadPhantom.h"
+#include "app/RunProcess.h"
+#include "scene/NrrdIO.h"
+#include "TestPaths.h"
+
+namespace fs = std::filesystem;
+using caps::test::quoted;
+using caps::test::runProcess;
+
+namespace {
+
+caps::test::ProcessResult runCaps(const std::string& args)
+{
+  return runProcess(quoted(CAPS_EXECUTABLE) + " " + args);
+}
+
+// The phantom CT as a NRRD file in the test's scratch folder.
+fs::path phantomCt(const fs::path& folder)
+{
+  const fs::path file = folder / "phantom-ct.nrrd";
+  caps::NrrdIO::writeImage(caps::test::HeadPhantom::instance().images.ct, file);
+  return file;
+}
+
+// The text header of a NRRD file (up to the blank line).
+std::string nrrdHeader(const fs::path& file)
+{
+  std::ifstream in(file, std::ios::binary);
+  std::string header, line;
+  while (std::getline(in, line) && !line.empty())
+    header += line + "\n";
+  return header;
+}
+
+std::array<int, 2> pngSize(const fs::path& file)
+{
+  auto reader = vtkSmartPointer<vtkPNGReader>::New();
+  reader->SetFileName(file.c_str());
+  reader->Update();
+  int dims[3] = {0, 0, 0};
+  reader->GetOutput()->GetDimensions(dims);
+  return {dims[0], dims[1]};
+}
+
+} // namespace
+
+TEST(ModuleCommands, SegmentWritesLabelsAndSurfaces)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path ct = phantomCt(folder);
+  const fs::path out = folder / "segment";
+  const auto r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+                         " --skin-threshold -480 --bone-threshold 520");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("(skin -480.0 HU, bone 520.0 HU)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cm3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cm2"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Segmentation notes:"), std::string::npos) << r.output;
+  for (const char* file : {"labels.nrrd", "skin.vtp", "bone.vtp", "skin.stl", "bone.stl"})
+  {
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+    EXPECT_GT(fs::file_size(out / file), 1000u) << file;
+  }
+  // The label map: 3D unsigned char on the CT's grid, in LPS.
+  const std::string header = nrrdHeader(out / "labels.nrrd");
+  EXPECT_NE(header.find("NRRD000"), std::string::npos) << header;
+  EXPECT_NE(header.find("dimension: 3"), std::string::npos) << header;
+  EXPECT_NE(header.find("type: unsigned char"), std::string::npos) << header;
+  EXPECT_NE(header.find("space: left-posterior-superior"), std::string::npos) << header;
+  int dims[3];
+  caps::test::HeadPhantom::instance().images.ct->GetDimensions(dims);
+  EXPECT_NE(header.find("sizes: " + std::to_string(dims[0]) + " " + std::to_string(dims[1]) + " " +
+                        std::to_string(dims[2])),
+            std::string::npos)
+    << header;
+  const auto labels = caps::NrrdIO::readImage(out / "labels.nrrd");
+  double range[2];
+  labels->GetScalarRange(range);
+  EXPECT_EQ(range[0], 0.0);
+  EXPECT_EQ(range[1], 2.0);
+  // Binary STL: 84 bytes of header and count, 50 bytes per triangle.
+  std::ifstream stl(out / "skin.stl", std::ios::binary);
+  char head[80];
+  std::uint32_t triangles = 0;
+  stl.read(head, 80);
+  stl.read(reinterpret_cast<char*>(&triangles), 4);
+  EXPECT_GT(triangles, 10000u);
+  EXPECT_EQ(fs::file_size(out / "skin.stl"), 84u + 50u * triangles);
+}
+
+TEST(ModuleCommands, SegmentWithoutSurfaceFiles)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path ct = phantomCt(folder);
+  const fs::path out = folder / "out";
+  auto r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+                   " --surfaces none");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_TRUE(fs::exists(out / "labels.nrrd"));
+  for (const char* file : {"skin.vtp", "bone.vtp", "skin.stl", "bone.stl"})
+    EXPECT_FALSE(fs::exists(out / file)) << file;
+  r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+              " --surfaces obj");
+  EXPECT_EQ(r.exitCode, 2) << r.output;
+}
+
+TEST(ModuleCommands, RangeMapWritesMapsAndPreviews)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path ct = phantomCt(folder);
+  const fs::path out = folder / "rangemap";
+  const auto r = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+                         " --size 360x120 --smooth");
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("360 x 120, smoothed"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Axis: through"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("radial r_skin - r_bone"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("along the skin normal"), std::string::npos) << r.output;
+  for (const char* file : {"skin-range.nrrd", "bone-range.nrrd", "thickness.nrrd",
+                           "thickness-normal.nrrd"})
+  {
+    ASSERT_TRUE(fs::exists(out / file)) << file;
+    const std::string header = nrrdHeader(out / file);
+    EXPECT_NE(header.find("dimension: 2"), std::string::npos) << file << "\n" << header;
+    EXPECT_NE(header.find("type: float"), std::string::npos) << file << "\n" << header;
+    EXPECT_NE(header.find("sizes: 360 120"), std::string::npos) << file << "\n" << header;
+    const Eigen::MatrixXf m = caps::NrrdIO::readMatrix(out / file);
+    EXPECT_EQ(m.rows(), 360);
+    EXPECT_EQ(m.cols(), 120);
+  }
+  // Thickness on the phantom's equator is 8..16 mm (8 on the axes).
+  const Eigen::MatrixXf t = caps::NrrdIO::readMatrix(out / "thickness.nrrd");
+  EXPECT_NEAR(t(90, 60), 8.0 + 0.0, 1.0); // θ = -π/2: the front, 8 mm along y
+  for (const char* file : {"skin-range.png", "thickness.png", "thickness-normal.png"})
+  {
+    ASSERT_TRUE(fs::exists(out / file)) << file;
+    const auto size = pngSize(out / file);
+    // 2 pixels per sample plus the margins for the text and the colour bar.
+    EXPECT_GT(size[0], 2 * 360) << file;
+    EXPECT_LT(size[0], 2 * 360 + 300) << file;
+    EXPECT_GT(size[1], 2 * 120) << file;
+    EXPECT_LT(size[1], 2 * 120 + 200) << file;
+  }
+}
+
+TEST(ModuleCommands, BadInputAndUsage)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path text = folder / "report.txt";
+  std::ofstream(text) << "Operative report: not an image.\n";
+  for (const char* command : {"segment", "rangemap"})
+  {
+    const std::string name = command;
+    auto r = runCaps(name + " " + quoted(text.string()) + " --out " + quoted((folder / "o").string()));
+    EXPECT_EQ(r.exitCode, 1) << name << ": " << r.output;
+    EXPECT_FALSE(r.crashed);
+    EXPECT_NE(r.output.find("caps " + name + ": "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("is not an image CAPS can read"), std::string::npos) << r.output;
+
+    r = runCaps(name + " " + quoted((folder / "missing").string()) + " --out " +
+                quoted((folder / "o").string()));
+    EXPECT_EQ(r.exitCode, 1) << name << ": " << r.output;
+
+    r = runCaps(name + " " + quoted(text.string()));
+    EXPECT_EQ(r.exitCode, 2) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("--out DIR missing"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("usage: caps " + name), std::string::npos) << r.output;
+
+    r = runCaps(name);
+    EXPECT_EQ(r.exitCode, 2) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("CT missing"), std::string::npos) << r.output;
+
+    r = runCaps(name + " --help");
+    EXPECT_EQ(r.exitCode, 0) << name << ": " << r.output;
+    EXPECT_NE(r.output.find("usage: caps " + name), std::string::npos) << r.output;
+
+    r = runCaps(name + " a b --out x");
+    EXPECT_EQ(r.exitCode, 2) << name << ": " << r.output;
+    r = runCaps(name + " a --frobnicate --out x");
+    EXPECT_EQ(r.exitCode, 2) << name << ": " << r.output;
+  }
+  auto r = runCaps("segment x --out y --skin-threshold soft");
+  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_NE(r.output.find("--skin-threshold needs a number"), std::string::npos) << r.output;
+  r = runCaps("segment x --out y --skin-threshold 300 --bone-threshold 200");
+  EXPECT_EQ(r.exitCode, 2) << r.output;
+  for (const char* size : {"512", "512x", "3x3", "512x256x2", "ax256"})
+  {
+    r = runCaps(std::string("rangemap x --out y --size ") + size);
+    EXPECT_EQ(r.exitCode, 2) << size << ": " << r.output;
+    EXPECT_NE(r.output.find("--size needs"), std::string::npos) << r.output;
+  }
+  // The output folder cannot be made (a file is in the way): exit 1, said so.
+  r = runCaps("rangemap " + quoted(text.string()) + " --out " + quoted((text / "sub").string()));
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+}
