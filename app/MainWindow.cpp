@@ -176,6 +176,10 @@ void MainWindow::buildModulePanels()
   }
   connect(module_selector_, qOverload<int>(&QComboBox::currentIndexChanged), panels_,
           &QStackedWidget::setCurrentIndex);
+  // The work starts with loading a CT.
+  const int start = module_selector_->findData(QString("volumes"));
+  if (start >= 0)
+    module_selector_->setCurrentIndex(start);
   dock->setMinimumWidth(380);
 }
 
@@ -210,6 +214,11 @@ void MainWindow::buildMenus()
   file->addAction(tr("&Quit"), this, &QWidget::close, QKeySequence::Quit);
 
   QMenu* view = menuBar()->addMenu(tr("&View"));
+  slices_in_3d_ = view->addAction(tr("&Slices in the 3D view"));
+  slices_in_3d_->setCheckable(true);
+  slices_in_3d_->setChecked(true);
+  connect(slices_in_3d_, &QAction::toggled, this,
+          [this](bool on) { view3d_->setSlicesVisible(on); });
   view->addAction(tr("&Reset 3D view"), this, [this]() {
     view3d_->resetCamera();
     view3d_->renderWindow()->Render();
@@ -246,6 +255,9 @@ void MainWindow::observeScene()
       else
         view3d_->setSurface(node.id(), surface.polyData(), surface.color(), surface.opacity(),
                             surface.visible());
+      // The opaque slice planes would hide the face: a new surface turns them off.
+      if (event == SceneEvent::NodeAdded && slices_in_3d_->isChecked())
+        slices_in_3d_->setChecked(false);
     }
   });
 }

@@ -13,6 +13,7 @@
 
 #include "modules/core/Module.h"
 
+class QAction;
 class QComboBox;
 class QLabel;
 class QMenu;
@@ -89,6 +90,7 @@ private:
   QLabel* progress_label_ = nullptr;
   QPushButton* cancel_ = nullptr;
   QMenu* recent_menu_ = nullptr;
+  QAction* slices_in_3d_ = nullptr;
   QThread* task_thread_ = nullptr;
   std::atomic<bool> cancel_requested_{false};
   std::filesystem::path scene_path_;

@@ -102,6 +102,14 @@ void ThreeDView::setImage(vtkImageData* image)
   renderWindow()->Render();
 }
 
+void ThreeDView::setSlicesVisible(bool visible)
+{
+  slices_visible_ = visible;
+  for (auto& slice : slices_)
+    slice->SetVisibility(visible);
+  renderWindow()->Render();
+}
+
 void ThreeDView::setWindowLevel(double window, double level)
 {
   image_property_->SetColorWindow(window);

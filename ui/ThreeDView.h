@@ -31,6 +31,9 @@ public:
   /// Shows the three orthogonal slices of @a image (nullptr clears).
   void setImage(vtkImageData* image);
   void setWindowLevel(double window, double level);
+  /// Shows or hides the three slice planes (surfaces stay).
+  void setSlicesVisible(bool visible);
+  bool slicesVisible() const { return slices_visible_; }
   /// Moves the three slice planes through @a position (image space, mm).
   void setCursorPosition(const std::array<double, 3>& position);
 
@@ -52,6 +55,7 @@ private:
   vtkSmartPointer<vtkActor> outline_;
   vtkSmartPointer<vtkOrientationMarkerWidget> orientation_marker_;
   std::map<std::string, vtkSmartPointer<vtkActor>> surfaces_;
+  bool slices_visible_ = true;
 };
 
 } // namespace caps::ui
