@@ -3,21 +3,20 @@
 // the chin must lie in anatomically plausible ranges. One TEST: reading and
 // segmenting the sample takes ~10 s, and each test runs in its own process.
 //
-// Where those places are, found from the maps themselves (the sample has no
-// landmarks), on the midline profile r_skin(z) at θ = -π/2 (the front of the
-// face; mean of the 5 columns around it):
+// Where those places are is found from the maps themselves (the sample has
+// no landmarks) by the library's automatic landmark placement
+// (segmentation/LandmarkPlacement.h, which documents the rules), on the
+// midline profile r_skin(z) at θ = -π/2 (the front of the face; median of the
+// 7 columns around it):
 // - nose tip (pronasale): the largest r of the profile in the upper two
 //   thirds of the scan (below lie the neck and the shoulders);
-// - forehead: 65 to 85 mm above the nose tip: above the nasion (the dip of
-//   the profile, 25-40 mm above the nose tip; 27 mm on the sample) and the
-//   glabella (~10 mm above the nasion), below the hairline;
+// - forehead: 75 mm above the nose tip: above the nasion (34 mm above the
+//   nose tip on the sample) and the glabella, below the hairline;
 // - underside of the jaw: walking down from the nose tip, the first sample
-//   whose r is below 60 % of the nose tip's (the neck is much closer to the
-//   axis than the face);
-// - chin (pogonion): the most anterior point (largest r) in the 25 mm above
-//   the underside of the jaw. (On the sample the lips and the chin are
-//   within 3 mm of the same r, so "the local maximum below the lips" is not
-//   a stable rule; the jaw's underside is.)
+//   whose r is below 60 % of the nose tip's;
+// - chin (pogonion): the most anterior point (largest r) 5 to 25 mm above
+//   the underside of the jaw (on the sample the lips and the chin are within
+//   3 mm of the same r, so "the local maximum below the lips" is not stable);
 // - cheeks: θ = -π/2 ± 50° (left and right) at the height of the nose tip:
 //   over the maxilla below the zygoma. (Lower, at the height of the mouth,
 //   the normal through the cheek meets no bone in the bone map on the sample:
@@ -49,6 +48,8 @@
 #include "modules/rangemap/RangeMapPreview.h"
 #include "modules/segment/SegmentLogic.h"
 #include "modules/volumes/VolumesLogic.h"
+#include "segmentation/LandmarkPlacement.h"
+#include "segmentation/Landmarks.h"
 #include "scene/LabelMapNode.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
@@ -156,33 +157,22 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   ASSERT_EQ(skin.values().rows(), 512);
   ASSERT_EQ(skin.values().cols(), 256);
 
-  // The midline profile r_skin(z) at θ = -π/2.
+  // The landmarks, placed automatically from the skin and bone maps.
+  const caps::seg::RangeMap skinMap = caps::RangeMapLogic::toRangeMap(skin);
+  const caps::seg::RangeMap boneMap =
+    caps::RangeMapLogic::toRangeMap(*scene.nodeAs<caps::RangeMapNode>(maps.boneId));
+  const caps::seg::LandmarkPlacement placed = caps::seg::placeLandmarks(skinMap, boneMap);
+  for (const auto& warning : placed.warnings)
+    std::printf("[ landmark ] %s\n", warning.c_str());
+  const caps::seg::ProfileFeatures& features = placed.features;
+  const std::vector<double>& profile = features.profile;
   const double front = -kPi / 2;
-  const Eigen::Index nz = skin.values().cols();
-  std::vector<double> profile(nz, std::nan(""));
-  for (Eigen::Index j = 0; j < nz; ++j)
-    profile[j] = patchMedian(skin, front, 2.5 * 2 * kPi / 512, skin.zAt(j), 0.0);
-
-  // Nose tip: the largest r in the upper two thirds of the scan.
-  Eigen::Index nose = -1;
-  for (Eigen::Index j = nz / 3; j < nz; ++j)
-    if (std::isfinite(profile[j]) && (nose < 0 || profile[j] > profile[nose]))
-      nose = j;
+  const Eigen::Index nose = features.pronasale;
+  const Eigen::Index jaw = features.jawUnderside;
+  const Eigen::Index chin = features.pogonion;
   ASSERT_GE(nose, 0);
   const double zNose = skin.zAt(nose);
-
-  // Underside of the jaw: walking down from the nose tip, the first sample
-  // whose r is below 60 % of the nose tip's (the neck lies much closer to the
-  // axis than the face). Chin: the largest r in the 25 mm above it.
-  Eigen::Index jaw = -1;
-  for (Eigen::Index j = nose; j >= 0 && jaw < 0; --j)
-    if (profile[j] < 0.6 * profile[nose])
-      jaw = j;
   ASSERT_GE(jaw, 0) << "no underside of the jaw below the nose tip";
-  Eigen::Index chin = -1;
-  for (Eigen::Index j = columnOf(skin, skin.zAt(jaw) + 5.0); j <= columnOf(skin, skin.zAt(jaw) + 25.0); ++j)
-    if (std::isfinite(profile[j]) && (chin < 0 || profile[j] > profile[chin]))
-      chin = j;
   // Print the profile from the chin to the forehead, for a person to check.
   const Eigen::Index first = columnOf(skin, zNose - 100);
   for (Eigen::Index j = first; j <= columnOf(skin, zNose + 90); ++j)
@@ -197,13 +187,15 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   EXPECT_GT(zNose - zChin, 30.0);
   EXPECT_LT(zNose - zChin, 110.0);
 
-  const double cheekAngle = 50.0 * kPi / 180.0;
-  const double zCheek = zNose;
+  const caps::seg::Landmark* forehead = placed.find("forehead");
+  const caps::seg::Landmark* rightCheek = placed.find("mid_cheek_right");
+  const caps::seg::Landmark* leftCheek = placed.find("mid_cheek_left");
+  ASSERT_TRUE(forehead && rightCheek && leftCheek);
   const Place places[] = {
-    {"forehead", front, zNose + 75.0, 3.0, 10.0, 3.0, 10.0},
+    {"forehead", forehead->theta, forehead->z, 3.0, 10.0, 3.0, 10.0},
     {"chin", front, zChin, 6.0, 18.0, 6.0, 18.0},
-    {"right cheek", front - cheekAngle, zCheek, 5.0, 30.0, 4.0, 25.0},
-    {"left cheek", front + cheekAngle, zCheek, 5.0, 30.0, 4.0, 25.0},
+    {"right cheek", rightCheek->theta, rightCheek->z, 5.0, 30.0, 4.0, 25.0},
+    {"left cheek", leftCheek->theta, leftCheek->z, 5.0, 30.0, 4.0, 25.0},
   };
   const double dTheta = 5.0 * kPi / 180.0, dz = 5.0;
   for (const Place& p : places)
@@ -218,9 +210,18 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
     EXPECT_LE(n, p.normalMax) << p.name;
   }
 
-  // Pictures for a person: the thickness maps as the command writes them.
+  // Pictures and the landmark table for a person: the thickness maps as the
+  // command writes them, and every landmark placed with its thickness.
   const auto folder = caps::test::artifacts() / "modules";
   std::filesystem::create_directories(folder);
+  const auto table = caps::seg::landmarkThickness(placed.landmarks, skinMap,
+                                                  caps::RangeMapLogic::toRangeMap(radial),
+                                                  caps::RangeMapLogic::toRangeMap(normal));
+  for (const auto& row : table)
+    std::printf("[ landmark ] %-17s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm\n",
+                row.landmark.name.c_str(), degrees(row.landmark.theta), row.landmark.z, row.radial,
+                row.normal);
+  caps::seg::writeLandmarkCsv(folder / "sample-landmarks.csv", table);
   caps::PreviewStyle style;
   style.title = "Sample CT: radial soft-tissue thickness";
   caps::writeRangeMapPreview(radial.values(), radial.zMin(), radial.zMax(), style,

@@ -1,0 +1,262 @@
+#include "segmentation/LandmarkPlacement.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+namespace caps::seg {
+
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+/// Row nearest z, clamped to the grid.
+int rowOf(const CylindricalFrame& frame, double z)
+{
+  const long v = std::lround(frame.zToIndex(z));
+  return static_cast<int>(std::clamp<long>(v, 0, frame.nZ() - 1));
+}
+
+/// Row of the largest (sign +1) or smallest (sign -1) finite p among the rows
+/// nearest z in [zLow, zHigh]; -1 if none.
+int extremum(const std::vector<double>& p, const CylindricalFrame& frame, double zLow, double zHigh,
+             double sign)
+{
+  if (!(zHigh >= zLow))
+    return -1;
+  int best = -1;
+  for (int j = rowOf(frame, zLow); j <= rowOf(frame, zHigh); ++j)
+    if (std::isfinite(p[j]) && (best < 0 || sign * p[j] > sign * p[best]))
+      best = j;
+  return best;
+}
+
+/// Running median of 2 · half + 1 rows (fewer at the ends; NaN ignored).
+std::vector<double> runningMedian(const std::vector<double>& p, int half)
+{
+  std::vector<double> out(p.size(), nan);
+  std::vector<double> v;
+  const int n = static_cast<int>(p.size());
+  for (int j = 0; j < n; ++j)
+  {
+    v.clear();
+    for (int k = std::max(0, j - half); k <= std::min(n - 1, j + half); ++k)
+      if (std::isfinite(p[k]))
+        v.push_back(p[k]);
+    if (v.empty() || !std::isfinite(p[j]))
+      continue;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    out[j] = v[v.size() / 2];
+  }
+  return out;
+}
+
+struct LateralPoint
+{
+  double theta = nan;
+  double z = nan;
+};
+
+/// The sample of @a map with the largest lateral extent r·|cos θ| for z in
+/// [zLow, zHigh] and θ between @a fromFront and @a toFront (radians) from the
+/// front, on the side @a side (+1 left: θ > -π/2, -1 right).
+LateralPoint widest(const RangeMap& map, double zLow, double zHigh, double fromFront,
+                    double toFront, int side)
+{
+  LateralPoint best;
+  if (!(zHigh >= zLow))
+    return best;
+  const CylindricalFrame& frame = map.frame();
+  double bestWidth = -1.0;
+  const int jLow = rowOf(frame, zLow), jHigh = rowOf(frame, zHigh);
+  const int steps = static_cast<int>(std::floor((toFront - fromFront) / frame.thetaStep()));
+  const double theta0 = kFrontTheta + side * fromFront;
+  for (int s = 0; s <= steps; ++s)
+  {
+    const double theta = theta0 + side * s * frame.thetaStep();
+    const int i = static_cast<int>(std::lround(frame.thetaToIndex(theta))) % frame.nTheta();
+    const double t = frame.indexToTheta(i);
+    for (int j = jLow; j <= jHigh; ++j)
+    {
+      const double r = map.at(i, j);
+      const double width = r * std::abs(std::cos(t));
+      if (std::isfinite(r) && width > bestWidth)
+      {
+        bestWidth = width;
+        best = {t, frame.indexToZ(j)};
+      }
+    }
+  }
+  return best;
+}
+
+} // namespace
+
+std::vector<double> midlineProfile(const RangeMap& skin, double theta, int halfColumns)
+{
+  const CylindricalFrame& frame = skin.frame();
+  std::vector<double> profile(static_cast<std::size_t>(skin.nZ()), nan);
+  if (skin.empty())
+    return profile;
+  const int n = frame.nTheta();
+  const int centre = static_cast<int>(std::lround(frame.thetaToIndex(theta))) % n;
+  std::vector<float> v;
+  for (int j = 0; j < skin.nZ(); ++j)
+  {
+    v.clear();
+    for (int d = -halfColumns; d <= halfColumns; ++d)
+    {
+      const float x = skin.at(((centre + d) % n + n) % n, j);
+      if (std::isfinite(x))
+        v.push_back(x);
+    }
+    if (v.empty())
+      continue;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    profile[j] = v[v.size() / 2];
+  }
+  return profile;
+}
+
+ProfileFeatures findProfileFeatures(const RangeMap& skin, int halfColumns)
+{
+  ProfileFeatures f;
+  f.profile = midlineProfile(skin, kFrontTheta, halfColumns);
+  const std::vector<double>& p = f.profile;
+  const CylindricalFrame& frame = skin.frame();
+  const int nz = skin.nZ();
+  auto z = [&frame](int j) { return frame.indexToZ(j); };
+
+  for (int j = nz / 3; j < nz; ++j)
+    if (std::isfinite(p[j]) && (f.pronasale < 0 || p[j] > p[f.pronasale]))
+      f.pronasale = j;
+  if (f.pronasale < 0)
+    throw std::runtime_error("The skin range map has no skin on the front of the face (θ = -90°) "
+                             "in the upper two thirds of the scan: no landmark can be placed.");
+  const int n = f.pronasale;
+  const double zN = z(n);
+
+  for (int j = n; j >= 0 && f.jawUnderside < 0; --j)
+    if (p[j] < 0.6 * p[n])
+      f.jawUnderside = j;
+  if (f.jawUnderside >= 0)
+    f.pogonion = extremum(p, frame, z(f.jawUnderside) + 5.0, z(f.jawUnderside) + 25.0, +1.0);
+  // The rules that look for dips and bumps read the profile through a 5-row
+  // running median: one-row glitches (a 4 mm deep one at the nasion's height
+  // on the sample CT) are not features.
+  const std::vector<double> q = runningMedian(p, 2);
+  f.nasion = extremum(q, frame, zN + 10.0, zN + 50.0, -1.0);
+  if (f.nasion >= 0)
+    f.glabella = extremum(q, frame, z(f.nasion) + frame.zStep(), z(f.nasion) + 25.0, +1.0);
+
+  // Subnasale: the first row below the nose tip, at least 5 mm behind it,
+  // that is the smallest p within ±3 mm of itself.
+  const int lowest = f.pogonion >= 0 ? f.pogonion : rowOf(frame, zN - 40.0);
+  for (int j = n - 1; j > lowest && f.subnasale < 0; --j)
+  {
+    if (!std::isfinite(q[j]) || p[n] - q[j] < 5.0)
+      continue;
+    if (extremum(q, frame, z(j) - 3.0, z(j) + 3.0, -1.0) == j)
+      f.subnasale = j;
+  }
+  if (f.subnasale >= 0 && f.pogonion >= 0)
+  {
+    const double zSn = z(f.subnasale), zPog = z(f.pogonion), d = zSn - zPog;
+    f.labraleSuperius = extremum(q, frame, zSn - 0.45 * d, zSn - frame.zStep(), +1.0);
+    f.labraleInferius = extremum(q, frame, zPog + 0.25 * d, zSn - 0.45 * d, +1.0);
+  }
+  // Menton: walking down from the pogonion, where p crosses half-way to the jaw underside.
+  if (f.pogonion >= 0)
+  {
+    const double half = 0.5 * (p[f.pogonion] + p[f.jawUnderside]);
+    for (int j = f.pogonion; j > f.jawUnderside; --j)
+      if (std::isfinite(p[j]) && std::isfinite(p[j - 1]) && p[j] >= half && p[j - 1] < half)
+      {
+        const double t = (p[j] - half) / (p[j] - p[j - 1]);
+        f.mentonZ = z(j) - t * frame.zStep();
+        break;
+      }
+  }
+  return f;
+}
+
+const Landmark* LandmarkPlacement::find(const std::string& name) const
+{
+  for (const Landmark& l : landmarks)
+    if (l.name == name)
+      return &l;
+  return nullptr;
+}
+
+LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
+{
+  if (!bone.empty() && bone.frame() != skin.frame())
+    throw std::invalid_argument("The bone range map is on another cylinder or grid than the skin map.");
+  LandmarkPlacement result;
+  result.features = findProfileFeatures(skin);
+  const ProfileFeatures& f = result.features;
+  const CylindricalFrame& frame = skin.frame();
+  auto z = [&frame](int j) { return j >= 0 ? frame.indexToZ(j) : nan; };
+  const double zPrn = z(f.pronasale), zN = z(f.nasion), zSn = z(f.subnasale);
+  const double zLs = z(f.labraleSuperius);
+
+  // Lateral landmarks: on the bone map when there is one.
+  const RangeMap& lateral = bone.empty() ? skin : bone;
+  const double zygionTop = std::isfinite(zN) ? zN : zPrn + 30.0;
+  const double gonionTop = std::isfinite(zSn) ? zSn : f.mentonZ + 40.0;
+  const LateralPoint zyL = widest(lateral, zPrn, zygionTop, 25 * kDegree, 80 * kDegree, +1);
+  const LateralPoint zyR = widest(lateral, zPrn, zygionTop, 25 * kDegree, 80 * kDegree, -1);
+  LateralPoint goL, goR;
+  if (std::isfinite(f.mentonZ))
+  {
+    goL = widest(lateral, f.mentonZ, gonionTop, 30 * kDegree, 95 * kDegree, +1);
+    goR = widest(lateral, f.mentonZ, gonionTop, 30 * kDegree, 95 * kDegree, -1);
+  }
+
+  struct Candidate
+  {
+    double theta, z;
+    const char* why;
+  };
+  const double front = kFrontTheta, cheek = 50 * kDegree;
+  const char* noJaw = "no jaw underside (profile below 60 % of the nose tip) below the nose tip";
+  const Candidate candidates[] = {
+    {front, z(f.glabella), "no nasion 10-50 mm above the nose tip"},
+    {front, zN, "no finite profile 10-50 mm above the nose tip"},
+    {front, zPrn, ""},
+    {front, zSn, "no local minimum of the profile 5 mm behind and below the nose tip"},
+    {front, 0.5 * (zSn + zLs), "no subnasale or labrale superius"},
+    {front, zLs, "no subnasale or pogonion"},
+    {front, z(f.labraleInferius), "no subnasale or pogonion"},
+    {front, z(f.pogonion), noJaw},
+    {front, f.mentonZ,
+     "no pogonion, or the profile does not cross half-way from it to the jaw underside"},
+    {zyL.theta, zyL.z, "no finite sample beside the face between the nose tip and the nasion"},
+    {zyR.theta, zyR.z, "no finite sample beside the face between the nose tip and the nasion"},
+    {goL.theta, goL.z, "no menton, or no finite sample beside the jaw"},
+    {goR.theta, goR.z, "no menton, or no finite sample beside the jaw"},
+    {front + cheek, zPrn, ""},
+    {front - cheek, zPrn, ""},
+    {front, zPrn + 75.0, "75 mm above the nose tip is beyond the scan"},
+  };
+  const auto& definitions = standardLandmarks();
+  if (definitions.size() != std::size(candidates))
+    throw std::logic_error("placeLandmarks: one rule per standard landmark");
+  for (std::size_t k = 0; k < definitions.size(); ++k)
+  {
+    const Candidate& c = candidates[k];
+    const bool inside = std::isfinite(c.theta) && std::isfinite(c.z) && c.z >= frame.zMin() &&
+                        c.z <= frame.zMax();
+    if (inside)
+      result.landmarks.push_back({definitions[k].name, CylindricalFrame::wrapTheta(c.theta), c.z});
+    else
+      result.warnings.push_back(std::string(definitions[k].name) + " not placed: " + c.why + ".");
+  }
+  return result;
+}
+
+} // namespace caps::seg

@@ -1,0 +1,104 @@
+#pragma once
+/// @file LandmarkPlacement.h
+/// @brief Automatic initial placement of the facial landmarks from the skin (and bone) range maps.
+///
+/// Everything is found on the maps themselves, in the cylindrical frame
+/// (θ = -π/2 the front of the face, row 0 the inferior end), with simple rules
+/// a person can check on the midline profile. The result is a first guess the
+/// user moves; the rules, from the most to the least reliable:
+///
+/// Midline profile p(z): for each row, the median of the skin map over the
+/// 2 · halfColumns + 1 columns around θ = -π/2 (NaN samples ignored). The
+/// nasion, glabella, subnasale and lip rules read p through a 5-row running
+/// median (one-row glitches are not features); the others read p itself.
+/// - pronasale (reliable): the largest p in the upper two thirds of the rows
+///   (below lie the neck and the shoulders, which can reach further out).
+/// - jaw underside (helper, reliable): walking down from the pronasale, the
+///   first row with p < 60 % of the pronasale's (the neck is much closer to
+///   the axis than the face).
+/// - pogonion (reliable): the largest p 5 to 25 mm above the jaw underside.
+///   (On real profiles the lips and the chin are within a few mm of the same
+///   r, so "the local maximum below the lips" is not stable; the jaw is.)
+/// - nasion (reliable): the smallest p 10 to 50 mm above the pronasale.
+/// - glabella (reliable): the largest p up to 25 mm above the nasion.
+/// - forehead (reliable as a place; not anatomical): 75 mm above the
+///   pronasale, above the glabella and below the hairline.
+/// - menton (fair): where p, walking down from the pogonion to the jaw
+///   underside, crosses half-way between them (linear between rows): the
+///   underside of the chin is nearly horizontal, so p drops steeply there.
+/// - subnasale (fair): walking down from the pronasale, the first row at least
+///   5 mm behind it that is the smallest p within ±3 mm of itself (the foot of
+///   the columella, before the upper lip comes forward again).
+/// - labrale superius / inferius (fair; lips closed and at rest): with
+///   d = z_subnasale − z_pogonion, the largest p in (z_sn − 0.45 d, z_sn) and
+///   in [z_pog + 0.25 d, z_sn − 0.45 d].
+/// - mid-philtrum (fair): on the midline half-way in z between the subnasale
+///   and the labrale superius.
+/// - mid-cheek left/right (fair, as a place): θ = -π/2 ± 50° at the height of
+///   the pronasale, over the maxilla below the zygoma.
+/// - zygion left/right (approximate): the laterally widest point, largest
+///   r·|cos θ|, of the bone map (the skin map without one) for z between the
+///   pronasale and the nasion and θ 25° to 80° from the front on that side
+///   (stops 10° before the side of the head, where the ears are); placed on
+///   the skin at the same (θ, z).
+/// - gonion left/right (approximate, check it): the laterally widest point of
+///   the bone map (the skin map without one) for z from the menton up to the
+///   subnasale (menton + 40 mm without one) and θ 30° to 95° from the front:
+///   the mandible's angle is its widest part below the condyles.
+/// Left is patient left: θ > -π/2 (towards θ = 0).
+
+#include <string>
+#include <vector>
+
+#include "segmentation/Landmarks.h"
+#include "segmentation/RangeMap.h"
+
+namespace caps::seg {
+
+/// θ of the front of the face.
+inline constexpr double kFrontTheta = -1.5707963267948966;
+
+/// p(z): per row j, the median of the finite skin samples in the columns
+/// nearest θ within ±halfColumns (NaN if none).
+std::vector<double> midlineProfile(const RangeMap& skin, double theta = kFrontTheta,
+                                   int halfColumns = 3);
+
+/// Rows of the midline profile features (-1 where not found) and the profile.
+struct ProfileFeatures
+{
+  std::vector<double> profile;
+  int pronasale = -1;
+  int jawUnderside = -1;
+  int pogonion = -1;
+  int nasion = -1;
+  int glabella = -1;
+  int subnasale = -1;
+  int labraleSuperius = -1;
+  int labraleInferius = -1;
+  /// z of the menton (mm, between rows); NaN where not found.
+  double mentonZ = RangeMap::quietNaN();
+};
+
+/// The profile features by the rules in this file's comment.
+/// @throws std::runtime_error if the profile has no finite sample in its upper two thirds.
+ProfileFeatures findProfileFeatures(const RangeMap& skin, int halfColumns = 3);
+
+struct LandmarkPlacement
+{
+  /// The landmarks found, in standardLandmarks() order (missing ones left out).
+  std::vector<Landmark> landmarks;
+  /// One line per landmark not found, saying why.
+  std::vector<std::string> warnings;
+  ProfileFeatures features;
+
+  /// The landmark of that name, nullptr if absent.
+  const Landmark* find(const std::string& name) const;
+};
+
+/// Initial placement of the standard landmarks. @a bone may be empty (0 × 0):
+/// zygion and gonion then use the skin map.
+/// @throws std::invalid_argument if a non-empty bone map is on another frame;
+///         std::runtime_error as findProfileFeatures().
+LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone = RangeMap());
+
+} // namespace caps::seg
