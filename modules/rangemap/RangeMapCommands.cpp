@@ -14,6 +14,8 @@
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
+#include "segmentation/LandmarkPlacement.h"
+#include "segmentation/Landmarks.h"
 
 namespace fs = std::filesystem;
 
@@ -31,6 +33,8 @@ const char* kRangeMapUsage =
   "  thickness-normal.nrrd              thickness along the inward skin normal\n"
   "  skin-range.png, thickness.png,     previews: the face in the middle, z up,\n"
   "  thickness-normal.png               a colour bar in mm\n"
+  "  landmarks.csv                      facial landmarks placed from the maps, with\n"
+  "                                     the thickness under each (check and correct)\n"
   "The NRRD files are 2D float images, theta fastest (rows of the map: theta from\n"
   "-180 deg, -90 deg at the face; columns: z from the bottom of the scan up).\n"
   "Prints the axis and the thickness statistics (mm).\n"
@@ -122,6 +126,41 @@ PreviewStyle skinStyle(const seg::RangeMap& skin)
   return style;
 }
 
+// The standard facial landmarks placed automatically from the maps, with the
+// thickness under each: a first table for the thickness review, to be
+// corrected by the surgeon (the CSV can be edited and read back).
+void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& file, std::ostream& out,
+                        std::ostream& err)
+{
+  seg::LandmarkPlacement placement;
+  try
+  {
+    placement = seg::placeLandmarks(maps.skin, maps.bone);
+  }
+  catch (const std::exception& e)
+  {
+    err << "warning: no landmarks placed: " << e.what() << "\n";
+    return;
+  }
+  for (const auto& warning : placement.warnings)
+    err << "warning: " << warning << "\n";
+  const auto rows =
+    seg::landmarkThickness(placement.landmarks, maps.skin, maps.thickness, maps.thicknessNormal);
+  out << "Thickness at the landmarks placed automatically (check them; mm):\n"
+      << "  landmark            theta    z     radial  normal\n";
+  for (const auto& row : rows)
+  {
+    std::string name = row.landmark.name;
+    name.resize(std::max<std::size_t>(name.size(), 18), ' ');
+    out << "  " << name << std::fixed << std::setprecision(0) << std::setw(6)
+        << row.landmark.theta * 180.0 / M_PI << std::setprecision(1) << std::setw(7)
+        << row.landmark.z << std::setw(8) << row.radial << std::setw(8) << row.normal << "\n";
+  }
+  out.unsetf(std::ios::floatfield);
+  seg::writeLandmarkCsv(file, rows);
+  out << "wrote " << file.string() << "\n";
+}
+
 int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
                 std::ostream& err)
 {
@@ -201,6 +240,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
       writeRangeMapPreview(node->values(), node->zMin(), node->zMax(), style, args.out / file.png);
       out << "wrote " << (args.out / file.png).string() << "\n";
     }
+    writeLandmarkTable(maps, args.out / "landmarks.csv", out, err);
     return 0;
   }
   catch (const std::exception& e)
