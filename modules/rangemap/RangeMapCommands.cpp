@@ -46,62 +46,34 @@ const char* kRangeMapUsage =
   "Exit status: 0 when written, 1 when the CT cannot be read or processed or the\n"
   "files cannot be written, 2 on wrong usage.\n";
 
-struct RangeMapArgs
+struct RangeMapArgs : cli::CtCommandArgs
 {
-  fs::path ct;
-  fs::path out;
-  seg::CtReadOptions read;
   RangeMapLogic::Parameters parameters;
-  bool help = false;
 };
 
-std::optional<std::string> parse(const std::vector<std::string>& args, RangeMapArgs& parsed)
+std::optional<std::string> parse(const std::vector<std::string>& argv, RangeMapArgs& parsed)
 {
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
-    const bool hasValue = i + 1 < args.size();
-    if (a == "--help" || a == "-h")
-      parsed.help = true;
-    else if (a == "--out")
-    {
-      if (!hasValue)
-        return "--out needs a folder";
-      parsed.out = args[++i];
-    }
-    else if (a == "--series")
-    {
-      if (!hasValue)
-        return "--series needs a number or a series UID";
-      if (auto problem = cli::parseSeries(args[++i], parsed.read))
-        return problem;
-    }
-    else if (a == "--size")
-    {
-      int nTheta = 0, nZ = 0;
-      char tail = 0;
-      if (!hasValue || std::sscanf(args[++i].c_str(), "%dx%d%c", &nTheta, &nZ, &tail) != 2 ||
-          nTheta < 8 || nZ < 4 || nTheta > 8192 || nZ > 8192)
-        return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
-      parsed.parameters.nTheta = nTheta;
-      parsed.parameters.nZ = nZ;
-    }
-    else if (a == "--smooth")
-      parsed.parameters.smooth = true;
-    else if (!a.empty() && a[0] == '-')
-      return "unknown option " + a;
-    else if (parsed.ct.empty())
-      parsed.ct = a;
-    else
-      return "one CT only (got '" + parsed.ct.string() + "' and '" + a + "')";
-  }
-  if (parsed.help)
-    return std::nullopt;
-  if (parsed.ct.empty())
-    return "CT missing";
-  if (parsed.out.empty())
-    return "--out DIR missing: where should the results go?";
-  return std::nullopt;
+  return cli::parseCtCommand(
+    argv, parsed,
+    [&parsed](const std::string& a, const std::vector<std::string>& args,
+              std::size_t& i) -> std::optional<std::string> {
+      if (a == "--size")
+      {
+        int nTheta = 0, nZ = 0;
+        char tail = 0;
+        if (i + 1 >= args.size() ||
+            std::sscanf(args[++i].c_str(), "%dx%d%c", &nTheta, &nZ, &tail) != 2 || nTheta < 8 ||
+            nZ < 4 || nTheta > 8192 || nZ > 8192)
+          return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
+        parsed.parameters.nTheta = nTheta;
+        parsed.parameters.nZ = nZ;
+      }
+      else if (a == "--smooth")
+        parsed.parameters.smooth = true;
+      else
+        return "unknown option " + a;
+      return std::nullopt;
+    });
 }
 
 void printStatistics(std::ostream& out, const char* what, const seg::ThicknessStatistics& s,
@@ -178,11 +150,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
   auto& logic = static_cast<RangeMapLogic&>(moduleLogic);
   try
   {
-    std::error_code ec;
-    fs::create_directories(args.out, ec);
-    if (ec || !fs::is_directory(args.out))
-      throw std::runtime_error("Cannot create the output folder " + args.out.string() + ": " +
-                               (ec ? ec.message() : "a file of that name exists"));
+    cli::makeOutputFolder(args.out);
     const auto start = std::chrono::steady_clock::now();
     args.read.progress = cli::consoleProgress(err);
     VolumeNode* volume = cli::loadCt(logic, args.ct, args.read, err);

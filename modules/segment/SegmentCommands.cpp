@@ -44,6 +44,56 @@ std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOpti
   return std::nullopt;
 }
 
+std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
+                                          CtCommandArgs& parsed, const CommandOption& option)
+{
+  for (std::size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    const bool hasValue = i + 1 < args.size();
+    if (a == "--help" || a == "-h")
+      parsed.help = true;
+    else if (a == "--out")
+    {
+      if (!hasValue)
+        return "--out needs a folder";
+      parsed.out = args[++i];
+    }
+    else if (a == "--series")
+    {
+      if (!hasValue)
+        return "--series needs a number or a series UID";
+      if (auto problem = parseSeries(args[++i], parsed.read))
+        return problem;
+    }
+    else if (!a.empty() && a[0] == '-')
+    {
+      if (auto problem = option(a, args, i))
+        return problem;
+    }
+    else if (parsed.ct.empty())
+      parsed.ct = a;
+    else
+      return "one CT only (got '" + parsed.ct.string() + "' and '" + a + "')";
+  }
+  if (parsed.help)
+    return std::nullopt;
+  if (parsed.ct.empty())
+    return "CT missing";
+  if (parsed.out.empty())
+    return "--out DIR missing: where should the results go?";
+  return std::nullopt;
+}
+
+void makeOutputFolder(const fs::path& folder)
+{
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec || !fs::is_directory(folder))
+    throw std::runtime_error("Cannot create the output folder " + folder.string() + ": " +
+                             (ec ? ec.message() : "a file of that name exists"));
+}
+
 bool parseNumber(const std::string& text, double& value)
 {
   char* end = nullptr;
@@ -138,39 +188,19 @@ const char* kSegmentUsage =
   "Exit status: 0 when written, 1 when the CT cannot be read or segmented or the\n"
   "files cannot be written, 2 on wrong usage.\n";
 
-struct SegmentArgs
+struct SegmentArgs : cli::CtCommandArgs
 {
-  fs::path ct;
-  fs::path out;
-  seg::CtReadOptions read;
   SegmentLogic::Parameters parameters;
   bool vtp = true; ///< surface files to write
   bool stl = true;
-  bool help = false;
 };
 
-std::optional<std::string> parse(const std::vector<std::string>& args, SegmentArgs& parsed)
+std::optional<std::string> parse(const std::vector<std::string>& argv, SegmentArgs& parsed)
 {
-  for (size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
+  const auto option = [&parsed](const std::string& a, const std::vector<std::string>& args,
+                                std::size_t& i) -> std::optional<std::string> {
     const bool hasValue = i + 1 < args.size();
-    if (a == "--help" || a == "-h")
-      parsed.help = true;
-    else if (a == "--out")
-    {
-      if (!hasValue)
-        return "--out needs a folder";
-      parsed.out = args[++i];
-    }
-    else if (a == "--series")
-    {
-      if (!hasValue)
-        return "--series needs a number or a series UID";
-      if (auto problem = cli::parseSeries(args[++i], parsed.read))
-        return problem;
-    }
-    else if (a == "--surfaces")
+    if (a == "--surfaces")
     {
       if (!hasValue)
         return "--surfaces needs vtp, stl, vtp,stl or none";
@@ -188,20 +218,13 @@ std::optional<std::string> parse(const std::vector<std::string>& args, SegmentAr
       (a == "--skin-threshold" ? parsed.parameters.skinThresholdHu
                                : parsed.parameters.boneThresholdHu) = value;
     }
-    else if (!a.empty() && a[0] == '-')
-      return "unknown option " + a;
-    else if (parsed.ct.empty())
-      parsed.ct = a;
     else
-      return "one CT only (got '" + parsed.ct.string() + "' and '" + a + "')";
-  }
-  if (parsed.help)
+      return "unknown option " + a;
     return std::nullopt;
-  if (parsed.ct.empty())
-    return "CT missing";
-  if (parsed.out.empty())
-    return "--out DIR missing: where should the results go?";
-  if (parsed.parameters.boneThresholdHu <= parsed.parameters.skinThresholdHu)
+  };
+  if (auto problem = cli::parseCtCommand(argv, parsed, option))
+    return problem;
+  if (!parsed.help && parsed.parameters.boneThresholdHu <= parsed.parameters.skinThresholdHu)
     return "the bone threshold must be above the skin threshold";
   return std::nullopt;
 }
@@ -223,11 +246,7 @@ int runSegment(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, s
   auto& logic = static_cast<SegmentLogic&>(moduleLogic);
   try
   {
-    std::error_code ec;
-    fs::create_directories(args.out, ec);
-    if (ec || !fs::is_directory(args.out))
-      throw std::runtime_error("Cannot create the output folder " + args.out.string() + ": " +
-                               (ec ? ec.message() : "a file of that name exists"));
+    cli::makeOutputFolder(args.out);
     const auto start = std::chrono::steady_clock::now();
     const TaskProgress progress = cli::consoleProgress(err);
     args.read.progress = progress;

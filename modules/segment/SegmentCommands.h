@@ -3,7 +3,9 @@
 /// @brief The Segment module's command `caps segment`, and the pieces the
 /// commands of modules built on it share (CT argument, console progress).
 
+#include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -21,6 +23,32 @@ class VolumeNode;
 std::vector<ModuleCommand> segmentCommands();
 
 namespace cli {
+
+/// What every command working on a CT takes: the CT, `--out DIR`,
+/// `--series N|UID` and `--help`.
+struct CtCommandArgs
+{
+  std::filesystem::path ct;
+  std::filesystem::path out;
+  seg::CtReadOptions read;
+  bool help = false;
+};
+
+/// Handles a command's own option @a option found at args[i], advancing @a i
+/// past a value it takes; returns an error text (also for an option it does
+/// not know), or nothing.
+using CommandOption = std::function<std::optional<std::string>(
+  const std::string& option, const std::vector<std::string>& args, std::size_t& i)>;
+
+/// Parses a CT command's arguments: the shared ones here, the others through
+/// @a option; then checks that the CT and --out are there (unless --help).
+/// Returns an error text for the usage message, or nothing.
+std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
+                                          CtCommandArgs& parsed, const CommandOption& option);
+
+/// Creates the output folder of a command.
+/// @throws std::runtime_error naming it when it cannot be made.
+void makeOutputFolder(const std::filesystem::path& folder);
 
 /// Parses `--series N|UID` into @a options (N counts from 1); an error text on failure.
 std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOptions& options);
