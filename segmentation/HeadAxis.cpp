@@ -233,4 +233,54 @@ HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
   return fit;
 }
 
+HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point,
+                            const Eigen::Vector3d& direction, const HeadAxisOptions& options)
+{
+  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
+      bodyMask->GetNumberOfScalarComponents() != 1 || !bodyMask->GetScalarPointer())
+    throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
+  if (!point.allFinite() || !direction.allFinite() || direction.norm() < 1e-9)
+    throw std::invalid_argument(
+      "The axis needs a finite point and a non-zero direction (e.g. 0,0,0 and 0,0,1).");
+  Eigen::Vector3d d = direction.normalized();
+  if (d.z() < 0.0)
+    d = -d;
+  const ImageGeometry g = ImageGeometry::of(bodyMask);
+  const auto dims = g.dimensions();
+  const auto* mask = static_cast<const unsigned char*>(bodyMask->GetScalarPointer());
+  const Eigen::Vector3d extentStart(g.extent[0], g.extent[2], g.extent[4]);
+
+  // z along the axis is linear in the voxel index, so along each row of the
+  // mask its extremes are at the row's first and last body voxels.
+  double zMin = std::numeric_limits<double>::max();
+  double zMax = std::numeric_limits<double>::lowest();
+  std::size_t offset = 0;
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j, offset += static_cast<std::size_t>(dims[0]))
+    {
+      const unsigned char* row = mask + offset;
+      int first = 0, last = dims[0] - 1;
+      while (first < dims[0] && !row[first])
+        ++first;
+      if (first == dims[0])
+        continue;
+      while (!row[last])
+        --last;
+      for (int i : {first, last})
+      {
+        const double z = (g.indexToWorld(extentStart + Eigen::Vector3d(i, j, k)) - point).dot(d);
+        zMin = std::min(zMin, z);
+        zMax = std::max(zMax, z);
+      }
+    }
+  if (zMin > zMax)
+    throw std::invalid_argument("The body mask is empty: there is no head to put the axis in.");
+  if (zMax - zMin < 1e-6)
+    zMax = zMin + 1.0; // one slice thick: give the frame a range
+  HeadAxisFit fit;
+  fit.frame = CylindricalFrame(point, d, zMin, zMax, options.nTheta, options.nZ);
+  fit.userDefined = true;
+  return fit;
+}
+
 } // namespace caps::seg

@@ -50,6 +50,8 @@ struct HeadAxisFit
   /// Weighted RMS distance of the used centroids from the axis, mm.
   double rmsResidual = 0.0;
   int slicesUsed = 0;
+  /// The user set the axis (axisThroughBody): nothing was fitted.
+  bool userDefined = false;
 };
 
 /// Fits the head axis to the centroids of the body mask slice by slice.
@@ -69,5 +71,14 @@ struct HeadAxisFit
 /// @throws std::invalid_argument if the mask is missing, not unsigned char, or
 /// has fewer than two usable slices.
 HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options = {});
+
+/// The axis the user sets (issue 3 item 3: "can be set by the user"), through
+/// @a point along @a direction (LPS mm; flipped to point superior), with the z
+/// range covering the whole body mask like fitHeadAxis and its grid
+/// (options.nTheta × options.nZ). The result has userDefined set and no centroids.
+/// @throws std::invalid_argument if the mask is missing or empty, or the point
+/// or direction is not finite or the direction is zero.
+HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point,
+                            const Eigen::Vector3d& direction, const HeadAxisOptions& options = {});
 
 } // namespace caps::seg

@@ -24,6 +24,7 @@ namespace {
 
 const char* kRangeMapUsage =
   "usage: caps rangemap CT --out DIR [--size NTHETAxNZ] [--smooth] [--series N|UID]\n"
+  "                      [--axis PX,PY,PZ,DX,DY,DZ] [--landmarks FILE.csv]\n"
   "\n"
   "Unwraps the skin and the bone of a head CT into cylindrical range maps r(theta, z)\n"
   "around an axis fitted to the head (segmenting the CT first, with the default\n"
@@ -42,6 +43,13 @@ const char* kRangeMapUsage =
   "  --size NTHETAxNZ   samples around the head and along the axis (default 512x256)\n"
   "  --smooth           3x3 box smoothing of the skin and bone maps (thesis eq. 4.2)\n"
   "  --series N|UID     in a folder with several series, the one to use\n"
+  "  --axis PX,PY,PZ,DX,DY,DZ\n"
+  "                     set the head axis yourself: through the point P along the\n"
+  "                     direction D (LPS mm, as the workstation shows them) instead\n"
+  "                     of fitting it to the head\n"
+  "  --landmarks FILE   your landmarks instead of the automatic ones: a CSV like\n"
+  "                     landmarks.csv; a row's x,y,z (LPS mm) places it when given,\n"
+  "                     else its theta_deg,z_mm\n"
   "\n"
   "Exit status: 0 when written, 1 when the CT cannot be read or processed or the\n"
   "files cannot be written, 2 on wrong usage.\n";
@@ -49,7 +57,21 @@ const char* kRangeMapUsage =
 struct RangeMapArgs : cli::CtCommandArgs
 {
   RangeMapLogic::Parameters parameters;
+  fs::path landmarks; ///< the user's landmarks; empty: placed automatically
 };
+
+/// "PX,PY,PZ,DX,DY,DZ" into an axis; false when it is not six finite numbers.
+bool parseAxis(const std::string& text, RangeMapLogic::Parameters::Axis& axis)
+{
+  double v[6];
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4],
+                  &v[5], &tail) != 6)
+    return false;
+  axis.point = Eigen::Vector3d(v[0], v[1], v[2]);
+  axis.direction = Eigen::Vector3d(v[3], v[4], v[5]);
+  return axis.point.allFinite() && axis.direction.allFinite() && axis.direction.norm() > 1e-9;
+}
 
 std::optional<std::string> parse(const std::vector<std::string>& argv, RangeMapArgs& parsed)
 {
@@ -70,6 +92,20 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, RangeMapA
       }
       else if (a == "--smooth")
         parsed.parameters.smooth = true;
+      else if (a == "--axis")
+      {
+        RangeMapLogic::Parameters::Axis axis;
+        if (i + 1 >= args.size() || !parseAxis(args[++i], axis))
+          return "--axis needs a point and a non-zero direction, PX,PY,PZ,DX,DY,DZ in LPS mm "
+                 "(e.g. 0,-200,750,0,0,1)";
+        parsed.parameters.axis = axis;
+      }
+      else if (a == "--landmarks")
+      {
+        if (i + 1 >= args.size())
+          return "--landmarks needs a CSV file (as landmarks.csv)";
+        parsed.landmarks = args[++i];
+      }
       else
         return "unknown option " + a;
       return std::nullopt;
@@ -98,28 +134,60 @@ PreviewStyle skinStyle(const seg::RangeMap& skin)
   return style;
 }
 
-// The standard facial landmarks placed automatically from the maps, with the
-// thickness under each: a first table for the thickness review, to be
-// corrected by the surgeon (the CSV can be edited and read back).
-void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& file, std::ostream& out,
-                        std::ostream& err)
+/// The user's landmarks from a CSV: placed by their world point when the row
+/// has one (it stays right whatever the axis), else by (theta, z).
+std::vector<seg::Landmark> readUserLandmarks(const fs::path& file, const seg::CylindricalFrame& frame)
 {
-  seg::LandmarkPlacement placement;
-  try
+  std::vector<seg::Landmark> landmarks;
+  for (const auto& row : seg::readLandmarkCsv(file))
   {
-    placement = seg::placeLandmarks(maps.skin, maps.bone);
+    seg::Landmark landmark = row.landmark;
+    if (row.position.allFinite())
+    {
+      const seg::CylindricalPoint c = frame.toCylindrical(row.position);
+      landmark.theta = c.theta;
+      landmark.z = c.z;
+    }
+    landmarks.push_back(landmark);
   }
-  catch (const std::exception& e)
+  if (landmarks.empty())
+    throw std::runtime_error(file.string() + " lists no landmarks: add one row per landmark "
+                             "(name,theta_deg,z_mm,x,y,z,...) as in landmarks.csv.");
+  return landmarks;
+}
+
+// The standard facial landmarks placed automatically from the maps (or the
+// user's, from --landmarks), with the thickness under each: a first table for
+// the thickness review, to be corrected by the surgeon (the CSV can be edited
+// and read back).
+void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& userLandmarks,
+                        const fs::path& file, std::ostream& out, std::ostream& err)
+{
+  std::vector<seg::Landmark> landmarks;
+  if (!userLandmarks.empty())
+    landmarks = readUserLandmarks(userLandmarks, maps.skin.frame());
+  else
   {
-    err << "warning: no landmarks placed: " << e.what() << "\n";
-    return;
+    seg::LandmarkPlacement placement;
+    try
+    {
+      placement = seg::placeLandmarks(maps.skin, maps.bone);
+    }
+    catch (const std::exception& e)
+    {
+      err << "warning: no landmarks placed: " << e.what() << "\n";
+      return;
+    }
+    for (const auto& warning : placement.warnings)
+      err << "warning: " << warning << "\n";
+    landmarks = std::move(placement.landmarks);
   }
-  for (const auto& warning : placement.warnings)
-    err << "warning: " << warning << "\n";
-  const auto rows =
-    seg::landmarkThickness(placement.landmarks, maps.skin, maps.thickness, maps.thicknessNormal);
-  out << "Thickness at the landmarks placed automatically (check them; mm):\n"
-      << "  landmark            theta    z     radial  normal\n";
+  const auto rows = seg::landmarkThickness(landmarks, maps.skin, maps.thickness, maps.thicknessNormal);
+  if (userLandmarks.empty())
+    out << "Thickness at the landmarks placed automatically (check them; mm):\n";
+  else
+    out << "Thickness at the landmarks of " << userLandmarks.string() << " (mm):\n";
+  out << "  landmark            theta    z     radial  normal\n";
   for (const auto& row : rows)
   {
     std::string name = row.landmark.name;
@@ -150,6 +218,8 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
   auto& logic = static_cast<RangeMapLogic&>(moduleLogic);
   try
   {
+    if (!args.landmarks.empty())
+      seg::readLandmarkCsv(args.landmarks); // a bad file stops us before the long part
     cli::makeOutputFolder(args.out);
     const auto start = std::chrono::steady_clock::now();
     args.read.progress = cli::consoleProgress(err);
@@ -208,7 +278,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
       writeRangeMapPreview(node->values(), node->zMin(), node->zMax(), style, args.out / file.png);
       out << "wrote " << (args.out / file.png).string() << "\n";
     }
-    writeLandmarkTable(maps, args.out / "landmarks.csv", out, err);
+    writeLandmarkTable(maps, args.landmarks, args.out / "landmarks.csv", out, err);
     return 0;
   }
   catch (const std::exception& e)

@@ -52,7 +52,9 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
   axisOptions.nTheta = parameters.nTheta;
   axisOptions.nZ = parameters.nZ;
   RangeMapOutput out;
-  out.axis = seg::fitHeadAxis(body, axisOptions);
+  out.axis = parameters.axis ? seg::axisThroughBody(body, parameters.axis->point,
+                                                    parameters.axis->direction, axisOptions)
+                             : seg::fitHeadAxis(body, axisOptions);
 
   report(progress, 0.05, "Skin and bone range maps");
   seg::RangeMapBuildOptions build;
@@ -165,16 +167,19 @@ std::string RangeMapLogic::describeAxis(const seg::HeadAxisFit& axis)
 {
   const seg::CylindricalFrame& f = axis.frame;
   const Eigen::Vector3d& o = f.origin();
-  const Eigen::Vector3d& d = f.direction();
+  const Eigen::Vector3d d = f.direction().array() + 0.0; // + 0.0: no "-0.000"
   const double tilt = std::acos(std::clamp(d.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
   std::ostringstream out;
   out << std::fixed << std::setprecision(1);
   out << "Axis: through (" << o.x() << ", " << o.y() << ", " << o.z() << ") mm LPS, direction ("
       << std::setprecision(3) << d.x() << ", " << d.y() << ", " << d.z() << "), "
       << std::setprecision(1) << tilt << " deg from patient superior\n";
-  out << "      fitted to " << axis.slicesUsed << " of " << axis.centroids.size()
-      << " slice centroids, RMS residual " << std::setprecision(2) << axis.rmsResidual
-      << " mm; z from " << std::setprecision(1) << f.zMin() << " to " << f.zMax() << " mm, "
+  if (axis.userDefined)
+    out << "      set by the user";
+  else
+    out << "      fitted to " << axis.slicesUsed << " of " << axis.centroids.size()
+        << " slice centroids, RMS residual " << std::setprecision(2) << axis.rmsResidual << " mm";
+  out << "; z from " << std::setprecision(1) << f.zMin() << " to " << f.zMax() << " mm, "
       << f.nTheta() << " x " << f.nZ() << " samples (" << std::setprecision(2)
       << 360.0 / f.nTheta() << " deg x " << f.zStep() << " mm)\n";
   return out.str();

@@ -4,6 +4,7 @@
 /// label map) in, skin, bone and thickness range maps out; no widgets.
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,9 +66,16 @@ public:
     /// HU of the skin and bone crossings; also the thresholds when run() has to segment.
     double skinThresholdHu = -400.0;
     double boneThresholdHu = 250.0;
+    /// The axis the user sets (LPS mm point, direction); none: fitted to the head.
+    struct Axis
+    {
+      Eigen::Vector3d point;
+      Eigen::Vector3d direction;
+    };
+    std::optional<Axis> axis;
   };
 
-  /// Fits the head axis to the body (label ≥ 1) and builds the maps from the
+  /// Fits the head axis to the body (label ≥ 1), or takes Parameters::axis, and builds the maps from the
   /// CT and the label map (1 soft tissue, 2 bone). Touches no scene.
   /// @throws std::invalid_argument (no body, other grids, ...), seg::Cancelled.
   static RangeMapOutput compute(vtkImageData* ct, vtkImageData* labels,

@@ -12,6 +12,7 @@
 #include "HeadPhantom.h"
 #include "app/RunProcess.h"
 #include "scene/NrrdIO.h"
+#include "segmentation/Landmarks.h"
 #include "TestPaths.h"
 
 namespace fs = std::filesystem;
@@ -154,6 +155,60 @@ TEST(ModuleCommands, RangeMapWritesMapsAndPreviews)
   }
 }
 
+// The axis set by hand (off the head's centre) and landmarks from the user's
+// CSV, one placed by its world point, one by (theta, z): the thickness under
+// each is the phantom's along the ray from that axis.
+TEST(ModuleCommands, RangeMapWithTheUsersAxisAndLandmarks)
+{
+  const auto& phantom = caps::test::HeadPhantom::instance();
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path ct = phantomCt(folder);
+  const fs::path out = folder / "rangemap";
+  const Eigen::Vector3d axisPoint = phantom.centre + Eigen::Vector3d(20, 0, 0);
+  const Eigen::Vector3d front = phantom.centre - Eigen::Vector3d(0, phantom.skinB, 0); // on the skin
+  const fs::path landmarks = folder / "mine.csv";
+  std::ofstream(landmarks) << "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm\n"
+                           << "front_point,0,0," << front.x() << "," << front.y() << ","
+                           << front.z() << ",,\n"
+                           << "front_ray,-90,0,,,,,\n";
+  std::ostringstream axis;
+  axis << axisPoint.x() << "," << axisPoint.y() << "," << axisPoint.z() << ",0,0,-1";
+  const auto r = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+                         " --axis " + axis.str() + " --landmarks " + quoted(landmarks.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("set by the user"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("direction (0.000, 0.000, 1.000)"), std::string::npos)
+    << "the axis points superior\n" << r.output;
+  EXPECT_NE(r.output.find("landmarks of"), std::string::npos) << r.output;
+
+  // rangemap segments with the default thresholds (-400, 250 HU), not the
+  // phantom's mid-step ones: its bone comes out about 1 mm thicker, hence 1.5 mm.
+  constexpr double tolerance = 1.5;
+  const auto rows = caps::seg::readLandmarkCsv(out / "landmarks.csv");
+  ASSERT_EQ(rows.size(), 2u);
+  // By world point: theta is where the point lies seen from the user's axis.
+  const Eigen::Vector3d toFront = front - axisPoint;
+  EXPECT_EQ(rows[0].landmark.name, "front_point");
+  EXPECT_NEAR(rows[0].landmark.theta, std::atan2(toFront.y(), toFront.x()), 1e-9);
+  EXPECT_NEAR(rows[0].landmark.z, 0.0, 1e-9);
+  EXPECT_NEAR(rows[0].radial, phantom.radialThickness(axisPoint, toFront.normalized()), tolerance);
+  // By (theta, z): straight to the front from the axis point.
+  EXPECT_EQ(rows[1].landmark.name, "front_ray");
+  EXPECT_NEAR(rows[1].radial, phantom.radialThickness(axisPoint, -Eigen::Vector3d::UnitY()), tolerance);
+  EXPECT_NEAR((rows[1].position - (axisPoint - phantom.skin.outermostHit(axisPoint, -Eigen::Vector3d::UnitY()) *
+                                                  Eigen::Vector3d::UnitY()))
+                .norm(),
+              0.0, 1.0);
+
+  // A landmark file that cannot be read stops the command before the long part.
+  std::ofstream(folder / "bad.csv") << "name,theta\nnasion,3\n";
+  const auto bad = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
+                           " --landmarks " + quoted((folder / "bad.csv").string()));
+  EXPECT_EQ(bad.exitCode, 1) << bad.output;
+  EXPECT_NE(bad.output.find("bad.csv"), std::string::npos) << bad.output;
+  EXPECT_EQ(bad.output.find("Range maps of"), std::string::npos) << bad.output;
+}
+
 TEST(ModuleCommands, BadInputAndUsage)
 {
   const fs::path folder = caps::test::scratchFolder();
@@ -200,6 +255,12 @@ TEST(ModuleCommands, BadInputAndUsage)
     r = runCaps(std::string("rangemap x --out y --size ") + size);
     EXPECT_EQ(r.exitCode, 2) << size << ": " << r.output;
     EXPECT_NE(r.output.find("--size needs"), std::string::npos) << r.output;
+  }
+  for (const char* axis : {"1,2,3", "1,2,3,0,0,0", "1,2,3,0,0,1,5", "a,b,c,d,e,f", "1,2,nan,0,0,1"})
+  {
+    r = runCaps(std::string("rangemap x --out y --axis ") + axis);
+    EXPECT_EQ(r.exitCode, 2) << axis << ": " << r.output;
+    EXPECT_NE(r.output.find("--axis needs"), std::string::npos) << r.output;
   }
   // The output folder cannot be made (a file is in the way): exit 1, said so.
   r = runCaps("rangemap " + quoted(text.string()) + " --out " + quoted((text / "sub").string()));

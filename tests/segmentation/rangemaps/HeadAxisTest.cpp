@@ -101,3 +101,47 @@ TEST(HeadAxis, RefusesAnEmptyMask)
   EXPECT_THROW(fitHeadAxis(mask), std::invalid_argument);
   EXPECT_THROW(fitHeadAxis(nullptr), std::invalid_argument);
 }
+
+// The axis set by the user: kept as given (pointing superior), its z range
+// covering every body voxel, compared with projecting each voxel centre.
+TEST(HeadAxis, TakesTheUsersAxisAndSpansTheBody)
+{
+  const TiltedHead head;
+  const Eigen::Matrix3d direction = Eigen::AngleAxisd(0.4, Eigen::Vector3d(0.2, 0.3, 1).normalized()).matrix();
+  const auto mask = headMask(head, direction);
+  const Eigen::Vector3d point(5, -3, 20);
+  const Eigen::Vector3d along = -Eigen::Vector3d(0.1, -0.2, 1.0).normalized(); // given pointing down
+  HeadAxisOptions options;
+  options.nTheta = 90;
+  options.nZ = 40;
+  const HeadAxisFit fit = axisThroughBody(mask, point, along, options);
+  EXPECT_TRUE(fit.userDefined);
+  EXPECT_TRUE(fit.centroids.empty());
+  EXPECT_NEAR((fit.frame.direction() + along).norm(), 0.0, 1e-12); // flipped to superior
+  EXPECT_NEAR((fit.frame.origin() - point).norm(), 0.0, 1e-12);
+  EXPECT_EQ(fit.frame.nTheta(), 90);
+  EXPECT_EQ(fit.frame.nZ(), 40);
+
+  const ImageGeometry g = ImageGeometry::of(mask);
+  const auto dims = g.dimensions();
+  const auto* m = static_cast<const unsigned char*>(mask->GetScalarPointer());
+  double lo = 1e300, hi = -1e300;
+  std::size_t o = 0;
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i, ++o)
+        if (m[o])
+        {
+          const double z = (g.indexToWorld(Eigen::Vector3d(i, j, k)) - point).dot(-along);
+          lo = std::min(lo, z);
+          hi = std::max(hi, z);
+        }
+  EXPECT_NEAR(fit.frame.zMin(), lo, 1e-9);
+  EXPECT_NEAR(fit.frame.zMax(), hi, 1e-9);
+
+  EXPECT_THROW(axisThroughBody(mask, point, Eigen::Vector3d::Zero()), std::invalid_argument);
+  EXPECT_THROW(axisThroughBody(mask, Eigen::Vector3d(0, std::nan(""), 0), along), std::invalid_argument);
+  EXPECT_THROW(axisThroughBody(nullptr, point, along), std::invalid_argument);
+  std::fill_n(static_cast<unsigned char*>(mask->GetScalarPointer()), mask->GetNumberOfPoints(), 0);
+  EXPECT_THROW(axisThroughBody(mask, point, along), std::invalid_argument);
+}
