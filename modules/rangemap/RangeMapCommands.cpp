@@ -121,19 +121,6 @@ void printStatistics(std::ostream& out, const char* what, const seg::ThicknessSt
   out.unsetf(std::ios::floatfield);
 }
 
-// Colour range of the skin preview: the 2nd..98th percentile, to 10 mm.
-PreviewStyle skinStyle(const seg::RangeMap& skin)
-{
-  PreviewStyle style;
-  style.title = "Skin range r(theta, z): distance from the head axis";
-  const double lo = seg::thicknessPercentile(skin, 2.0), hi = seg::thicknessPercentile(skin, 98.0);
-  style.low = std::isfinite(lo) ? 10.0 * std::floor(lo / 10.0) : 0.0;
-  style.high = std::isfinite(hi) ? 10.0 * std::ceil(hi / 10.0) : 100.0;
-  if (style.high <= style.low)
-    style.high = style.low + 10.0;
-  return style;
-}
-
 /// The user's landmarks from a CSV: placed by their world point when the row
 /// has one (it stays right whatever the axis), else by (theta, z).
 std::vector<seg::Landmark> readUserLandmarks(const fs::path& file, const seg::CylindricalFrame& frame)
@@ -264,7 +251,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
         continue;
       PreviewStyle style;
       if (node->role() == "skin")
-        style = skinStyle(maps.skin);
+        style = rangeStyle(node->values(), "Skin range r(theta, z): distance from the head axis");
       else
       {
         // One fixed scale for thickness, so pictures of two patients compare;
@@ -294,7 +281,8 @@ std::vector<ModuleCommand> rangeMapCommands()
 {
   return {{"rangemap",
            "skin, bone and thickness range maps of a CT (NRRD) with PNG previews in mm",
-           kRangeMapUsage, runRangeMap}};
+           kRangeMapUsage, runRangeMap},
+          scanCommand()};
 }
 
 } // namespace caps

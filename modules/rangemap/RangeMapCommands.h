@@ -1,6 +1,6 @@
 #pragma once
 /// @file RangeMapCommands.h
-/// @brief The RangeMap module's command `caps rangemap`.
+/// @brief The RangeMap module's commands `caps rangemap` and `caps scan`.
 
 #include <vector>
 
@@ -9,5 +9,8 @@
 namespace caps {
 
 std::vector<ModuleCommand> rangeMapCommands();
+
+/// `caps scan`: a surface scan to range and colour map pictures (ScanCommands.cpp).
+ModuleCommand scanCommand();
 
 } // namespace caps

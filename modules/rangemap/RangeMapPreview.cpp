@@ -233,4 +233,30 @@ void writeRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMa
     throw std::runtime_error("Could not write " + file.string() + ": is the folder writable?");
 }
 
+PreviewStyle rangeStyle(const Eigen::MatrixXf& values, std::string title)
+{
+  std::vector<float> finite;
+  finite.reserve(static_cast<std::size_t>(values.size()));
+  for (Eigen::Index k = 0; k < values.size(); ++k)
+    if (std::isfinite(values.data()[k]))
+      finite.push_back(values.data()[k]);
+  PreviewStyle style;
+  style.title = std::move(title);
+  style.low = 0.0;
+  style.high = 100.0;
+  if (!finite.empty())
+  {
+    auto at = [&finite](double percent) {
+      const auto k = static_cast<std::size_t>(std::lround(percent / 100.0 * double(finite.size() - 1)));
+      std::nth_element(finite.begin(), finite.begin() + static_cast<std::ptrdiff_t>(k), finite.end());
+      return double(finite[k]);
+    };
+    style.low = 10.0 * std::floor(at(2.0) / 10.0);
+    style.high = 10.0 * std::ceil(at(98.0) / 10.0);
+  }
+  if (style.high <= style.low)
+    style.high = style.low + 10.0;
+  return style;
+}
+
 } // namespace caps

@@ -22,6 +22,10 @@ struct PreviewStyle
   int pixelsPerSample = 2;  ///< the map's samples as squares of this many pixels
 };
 
+/// The style for a map of distances from the axis (skin, scan): its 2nd..98th
+/// percentile widened to whole 10 mm, so outliers do not wash out the face.
+PreviewStyle rangeStyle(const Eigen::MatrixXf& values, std::string title);
+
 /// @brief Draws a range map as an RGB picture (y up, as vtkImageData and vtkPNGWriter).
 ///
 /// θ runs horizontally with the face (θ = -π/2) in the middle of the picture
