@@ -18,16 +18,16 @@ struct ChunkResult {
   std::exception_ptr error;
 };
 
-void assembleRange(const Mesh& mesh, const MaterialTable& materials, const IntegrationRule& rule,
+void assembleRange(const Mesh& mesh, const MaterialTable& materials, int pointsPerDirection,
                    std::size_t first, std::size_t last, ChunkResult& out) {
   try {
     ElementMatrix ke;
     out.triplets.reserve((last - first) * (kHex20DofCount * (kHex20DofCount + 1) / 2));
     for (std::size_t e = first; e < last; ++e) {
       const Element& el = mesh.elements[e];
-      const Hex20Shape shape = Hex20Shape::fromConnectivity(el.nodes);
-      assembleElementStiffness(shape, mesh.elementCoordinates(e), materials.at(el.region), rule, int(e),
-                               ke);
+      const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
+      assembleElementStiffness(shape, mesh.elementCoordinates(e), materials.at(el.region),
+                               integrationRule(el.kind, pointsPerDirection), int(e), ke);
       for (int p = 0; p < kHex20DofCount; ++p) {
         const int np = el.nodes[p / 3];
         if (np < 0) continue;
@@ -49,7 +49,14 @@ void assembleRange(const Mesh& mesh, const MaterialTable& materials, const Integ
 
 Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
                                               const AssemblyOptions& options) {
-  const IntegrationRule& rule = gaussRule(options.gaussPointsPerDirection);
+  // Fail early on a bad rule, not in a worker thread.
+  gaussRule(options.gaussPointsPerDirection);
+  for (const Element& el : mesh.elements)
+    if (el.kind == ElementKind::Wedge15) {
+      wedgeRule(options.gaussPointsPerDirection);
+      break;
+    }
+  const int n = options.gaussPointsPerDirection;
   const std::size_t ne = mesh.elements.size();
   const std::size_t threads =
       std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(std::max(1, options.threads)), ne));
@@ -58,10 +65,10 @@ Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTa
   for (std::size_t t = 0; t < threads; ++t) {
     const std::size_t first = ne * t / threads, last = ne * (t + 1) / threads;
     if (t + 1 == threads) {
-      assembleRange(mesh, materials, rule, first, last, chunks[t]);
+      assembleRange(mesh, materials, n, first, last, chunks[t]);
     } else {
-      workers.emplace_back(assembleRange, std::cref(mesh), std::cref(materials), std::cref(rule), first,
-                           last, std::ref(chunks[t]));
+      workers.emplace_back(assembleRange, std::cref(mesh), std::cref(materials), n, first, last,
+                           std::ref(chunks[t]));
     }
   }
   for (auto& w : workers) w.join();
@@ -84,15 +91,15 @@ Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTa
 
 Eigen::VectorXd assembleGravityLoad(const Mesh& mesh, const MaterialTable& materials,
                                     const Eigen::Vector3d& acceleration, const AssemblyOptions& options) {
-  const IntegrationRule& rule = gaussRule(options.gaussPointsPerDirection);
   Eigen::VectorXd r = Eigen::VectorXd::Zero(mesh.dofCount());
   ElementVector re;
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
     const double rho = materials.at(el.region).density;
     if (rho == 0.0) continue;
-    assembleElementBodyForce(Hex20Shape::fromConnectivity(el.nodes), mesh.elementCoordinates(e),
-                             rho * acceleration, rule, int(e), re);
+    assembleElementBodyForce(ElementShape::fromConnectivity(el.kind, el.nodes), mesh.elementCoordinates(e),
+                             rho * acceleration, integrationRule(el.kind, options.gaussPointsPerDirection), int(e),
+                             re);
     for (int k = 0; k < kHex20NodeCount; ++k)
       if (el.nodes[k] >= 0) r.segment<3>(3 * el.nodes[k]) += re.segment<3>(3 * k);
   }

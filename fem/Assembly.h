@@ -9,7 +9,9 @@ namespace caps::fem {
 
 struct AssemblyOptions {
   int threads = 2;                 ///< worker threads over elements (>= 1)
-  int gaussPointsPerDirection = 3; ///< 3 (Table 4.6, default) or 2
+  /// 3 (Table 4.6, default) or 2. Native wedges take wedgeRule() of the same
+  /// level: 3 -> 18 points (full), 2 -> 9 points (lower, CalculiX C3D15).
+  int gaussPointsPerDirection = 3;
 };
 
 /**

@@ -1,6 +1,7 @@
 #include "fem/CalculixIO.h"
 
 #include "fem/ElementNumbering.h"
+#include "fem/FacePressure.h"
 
 #include <cstdlib>
 #include <fstream>
@@ -58,9 +59,13 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
   if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
 
   // Elements, grouped by region and type.
-  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;  // (region, type 20/8) -> elements
+  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;  // (region, type 20/15/8) -> elements
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
+    if (el.kind == ElementKind::Wedge15) {
+      groups[{el.region, 15}].push_back(e);
+      continue;
+    }
     int present = 0;
     for (int k = kHex20CornerCount; k < kHex20NodeCount; ++k) present += el.nodes[k] >= 0;
     if (present != 0 && present != 12)
@@ -70,13 +75,15 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
   }
   const auto& toC3D20 = batheToC3D20Table();
   for (const auto& [key, elements] : groups) {
-    o << "*ELEMENT, TYPE=" << (key.second == 20 ? "C3D20" : "C3D8") << ", ELSET=" << regionName("R", key.first)
-      << "\n";
+    const int count = key.second;
+    o << "*ELEMENT, TYPE=C3D" << count << ", ELSET=" << regionName("R", key.first) << "\n";
     for (std::size_t e : elements) {
       const Element& el = mesh.elements[e];
       int c3d[kHex20NodeCount];
-      const int count = key.second;
-      for (int k = 0; k < count; ++k) c3d[toC3D20[k] - 1] = el.nodes[k] + 1;
+      for (int k = 0; k < count; ++k) {
+        const int number = count == kWedge15NodeCount ? wedge15ToC3D15(k) : toC3D20[std::size_t(k)];
+        c3d[number - 1] = el.nodes[std::size_t(k)] + 1;
+      }
       // At most 16 entries per line; a trailing comma continues the record.
       o << e + 1;
       for (int j = 0; j < count; ++j) o << (j == 15 ? ",\n" : ", ") << c3d[j];
@@ -112,7 +119,7 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
   for (std::size_t d = 0; d < map.reduced.size(); ++d)
     if (map.reduced[d] < 0)
       o << d / 3 + 1 << ", " << d % 3 + 1 << ", " << d % 3 + 1 << ", " << map.offset[Eigen::Index(d)] << "\n";
-  if (!load.nodalForces.empty()) {
+  if (!load.nodalForces.empty() || !load.muscles.empty()) {
     // Sum forces per node so each (node, direction) appears once.
     std::map<int, Eigen::Vector3d> forces;
     for (const auto& [node, f] : load.nodalForces) {
@@ -121,6 +128,13 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
                                     ", outside the mesh");
       auto it = forces.emplace(node, Eigen::Vector3d::Zero()).first;
       it->second += f;
+    }
+    // ccx has no spherical body force: muscles go in as their consistent nodal loads.
+    if (!load.muscles.empty()) {
+      const Eigen::VectorXd muscle = assembleMuscleLoad(mesh, load.muscles).load;
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (!muscle.segment<3>(3 * i).isZero(0.0))
+          forces.emplace(int(i), Eigen::Vector3d::Zero()).first->second += muscle.segment<3>(3 * i);
     }
     o << "*CLOAD\n";
     for (const auto& [node, f] : forces)
@@ -138,6 +152,18 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
       o << regionName("R", region) << ", GRAV, " << g << ", " << dir[0] << ", " << dir[1] << ", " << dir[2]
         << "\n";
     }
+  }
+  if (!load.facePressures.empty()) {
+    validateFacePressures(mesh, load.facePressures);
+    // Our face numbers are CalculiX's for each type written: C3D20 and C3D8
+    // (also a wedge written as a degenerate C3D20), C3D15 for a native
+    // wedge. Pressures on the same face add up in ccx as in LoadCase; one
+    // line per face keeps the deck plain.
+    std::map<std::pair<int, int>, double> pressures;
+    for (const FacePressure& p : load.facePressures) pressures[{p.element, p.face}] += p.pressure;
+    o << "*DLOAD\n";
+    for (const auto& [face, p] : pressures)
+      if (p != 0.0) o << face.first + 1 << ", P" << face.second << ", " << p << "\n";
   }
   o << "*NODE FILE\nU\n*NODE PRINT, NSET=NALLNODES\nU\n*END STEP\n";
   return o.str();

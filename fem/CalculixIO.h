@@ -16,7 +16,9 @@ namespace caps::fem {
  *
  * Nodes and elements are numbered from 1 (CAPS index + 1). 20-node elements
  * are C3D20 with the node order translated (batheToC3D20); elements without
- * any mid-side node are C3D8; wedges stay degenerate C3D20. One ELSET R<id>,
+ * any mid-side node are C3D8; degenerate wedges stay degenerate C3D20;
+ * native 15-node wedges are C3D15 (node order translated by wedge15ToC3D15;
+ * ccx integrates them with the 9-point rule of wedgeRule(2)). One ELSET R<id>,
  * MATERIAL M<id> and SOLID SECTION per region. Constraints are written as
  * resolved by resolveConstraints(), i.e. the same U = T Ubar + g:
  * prescribed DOFs (also those sutured onto prescribed ones) as *BOUNDARY,
@@ -25,8 +27,10 @@ namespace caps::fem {
  * repeated in a degenerate (wedge) element is kept independent in the
  * equations where possible: ccx 2.20 gives wrong results when such a node is
  * the dependent DOF (measured: 76 % off against the merged mesh). Loads:
- * *CLOAD, *DLOAD GRAV per region. Output: *NODE FILE U (.frd) and
- * *NODE PRINT U (.dat, one more digit than the .frd).
+ * *CLOAD (muscles as their consistent nodal loads), *DLOAD GRAV per region,
+ * *DLOAD Pn face pressures (summed per element face; our face numbers are
+ * ccx's). Output: *NODE FILE U (.frd) and *NODE PRINT U (.dat, one more
+ * digit than the .frd).
  *
  * Throws std::invalid_argument for an element with only some mid-side nodes
  * (no C3D20 equivalent).

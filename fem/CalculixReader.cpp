@@ -42,7 +42,8 @@ struct Line {
 
 class Parser {
 public:
-  Parser(const std::string& text, std::string source) : source_(std::move(source)) {
+  Parser(const std::string& text, std::string source, const CalculixReadOptions& options)
+      : source_(std::move(source)), options_(options) {
     std::istringstream in(text);
     std::string raw;
     int number = 0;
@@ -196,8 +197,12 @@ private:
         const auto f = split(l.text);
         if (f.size() < 2) fail(l.number, "*DLOAD needs an element (set) and a load type");
         const std::string type = upper(f[1]);
+        if (type.size() > 1 && type[0] == 'P' && type.find_first_not_of("0123456789", 1) == std::string::npos) {
+          readFacePressure(f, type, l.number);
+          continue;
+        }
         if (type != "GRAV")
-          fail(l.number, "*DLOAD type " + type + " is not supported (only GRAV; face pressure P1..P6 is not)");
+          fail(l.number, "*DLOAD type " + type + " is not supported (GRAV and uniform face pressure P1..P6 are)");
         if (f.size() < 6) fail(l.number, "*DLOAD GRAV needs magnitude, nx, ny, nz");
         const Eigen::Vector3d g = number(f[2], l.number) * Eigen::Vector3d(number(f[3], l.number), number(f[4], l.number),
                                                                          number(f[5], l.number));
@@ -251,7 +256,10 @@ private:
       for (int k = 1; k <= count; ++k) n.push_back(nodeIndex(integer(tokens[std::size_t(k)], first), first));
       Element el;
       el.nodes.fill(-1);
-      if (count == 15) {
+      if (count == 15 && options_.nativeWedges) {
+        el.kind = ElementKind::Wedge15;
+        for (int c = 0; c < 15; ++c) el.nodes[std::size_t(c3d15ToWedge15(c + 1))] = n[std::size_t(c)];
+      } else if (count == 15) {
         // C3D15 -> degenerate C3D20 (Fig. 3.2): the edge 3-4 of each triangle face collapses.
         const int map[20] = {0, 1, 2, 2, 3, 4, 5, 5, 6, 7, 2, 8, 9, 10, 5, 11, 12, 13, 14, 14};
         for (int c = 0; c < 20; ++c) el.nodes[std::size_t(c3d20ToBathe(c + 1))] = n[std::size_t(map[c])];
@@ -262,10 +270,40 @@ private:
       elements_.push_back(el);
       elementNumbers_.push_back(id);
       elementLines_.push_back(first);
+      elementNodeCounts_.push_back(count);
       if (set) set->push_back(id);
       tokens.clear();
     }
     if (!tokens.empty()) fail(first, type + " element " + tokens[0] + " is incomplete (" + std::to_string(tokens.size() - 1) + " of " + std::to_string(count) + " nodes)");
+  }
+
+  /// *DLOAD element (set), Pn, pressure: face n in the deck's numbering of
+  /// the element's type, mapped onto the faces of our element.
+  void readFacePressure(const std::vector<std::string>& f, const std::string& type, int line) {
+    // More than three digits cannot be a face (and would overflow stoi).
+    const int face = type.size() <= 4 ? std::stoi(type.substr(1)) : 0;
+    if (f.size() < 3 || f[2].empty()) fail(line, "*DLOAD " + type + " needs a pressure");
+    const double p = number(f[2], line);
+    if (!std::isfinite(p)) fail(line, "*DLOAD " + type + " with a non-finite pressure");
+    for (long id : elementsOf(f[0], line)) {
+      auto it = elementIds_.find(id);
+      if (it == elementIds_.end()) fail(line, "*DLOAD on element " + std::to_string(id) + ", which is not defined");
+      const int e = it->second;
+      const bool wedge = elementNodeCounts_[std::size_t(e)] == 15;
+      const int faces = wedge ? 5 : 6;
+      if (face < 1 || face > faces)
+        fail(line, "*DLOAD " + type + " on element " + std::to_string(id) + ": a " +
+                       (wedge ? "C3D15 wedge has faces P1..P5" : "hexahedron has faces P1..P6"));
+      // A native wedge keeps the C3D15 numbering. In the degenerate brick
+      // built in readElements, C3D15 faces 1-2-3, 4-5-6, 1-2-5-4, 2-3-6-5,
+      // 3-1-4-6 are C3D20 faces 1, 2, 3, 4, 6 (face 5, 3-7-8-4, is the
+      // collapsed edge).
+      static constexpr int kWedgeToHexFace[5] = {1, 2, 3, 4, 6};
+      const bool degenerate = wedge && elements_[std::size_t(e)].kind == ElementKind::Hex20;
+      const int ourFace = degenerate ? kWedgeToHexFace[face - 1] : face;
+      // Pressures repeated on one face add up, as in ccx 2.20 (measured).
+      pressures_[{e, ourFace}] += p;
+    }
   }
 
   void readSet(const std::string& keyword, const std::map<std::string, std::string>& params,
@@ -410,6 +448,7 @@ private:
       m.constraints.suture(pair.first, pair.second);
     }
     m.load.nodalForces = forces_;
+    for (const auto& [face, p] : pressures_) m.load.facePressures.push_back({face.first, face.second, p});
     // Gravity: one acceleration for every element with a density.
     bool have = false;
     for (std::size_t e = 0; e < elements_.size(); ++e) {
@@ -426,6 +465,7 @@ private:
   }
 
   std::string source_;
+  CalculixReadOptions options_;
   std::vector<Line> lines_;
   int line_ = 0;
   int steps_ = 0;
@@ -435,6 +475,7 @@ private:
   std::vector<Element> elements_;
   std::vector<long> elementNumbers_;
   std::vector<int> elementLines_;
+  std::vector<int> elementNodeCounts_;  ///< 20, 15 or 8: the deck's element type
   std::map<long, int> elementIds_;
   std::map<std::string, std::vector<long>> nsets_, elsets_;
   std::string material_;
@@ -445,22 +486,24 @@ private:
   std::vector<Boundary> boundary_;
   std::vector<std::pair<int, Eigen::Vector3d>> forces_;
   std::map<long, Eigen::Vector3d> gravity_;
+  std::map<std::pair<int, int>, double> pressures_;  ///< (element index, face 1..6) -> MPa
   int gravityLine_ = 0;
   std::vector<Equation> equations_;
 };
 
 }  // namespace
 
-CalculixModel parseCalculixInput(const std::string& text, const std::string& sourceName) {
-  return Parser(text, sourceName).run();
+CalculixModel parseCalculixInput(const std::string& text, const std::string& sourceName,
+                                 const CalculixReadOptions& options) {
+  return Parser(text, sourceName, options).run();
 }
 
-CalculixModel readCalculixInput(const std::string& path) {
+CalculixModel readCalculixInput(const std::string& path, const CalculixReadOptions& options) {
   std::ifstream f(path);
   if (!f) throw std::runtime_error("cannot read the input deck " + path);
   std::ostringstream s;
   s << f.rdbuf();
-  return parseCalculixInput(s.str(), path);
+  return parseCalculixInput(s.str(), path, options);
 }
 
 }  // namespace caps::fem

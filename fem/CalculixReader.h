@@ -34,6 +34,13 @@ struct CalculixModel {
   std::vector<std::string> materialNames;  ///< by region id
 };
 
+/// How parseCalculixInput() builds elements.
+struct CalculixReadOptions {
+  /// C3D15 as native 15-node wedges (ElementKind::Wedge15) instead of the
+  /// degenerate 20-node wedge of Fig. 3.2 (the default).
+  bool nativeWedges = false;
+};
+
 /**
  * @brief Reads the CalculiX/Abaqus `.inp` subset that calculixInput() writes,
  *        and hand-written decks of the same kind.
@@ -41,22 +48,27 @@ struct CalculixModel {
  * Keywords (case-insensitive; `**` comments; a keyword line ending in a
  * comma continues on the next line): *HEADING, *NODE, *ELEMENT with TYPE
  * C3D20, C3D20R (read as C3D20: full 3x3x3 integration), C3D15 (a degenerate
- * 20-node wedge, Fig. 3.2) or C3D8 (corners only); *NSET and *ELSET (with
- * GENERATE); *MATERIAL with *ELASTIC (isotropic) and *DENSITY; *SOLID
+ * 20-node wedge, Fig. 3.2, or with options.nativeWedges a native 15-node
+ * wedge) or C3D8 (corners only); *NSET and *ELSET (with GENERATE); *MATERIAL with *ELASTIC (isotropic) and *DENSITY; *SOLID
  * SECTION; *BOUNDARY (node or set, first and last DOF, value; DOFs above 3
  * are ignored for solids); *CLOAD; *DLOAD GRAV (one acceleration for every
- * element with a density); *EQUATION of two terms u_a,i - u_b,i = 0 tying
+ * element with a density); *DLOAD Pn uniform face pressure (element or
+ * element set; P1..P6 for C3D20/C3D20R/C3D8, P1..P5 for C3D15, mapped onto
+ * the faces of the degenerate brick unless the wedge is native; pressures
+ * repeated on a face add up, as in ccx; *DLOAD parameters such as
+ * AMPLITUDE are ignored); *EQUATION of two terms u_a,i - u_b,i = 0 tying
  * all three directions of two coincident nodes (a suture), or three terms
  * u_a,i - u_b,i + c u_aux,1 = 0 with an auxiliary node prescribed to
  * (1, 0, 0) where -c equals the coordinate difference (a suture as written
  * by calculixInput()); one *STEP with *STATIC; *NODE FILE, *EL FILE,
  * *NODE PRINT, *EL PRINT accepted and ignored. Any other keyword, element
- * type or load (e.g. face pressure P1..P6) throws InputDeckError naming it
- * and its line. Nodes in no element (e.g. the auxiliary node) are kept.
+ * type or load (e.g. non-uniform pressure PnNU) throws InputDeckError naming
+ * it and its line. Nodes in no element (e.g. the auxiliary node) are kept.
  */
-CalculixModel parseCalculixInput(const std::string& text, const std::string& sourceName = "input");
+CalculixModel parseCalculixInput(const std::string& text, const std::string& sourceName = "input",
+                                 const CalculixReadOptions& options = {});
 
 /// Reads @a path; throws std::runtime_error if unreadable, InputDeckError if bad.
-CalculixModel readCalculixInput(const std::string& path);
+CalculixModel readCalculixInput(const std::string& path, const CalculixReadOptions& options = {});
 
 }  // namespace caps::fem

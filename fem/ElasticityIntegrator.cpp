@@ -19,7 +19,7 @@ void strainDisplacementMatrix(const PointGeometry& g, StrainDisplacement& b) {
   }
 }
 
-void assembleElementStiffness(const Hex20Shape& shape, const ElementCoordinates& x,
+void assembleElementStiffness(const ElementShape& shape, const ElementCoordinates& x,
                               const LinearElasticMaterial& material, const IntegrationRule& rule,
                               int elementIndex, ElementMatrix& ke) {
   // B^T C B for an isotropic C, one 3x3 block per node pair (a, b):
@@ -30,13 +30,15 @@ void assembleElementStiffness(const Hex20Shape& shape, const ElementCoordinates&
   const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   const double mu = e / (2.0 * (1.0 + nu));
   ke.setZero();
+  // A native wedge uses slots 0..14 only; skip the empty rest.
+  const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
   PointGeometry g;
   for (std::size_t q = 0; q < rule.size(); ++q) {
     evaluateGeometry(shape, x, rule.points[q], elementIndex, g);
     const double w = rule.weights[q] * g.detJ;
     const Eigen::Matrix<double, kHex20NodeCount, 3> lg = (w * lambda) * g.dhWorld;
     const Eigen::Matrix<double, kHex20NodeCount, 3> mg = (w * mu) * g.dhWorld;
-    for (int b = 0; b < kHex20NodeCount; ++b) {
+    for (int b = 0; b < slots; ++b) {
       const double gb0 = g.dhWorld(b, 0), gb1 = g.dhWorld(b, 1), gb2 = g.dhWorld(b, 2);
       for (int a = 0; a <= b; ++a) {
         const double dot = mg(a, 0) * gb0 + mg(a, 1) * gb1 + mg(a, 2) * gb2;
@@ -52,11 +54,11 @@ void assembleElementStiffness(const Hex20Shape& shape, const ElementCoordinates&
       }
     }
   }
-  for (int b = 0; b < kHex20NodeCount; ++b)
+  for (int b = 0; b < slots; ++b)
     for (int a = 0; a < b; ++a) ke.block<3, 3>(3 * b, 3 * a) = ke.block<3, 3>(3 * a, 3 * b).transpose();
 }
 
-void assembleElementBodyForce(const Hex20Shape& shape, const ElementCoordinates& x,
+void assembleElementBodyForce(const ElementShape& shape, const ElementCoordinates& x,
                               const Eigen::Vector3d& forcePerVolume, const IntegrationRule& rule,
                               int elementIndex, ElementVector& re) {
   re.setZero();
@@ -68,7 +70,7 @@ void assembleElementBodyForce(const Hex20Shape& shape, const ElementCoordinates&
   }
 }
 
-double elementVolume(const Hex20Shape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
+double elementVolume(const ElementShape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
                      int elementIndex) {
   double v = 0.0;
   PointGeometry g;

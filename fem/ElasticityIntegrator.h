@@ -8,7 +8,8 @@
 
 namespace caps::fem {
 
-/// Element DOFs: 3 k + d for Bathe node k, direction d (x, y, z).
+/// Element DOFs: 3 k + d for node slot k (Bathe node, or wedge node 0..14),
+/// direction d (x, y, z).
 inline constexpr int kHex20DofCount = 3 * kHex20NodeCount;
 using ElementMatrix = Eigen::Matrix<double, kHex20DofCount, kHex20DofCount>;
 using ElementVector = Eigen::Matrix<double, kHex20DofCount, 1>;
@@ -24,9 +25,11 @@ void strainDisplacementMatrix(const PointGeometry& geometry, StrainDisplacement&
  * Sees one element only: its shape, node coordinates and material; knows
  * nothing of the global numbering. Each integration point's Jacobian is
  * checked (evaluateGeometry), so an inverted element throws ElementError
- * naming @a elementIndex. Rows/columns of absent nodes are zero.
+ * naming @a elementIndex. Rows/columns of absent nodes (and of slots 15..19
+ * of a native wedge) are zero. @a rule must suit the element's kind
+ * (integrationRule()).
  */
-void assembleElementStiffness(const Hex20Shape& shape, const ElementCoordinates& x,
+void assembleElementStiffness(const ElementShape& shape, const ElementCoordinates& x,
                               const LinearElasticMaterial& material, const IntegrationRule& rule,
                               int elementIndex, ElementMatrix& ke);
 
@@ -35,12 +38,12 @@ void assembleElementStiffness(const Hex20Shape& shape, const ElementCoordinates&
  *        @a forcePerVolume (N/mm^3), eq. 4.37-4.39: R = sum_g alpha_g H^T f det J.
  *        For gravity pass density * acceleration.
  */
-void assembleElementBodyForce(const Hex20Shape& shape, const ElementCoordinates& x,
+void assembleElementBodyForce(const ElementShape& shape, const ElementCoordinates& x,
                               const Eigen::Vector3d& forcePerVolume, const IntegrationRule& rule,
                               int elementIndex, ElementVector& re);
 
 /// Volume of the element (mm^3) by the same rule.
-double elementVolume(const Hex20Shape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
+double elementVolume(const ElementShape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
                      int elementIndex);
 
 }  // namespace caps::fem

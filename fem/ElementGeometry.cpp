@@ -7,7 +7,7 @@
 
 namespace caps::fem {
 
-void evaluateGeometry(const Hex20Shape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
+void evaluateGeometry(const ElementShape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
                       int elementIndex, PointGeometry& out, bool check) {
   shape.evaluate(rst, out.h, out.dhNatural);
   out.jacobian.noalias() = out.dhNatural.transpose() * x;
@@ -29,7 +29,7 @@ void evaluateGeometry(const Hex20Shape& shape, const ElementCoordinates& x, cons
         << (scale > 0.0 ? out.detJ / scale : 0.0) << ")";
     m << " at natural point (r, s, t) = (" << rst[0] << ", " << rst[1] << ", " << rst[2]
       << "), world (" << out.world[0] << ", " << out.world[1] << ", " << out.world[2]
-      << ") mm; check its node order (Bathe numbering) and positions";
+      << ") mm; check its node order (" << shape.numberingName() << ") and positions";
     throw ElementError(elementIndex, m.str());
   }
   if (finite && out.detJ != 0.0) {

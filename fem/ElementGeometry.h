@@ -1,6 +1,6 @@
 #pragma once
 
-#include "fem/Hex20Shape.h"
+#include "fem/ElementShape.h"
 
 #include <Eigen/Core>
 
@@ -9,8 +9,8 @@
 
 namespace caps::fem {
 
-/// World coordinates of an element's 20 nodes, one per row in Bathe order
-/// (rows of absent mid-side nodes are ignored).
+/// World coordinates of an element's 20 node slots, one per row in Bathe
+/// order (or wedge order for a native wedge); rows of absent nodes are ignored.
 using ElementCoordinates = Eigen::Matrix<double, kHex20NodeCount, 3>;
 
 /// An element that cannot be analysed (inverted, collapsed, distorted).
@@ -51,8 +51,10 @@ inline constexpr double kMinScaledJacobian = 1e-6;
  * position when det J <= 0 (inverted) or the scaled Jacobian is below
  * kMinScaledJacobian (collapsed or badly distorted). Pass @a check = false to
  * evaluate on a collapsed edge (e.g. to map a point of a wedge for display).
+ * A native wedge (ElementShape::wedge15()) is checked the same way, its
+ * natural point given in the wedge's (r, s, t).
  */
-void evaluateGeometry(const Hex20Shape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
+void evaluateGeometry(const ElementShape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
                       int elementIndex, PointGeometry& out, bool check = true);
 
 }  // namespace caps::fem

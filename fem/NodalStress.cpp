@@ -4,6 +4,7 @@
 #include "fem/Quadrature.h"
 #include "fem/StressRecovery.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -70,17 +71,57 @@ Eigen::MatrixXd gaussToNodeExtrapolation(int pointsPerDirection) {
   return e;
 }
 
+Eigen::MatrixXd gaussToNodeExtrapolation(ElementKind kind, int pointsPerDirection) {
+  if (kind == ElementKind::Hex20) return gaussToNodeExtrapolation(pointsPerDirection);
+  const IntegrationRule& rule = wedgeRule(pointsPerDirection);
+  // The fitted polynomial: linear in (r, s) times linear in t (least squares
+  // over the 3 x 3 points), or quadratic times quadratic (interpolating the
+  // 6 x 3 points).
+  const bool quadratic = pointsPerDirection == 3;
+  auto basis = [&](const Eigen::Vector3d& p) {
+    const double r = p[0], s = p[1], t = p[2];
+    std::vector<double> inPlane = {1.0, r, s};
+    std::vector<double> along = {1.0, t};
+    if (quadratic) {
+      inPlane.insert(inPlane.end(), {r * r, r * s, s * s});
+      along.push_back(t * t);
+    }
+    Eigen::RowVectorXd b(Eigen::Index(inPlane.size() * along.size()));
+    Eigen::Index i = 0;
+    for (double u : inPlane)
+      for (double v : along) b[i++] = u * v;
+    return b;
+  };
+  const Eigen::Index m = basis(rule.points[0]).size();
+  Eigen::MatrixXd v(Eigen::Index(rule.size()), m);
+  for (std::size_t p = 0; p < rule.size(); ++p) v.row(Eigen::Index(p)) = basis(rule.points[p]);
+  // Coefficients = (V^T V)^-1 V^T g: the least-squares fit (the interpolant when V is square).
+  const Eigen::MatrixXd fit = (v.transpose() * v).ldlt().solve(v.transpose());
+  Eigen::MatrixXd e = Eigen::MatrixXd::Zero(kHex20NodeCount, Eigen::Index(rule.size()));
+  for (int k = 0; k < kWedge15NodeCount; ++k) e.row(k) = basis(wedge15NaturalCoordinates(k)) * fit;
+  return e;
+}
+
 NodalStressField recoverNodalStresses(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
                                       int pointsPerDirection) {
   if (u.size() != mesh.dofCount())
     throw std::invalid_argument("recoverNodalStresses: the displacement vector must have 3N entries");
-  const Eigen::MatrixXd extrapolation = gaussToNodeExtrapolation(pointsPerDirection);
+  const Eigen::MatrixXd hexExtrapolation = gaussToNodeExtrapolation(pointsPerDirection);
+  Eigen::MatrixXd wedgeExtrapolation;
+  for (const Element& el : mesh.elements)
+    if (el.kind == ElementKind::Wedge15) {
+      wedgeExtrapolation = gaussToNodeExtrapolation(ElementKind::Wedge15, pointsPerDirection);
+      break;
+    }
   NodalStressField field;
   field.stress = NodalStressMatrix::Zero(6, mesh.nodeCount());
   field.elementCount = Eigen::VectorXi::Zero(mesh.nodeCount());
-  Eigen::Matrix<double, 6, Eigen::Dynamic> gauss(6, extrapolation.cols());
+  Eigen::Matrix<double, 6, Eigen::Dynamic> gauss;
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    const Eigen::MatrixXd& extrapolation =
+        mesh.elements[e].kind == ElementKind::Wedge15 ? wedgeExtrapolation : hexExtrapolation;
     const auto points = recoverStressAtGaussPoints(mesh, materials, u, int(e), pointsPerDirection);
+    gauss.resize(6, Eigen::Index(points.size()));
     for (std::size_t p = 0; p < points.size(); ++p) gauss.col(Eigen::Index(p)) = points[p].stress;
     const Eigen::Matrix<double, 6, kHex20NodeCount> atNodes = gauss * extrapolation.transpose();
     // Mean over the slots of each distinct node (repeated in a wedge).

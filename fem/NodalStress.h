@@ -49,8 +49,8 @@ Eigen::MatrixXd gaussToNodeExtrapolation(int pointsPerDirection);
 /**
  * @brief Nodal stresses: in each element, sigma at the Gauss points
  *        (recoverStressAtGaussPoints), extrapolated to the element's nodes by
- *        gaussToNodeExtrapolation(), then averaged (plain mean) over the
- *        elements sharing each node.
+ *        gaussToNodeExtrapolation() of its kind, then averaged (plain mean)
+ *        over the elements sharing each node.
  *
  * The default 2x2x2 points are the Barlow (superconvergent) points of the
  * 20-node brick; its trilinear extrapolation reproduces any stress field
@@ -64,6 +64,17 @@ Eigen::MatrixXd gaussToNodeExtrapolation(int pointsPerDirection);
  * @a u holds the 3N nodal displacements. Throws ElementError for a bad
  * Jacobian at a Gauss point, std::invalid_argument for a wrong @a u size.
  */
+/**
+ * @brief The same for elements of @a kind. Hex20: gaussToNodeExtrapolation(n).
+ *        Wedge15 (points of wedgeRule(n), rows 15..19 zero): for n = 2 the
+ *        polynomial linear in (r, s) times linear in t fitted by least squares
+ *        to the 3 x 3 values (it reproduces any stress linear in r, s, t
+ *        exactly and, like the brick's 2x2x2 trilinear extrapolation, does not
+ *        magnify the higher-order noise); for n = 3 the quadratic-in-(r, s)
+ *        times quadratic-in-t interpolant of the 6 x 3 values.
+ */
+Eigen::MatrixXd gaussToNodeExtrapolation(ElementKind kind, int pointsPerDirection);
+
 NodalStressField recoverNodalStresses(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
                                       int pointsPerDirection = 2);
 

@@ -89,6 +89,8 @@ Eigen::VectorXd LinearStaticAnalysis::loadVector(const LoadCase& load) const {
     r.segment<3>(3 * node) += f;
   }
   if (!load.gravity.isZero(0.0)) r += assembleGravityLoad(mesh_, materials_, load.gravity, options_);
+  if (!load.facePressures.empty()) r += assembleFacePressureLoad(mesh_, load.facePressures);
+  if (!load.muscles.empty()) r += assembleMuscleLoad(mesh_, load.muscles, options_).load;
   return r;
 }
 

@@ -2,7 +2,9 @@
 
 #include "fem/Assembly.h"
 #include "fem/Constraints.h"
+#include "fem/FacePressure.h"
 #include "fem/Mesh.h"
+#include "fem/MuscleLoad.h"
 #include "fem/SparseCholeskySolver.h"
 
 #include <Eigen/Core>
@@ -14,10 +16,13 @@
 
 namespace caps::fem {
 
-/// One load condition (§4.6.1 step 3): nodal forces and gravity.
+/// One load condition (§4.6.1 step 3): nodal forces, gravity, muscles and
+/// pressures on element faces.
 struct LoadCase {
   std::vector<std::pair<int, Eigen::Vector3d>> nodalForces;  ///< (node, force N)
   Eigen::Vector3d gravity = Eigen::Vector3d::Zero();          ///< acceleration, mm/s^2
+  std::vector<Muscle> muscles;  ///< muscle force functions (eq. 4.40-4.42), summed
+  std::vector<FacePressure> facePressures;  ///< uniform pressures (MPa) on element faces
 };
 
 /// Wall-clock seconds of each phase of the last prepare()/solve().

@@ -8,6 +8,17 @@
 
 namespace caps::fem {
 
+namespace {
+
+void checkElement(const Mesh& mesh, int element) {
+  if (element < 0 || std::size_t(element) >= mesh.elements.size())
+    throw std::invalid_argument("stress requested in element " + std::to_string(element) +
+                                ", but the mesh has elements 0.." +
+                                std::to_string(int(mesh.elements.size()) - 1));
+}
+
+}  // namespace
+
 double StressPoint::vonMises() const {
   const Vector6d& s = stress;
   const double a = s[0] - s[1], b = s[1] - s[2], c = s[2] - s[0];
@@ -18,15 +29,12 @@ double StressPoint::meanStress() const { return (stress[0] + stress[1] + stress[
 
 StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
                           int element, const Eigen::Vector3d& rst) {
-  if (element < 0 || std::size_t(element) >= mesh.elements.size())
-    throw std::invalid_argument("stress requested in element " + std::to_string(element) +
-                                ", but the mesh has elements 0.." +
-                                std::to_string(int(mesh.elements.size()) - 1));
+  checkElement(mesh, element);
   if (u.size() != mesh.dofCount())
     throw std::invalid_argument("recoverStress: the displacement vector must have 3N entries");
   const Element& el = mesh.elements[std::size_t(element)];
   PointGeometry g;
-  evaluateGeometry(Hex20Shape::fromConnectivity(el.nodes), mesh.elementCoordinates(std::size_t(element)),
+  evaluateGeometry(ElementShape::fromConnectivity(el.kind, el.nodes), mesh.elementCoordinates(std::size_t(element)),
                    rst, element, g);
   StrainDisplacement b;
   strainDisplacementMatrix(g, b);
@@ -44,7 +52,8 @@ StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, cons
 std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const MaterialTable& materials,
                                                    const Eigen::VectorXd& u, int element,
                                                    int pointsPerDirection) {
-  const IntegrationRule& rule = gaussRule(pointsPerDirection);
+  checkElement(mesh, element);
+  const IntegrationRule& rule = integrationRule(mesh.elements[std::size_t(element)].kind, pointsPerDirection);
   std::vector<StressPoint> out;
   out.reserve(rule.size());
   for (const auto& p : rule.points) out.push_back(recoverStress(mesh, materials, u, element, p));

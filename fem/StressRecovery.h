@@ -26,13 +26,16 @@ struct StressPoint {
 /**
  * @brief Strain and stress at body coordinate (element, r, s, t) (thesis
  *        eq. 4.47-4.48): epsilon = B U^(m), sigma = C epsilon.
- *        @a u holds the 3N nodal displacements. Throws ElementError if the
- *        Jacobian is bad there.
+ *        (r, s, t) are the natural coordinates of the element's kind (the
+ *        cube, or the wedge's triangle times t). @a u holds the 3N nodal
+ *        displacements. Throws ElementError if the Jacobian is bad there.
  */
 StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
                           int element, const Eigen::Vector3d& rst);
 
-/// The same at every point of the Gauss rule with @a pointsPerDirection points.
+/// The same at every point of the element's rule, integrationRule(kind,
+/// @a pointsPerDirection): the n x n x n Gauss points of a brick, or
+/// wedgeRule(n) of a native wedge.
 std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const MaterialTable& materials,
                                                    const Eigen::VectorXd& u, int element,
                                                    int pointsPerDirection = 3);

@@ -14,91 +14,10 @@ namespace {
 constexpr std::array<int, kHex20NodeCount> kVtkHexToBathe{6,  7,  4,  5,  2,  3,  0,  1,  14, 15,
                                                           12, 13, 10, 11, 8,  9,  18, 19, 16, 17};
 
-/// Bathe node at natural coordinates @a c (each -1, 0 or 1).
-int batheAt(const std::array<int, 3>& c) {
-  for (int k = 0; k < kHex20NodeCount; ++k) {
-    const Eigen::Vector3d n = batheNaturalCoordinates(k);
-    if (int(n[0]) == c[0] && int(n[1]) == c[1] && int(n[2]) == c[2]) return k;
-  }
-  throw std::logic_error("no Bathe node at these natural coordinates");
-}
-
-/// Natural coordinates with value @a va on axis a, @a vb on axis b, @a vc on axis c.
-std::array<int, 3> on(int a, int va, int b, int vb, int c, int vc) {
-  std::array<int, 3> x{};
-  x[std::size_t(a)] = va;
-  x[std::size_t(b)] = vb;
-  x[std::size_t(c)] = vc;
-  return x;
-}
-
 bool allMidsides(const Element& el, const std::vector<int>& batheNodes) {
   for (int k : batheNodes)
     if (el.nodes[std::size_t(k)] < 0) return false;
   return true;
-}
-
-/// The wedge cell of a degenerate element, or an empty cell if it is none.
-VtkCell wedgeCell(const Element& el, const Eigen::Matrix3Xd& x) {
-  auto node = [&](const std::array<int, 3>& c) { return el.nodes[std::size_t(batheAt(c))]; };
-  for (int a = 0; a < 3; ++a)  // axis along which two edges collapse
-    for (int b = 0; b < 3; ++b) {
-      if (b == a) continue;
-      const int c = 3 - a - b;  // extrusion axis
-      for (int beta : {-1, 1}) {
-        // Edges along a at b = beta, on the faces c = -1 and c = +1, collapsed.
-        bool collapsed = true;
-        for (int gamma : {-1, 1})
-          collapsed = collapsed && node(on(a, -1, b, beta, c, gamma)) == node(on(a, 1, b, beta, c, gamma));
-        if (!collapsed) continue;
-        // The other four corners distinct from each other and from the apexes.
-        std::vector<int> corners;
-        for (int gamma : {-1, 1})
-          for (int alpha : {-1, 1, 0}) {
-            corners.push_back(alpha == 0 ? node(on(a, -1, b, beta, c, gamma)) : node(on(a, alpha, b, -beta, c, gamma)));
-          }
-        bool distinct = true;
-        for (std::size_t i = 0; i < corners.size(); ++i)
-          for (std::size_t j = i + 1; j < corners.size(); ++j) distinct = distinct && corners[i] != corners[j];
-        if (!distinct) continue;
-        // Triangle on face c = gamma: apex P (b = beta), Q (a = -1, b = -beta), R (a = +1, b = -beta).
-        int qa = -1, ra = 1;
-        {
-          const Eigen::Vector3d p = x.col(node(on(a, -1, b, beta, c, -1)));
-          const Eigen::Vector3d q = x.col(node(on(a, qa, b, -beta, c, -1)));
-          const Eigen::Vector3d r = x.col(node(on(a, ra, b, -beta, c, -1)));
-          const Eigen::Vector3d top = x.col(node(on(a, -1, b, beta, c, 1)));
-          // VTK: normal of (0, 1, 2) points away from (3, 4, 5).
-          if ((q - p).cross(r - p).dot(top - p) > 0) std::swap(qa, ra);
-        }
-        // Natural coordinates of the six corners and nine mid-edges in VTK order.
-        auto corner = [&](int i, int gamma) {
-          return i == 0 ? on(a, -1, b, beta, c, gamma) : on(a, i == 1 ? qa : ra, b, -beta, c, gamma);
-        };
-        VtkCell cell;
-        for (int gamma : {-1, 1})
-          for (int i = 0; i < 3; ++i) cell.nodes.push_back(node(corner(i, gamma)));
-        std::vector<std::array<int, 3>> mids;
-        for (int gamma : {-1, 1}) {
-          mids.push_back(on(a, qa, b, 0, c, gamma));   // P-Q
-          mids.push_back(on(a, 0, b, -beta, c, gamma)); // Q-R
-          mids.push_back(on(a, ra, b, 0, c, gamma));   // R-P
-        }
-        mids.push_back(on(a, -1, b, beta, c, 0));  // P vertical (either collapsed slot)
-        mids.push_back(on(a, qa, b, -beta, c, 0));
-        mids.push_back(on(a, ra, b, -beta, c, 0));
-        std::vector<int> midBathe;
-        for (const auto& m : mids) midBathe.push_back(batheAt(m));
-        if (allMidsides(el, midBathe)) {
-          cell.type = kVtkQuadraticWedge;
-          for (int k : midBathe) cell.nodes.push_back(el.nodes[std::size_t(k)]);
-        } else {
-          cell.type = kVtkWedge;
-        }
-        return cell;
-      }
-    }
-  return {};
 }
 
 void writeArray(std::ostream& o, const VtuArray& a) {
@@ -117,17 +36,21 @@ void writeArray(std::ostream& o, const VtuArray& a) {
 const std::array<int, kHex20NodeCount>& vtkQuadraticHexToBathe() { return kVtkHexToBathe; }
 
 VtkCell vtkCell(const Element& el, const Eigen::Matrix3Xd& nodes) {
-  int distinct = 0;
-  for (int k = 0; k < kHex20CornerCount; ++k) {
-    bool first = true;
-    for (int j = 0; j < k; ++j) first = first && el.nodes[std::size_t(j)] != el.nodes[std::size_t(k)];
-    distinct += first;
-  }
-  if (distinct == 6) {
-    VtkCell w = wedgeCell(el, nodes);
-    if (!w.nodes.empty()) return w;
-  }
   VtkCell cell;
+  // The wedge numbering is VTK's quadratic wedge order (ElementNumbering.h).
+  if (el.kind == ElementKind::Wedge15) {
+    cell.type = kVtkQuadraticWedge;
+    cell.nodes.assign(el.nodes.begin(), el.nodes.begin() + kWedge15NodeCount);
+    return cell;
+  }
+  std::array<int, kWedge15NodeCount> slots{};
+  if (degenerateWedgeSlots(el, nodes, slots)) {
+    const std::vector<int> mids(slots.begin() + kWedge15CornerCount, slots.end());
+    cell.type = allMidsides(el, mids) ? kVtkQuadraticWedge : kVtkWedge;
+    const int count = cell.type == kVtkQuadraticWedge ? kWedge15NodeCount : kWedge15CornerCount;
+    for (int k = 0; k < count; ++k) cell.nodes.push_back(el.nodes[std::size_t(slots[std::size_t(k)])]);
+    return cell;
+  }
   std::vector<int> mids;
   for (int k = kHex20CornerCount; k < kHex20NodeCount; ++k) mids.push_back(k);
   cell.type = allMidsides(el, mids) ? kVtkQuadraticHexahedron : kVtkHexahedron;

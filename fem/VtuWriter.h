@@ -43,7 +43,9 @@ const std::array<int, kHex20NodeCount>& vtkQuadraticHexToBathe();
  * from (3, 4, 5) as vtkWedge documents (checked against VTK 9.1's
  * vtkCellSizeFilter, which then gives a positive volume). @a nodes gives the
  * world position of each mesh node (for that orientation). Any other
- * degenerate element stays a (degenerate) hexahedron.
+ * degenerate element stays a (degenerate) hexahedron. A native 15-node
+ * wedge (ElementKind::Wedge15) is a VTK_QUADRATIC_WEDGE with its nodes in
+ * their own order, which is VTK's.
  */
 VtkCell vtkCell(const Element& el, const Eigen::Matrix3Xd& nodes);
 

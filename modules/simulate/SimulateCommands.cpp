@@ -21,8 +21,8 @@ const char* kFemUsage =
   "  result.vtu         the mesh with displacement and stress fields, for ParaView\n"
   "\n"
   "Supported: *NODE, *ELEMENT (C3D20, C3D20R, C3D15, C3D8), *NSET, *ELSET, *MATERIAL,\n"
-  "*ELASTIC, *DENSITY, *SOLID SECTION, *BOUNDARY, *CLOAD, *DLOAD GRAV, *EQUATION (sutures),\n"
-  "*STEP, *STATIC; output requests are ignored. Anything else is an error.\n"
+  "*ELASTIC, *DENSITY, *SOLID SECTION, *BOUNDARY, *CLOAD, *DLOAD GRAV and face pressure P1..P6,\n"
+  "*EQUATION (sutures), *STEP, *STATIC; output requests are ignored. Anything else is an error.\n"
   "\n"
   "Exit status: 0 when solved, 1 when the model cannot be read or solved, 2 on wrong usage.\n";
 

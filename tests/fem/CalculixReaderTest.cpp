@@ -111,7 +111,9 @@ TEST(CalculixReader, ClearErrorsNamingKeywordAndLine) {
   EXPECT_NE(errorOf(base + "*AMPLITUDE, NAME=A\n0,0\n").find("deck.inp:12: unsupported keyword *AMPLITUDE"),
             std::string::npos)
       << errorOf(base + "*AMPLITUDE, NAME=A\n0,0\n");
-  EXPECT_NE(errorOf(base + "*DLOAD\nE, P1, 1.0\n").find("P1"), std::string::npos);
+  EXPECT_NE(errorOf(base + "*DLOAD\nE, P7, 1.0\n").find("deck.inp:13: *DLOAD P7 on element 1: a hexahedron has faces P1..P6"),
+            std::string::npos)
+      << errorOf(base + "*DLOAD\nE, P7, 1.0\n");
   EXPECT_NE(errorOf(std::string(kNodes8) + "*ELEMENT, TYPE=C3D4\n1,1,2,3,4\n").find("unsupported element type C3D4"),
             std::string::npos);
   EXPECT_NE(errorOf(std::string(kNodes8) + "*ELEMENT, TYPE=C3D8\n1,1,2,3,4,5,6,7,99\n").find("node 99 is not defined"),
