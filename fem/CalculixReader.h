@@ -36,9 +36,10 @@ struct CalculixModel {
 
 /// How parseCalculixInput() builds elements.
 struct CalculixReadOptions {
-  /// C3D15 as native 15-node wedges (ElementKind::Wedge15) instead of the
-  /// degenerate 20-node wedge of Fig. 3.2 (the default).
-  bool nativeWedges = false;
+  /// C3D15 as native 15-node wedges (ElementKind::Wedge15, the default: the
+  /// element ccx itself uses, and far stiffer-free in bending than the
+  /// degenerate 20-node wedge of Fig. 3.2, which false selects).
+  bool nativeWedges = true;
 };
 
 /**
@@ -47,9 +48,9 @@ struct CalculixReadOptions {
  *
  * Keywords (case-insensitive; `**` comments; a keyword line ending in a
  * comma continues on the next line): *HEADING, *NODE, *ELEMENT with TYPE
- * C3D20, C3D20R (read as C3D20: full 3x3x3 integration), C3D15 (a degenerate
- * 20-node wedge, Fig. 3.2, or with options.nativeWedges a native 15-node
- * wedge) or C3D8 (corners only); *NSET and *ELSET (with GENERATE); *MATERIAL with *ELASTIC (isotropic) and *DENSITY; *SOLID
+ * C3D20, C3D20R (read as C3D20: full 3x3x3 integration), C3D15 (a native 15-node
+ * wedge, or with options.nativeWedges = false the degenerate 20-node wedge
+ * of Fig. 3.2) or C3D8 (corners only); *NSET and *ELSET (with GENERATE); *MATERIAL with *ELASTIC (isotropic) and *DENSITY; *SOLID
  * SECTION; *BOUNDARY (node or set, first and last DOF, value; DOFs above 3
  * are ignored for solids); *CLOAD; *DLOAD GRAV (one acceleration for every
  * element with a density); *DLOAD Pn uniform face pressure (element or

@@ -573,11 +573,11 @@ const char* kC3D15Deck =
     "*MATERIAL, NAME=M\n*ELASTIC\n100, 0.25\n*SOLID SECTION, ELSET=W, MATERIAL=M\n"
     "*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n7,1,3\n8,1,3\n9,1,3\n*STEP\n*STATIC\n*CLOAD\n4,3,1.0\n*END STEP\n";
 
-TEST(NativeWedges, ReaderOptionKeepsC3D15Native) {
+TEST(NativeWedges, ReaderKeepsC3D15NativeOrDegenerateByOption) {
+  const CalculixModel native = parseCalculixInput(kC3D15Deck, "deck.inp");  // the default
   CalculixReadOptions options;
-  options.nativeWedges = true;
-  const CalculixModel native = parseCalculixInput(kC3D15Deck, "deck.inp", options);
-  const CalculixModel degenerate = parseCalculixInput(kC3D15Deck, "deck.inp");
+  options.nativeWedges = false;
+  const CalculixModel degenerate = parseCalculixInput(kC3D15Deck, "deck.inp", options);
   ASSERT_EQ(native.mesh.elements.size(), 1u);
   const Element& el = native.mesh.elements[0];
   EXPECT_EQ(el.kind, ElementKind::Wedge15);
