@@ -13,9 +13,11 @@
 #include "app/ModuleManager.h"
 #include "app/Paths.h"
 #include "app/Session.h"
+#include "fem/BlasKernels.h"
 
 int main(int argc, char** argv)
 {
+  caps::fem::useBestBlasKernels(argv); // may re-execute: first, before any thread
   const std::vector<std::string> args(argv + 1, argv + argc);
   caps::ModuleManager modules;
   for (const auto& folder : caps::ModuleManager::searchPath(caps::executablePath()))

@@ -3,7 +3,9 @@
 #include "fem/ElasticityIntegrator.h"
 
 #include <algorithm>
+#include <array>
 #include <exception>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -11,44 +13,135 @@ namespace caps::fem {
 
 namespace {
 
-using Triplet = Eigen::Triplet<double>;
+/// The upper triangle's pattern of K in compressed columns, built from the
+/// node adjacency (two nodes couple when an element holds both): column
+/// 3n + d holds rows 3m..3m+2 of every neighbour m < n, then 3n..3n+d.
+struct StiffnessPattern {
+  std::vector<std::vector<int>> lowerNeighbours;  ///< per node n: sorted neighbours m < n
+  std::vector<int> outer;                         ///< column starts, size 3N + 1
+  std::vector<int> inner;                         ///< row indices
 
-struct ChunkResult {
-  std::vector<Triplet> triplets;
-  std::exception_ptr error;
+  explicit StiffnessPattern(const Mesh& mesh) {
+    const std::size_t nodes = std::size_t(mesh.nodeCount());
+    // Elements of each node (compressed), then each node's neighbours by a
+    // stamp array: no per-pair pushes, no global sort.
+    std::vector<int> firstElement(nodes + 1, 0), lastSeen(nodes, -1);
+    for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+      for (int a : mesh.elements[e].nodes)
+        if (a >= 0 && lastSeen[std::size_t(a)] != int(e)) {  // a wedge repeats a node
+          lastSeen[std::size_t(a)] = int(e);
+          ++firstElement[std::size_t(a) + 1];
+        }
+    for (std::size_t n = 0; n < nodes; ++n) firstElement[n + 1] += firstElement[n];
+    std::vector<int> elementsOf(std::size_t(firstElement.back()));
+    {
+      std::vector<int> fill(firstElement.begin(), firstElement.end() - 1);
+      std::fill(lastSeen.begin(), lastSeen.end(), -1);
+      for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+        for (int a : mesh.elements[e].nodes)
+          if (a >= 0 && lastSeen[std::size_t(a)] != int(e)) {
+            lastSeen[std::size_t(a)] = int(e);
+            elementsOf[std::size_t(fill[std::size_t(a)]++)] = int(e);
+          }
+    }
+    lowerNeighbours.resize(nodes);
+    std::vector<int> stamp(nodes, -1);
+    for (std::size_t n = 0; n < nodes; ++n) {
+      auto& nb = lowerNeighbours[n];
+      for (int k = firstElement[n]; k < firstElement[n + 1]; ++k)
+        for (int m : mesh.elements[std::size_t(elementsOf[std::size_t(k)])].nodes)
+          if (m >= 0 && std::size_t(m) < n && stamp[std::size_t(m)] != int(n)) {
+            stamp[std::size_t(m)] = int(n);
+            nb.push_back(m);
+          }
+      std::sort(nb.begin(), nb.end());
+    }
+    outer.assign(3 * nodes + 1, 0);
+    for (std::size_t n = 0; n < nodes; ++n)
+      for (int d = 0; d < 3; ++d)
+        outer[3 * n + d + 1] = outer[3 * n + d] + 3 * int(lowerNeighbours[n].size()) + d + 1;
+    inner.resize(std::size_t(outer.back()));
+    for (std::size_t n = 0; n < nodes; ++n)
+      for (int d = 0; d < 3; ++d) {
+        int* row = &inner[std::size_t(outer[3 * n + d])];
+        for (int m : lowerNeighbours[n])
+          for (int c = 0; c < 3; ++c) *row++ = 3 * m + c;
+        for (int c = 0; c <= d; ++c) *row++ = int(3 * n) + c;
+      }
+  }
+
 };
 
-void assembleRange(const Mesh& mesh, const MaterialTable& materials, int pointsPerDirection,
-                   std::size_t first, std::size_t last, ChunkResult& out) {
+/// Adds one element matrix into K's values. Column 3 q of the pattern lists
+/// rows 3 m of q's lower neighbours m (every third entry), then q's own; for
+/// each column node one walk along that list finds the rank of every element
+/// node below it (the element's nodes sorted), so no search per entry.
+void scatter(const int* outer, const int* inner, const Element& el, const ElementMatrix& ke, double* values) {
+  std::array<std::pair<int, int>, kHex20NodeCount> sorted;  // (node, slot)
+  int count = 0;
+  for (int p = 0; p < kHex20NodeCount; ++p)
+    if (el.nodes[std::size_t(p)] >= 0) sorted[std::size_t(count++)] = {el.nodes[std::size_t(p)], p};
+  std::sort(sorted.begin(), sorted.begin() + count);
+  std::array<int, kHex20NodeCount> rank{};
+  for (int k = 0; k < count; ++k) {
+    const auto [nq, q] = sorted[std::size_t(k)];
+    const int* column = inner + outer[3 * nq];
+    const int neighbours = (outer[3 * nq + 1] - outer[3 * nq] - 1) / 3;
+    int walk = 0;
+    for (int i = 0; i < count; ++i) {
+      const int np = sorted[std::size_t(i)].first;
+      if (np >= nq) {
+        rank[std::size_t(i)] = neighbours;  // the node itself (np == nq), after its neighbours
+        continue;
+      }
+      while (column[3 * walk] < 3 * np) ++walk;
+      rank[std::size_t(i)] = walk;
+    }
+    for (int d = 0; d < 3; ++d) {
+      const int base = outer[3 * nq + d];
+      for (int i = 0; i < count; ++i) {
+        const auto [np, p] = sorted[std::size_t(i)];
+        if (np > nq) break;
+        // On one node (the diagonal block; twice for a degenerate wedge's
+        // repeated node, (p, q) and (q, p) both) only the upper part c <= d.
+        const int rows = np == nq ? d + 1 : 3;
+        double* v = values + base + 3 * rank[std::size_t(i)];
+        for (int c = 0; c < rows; ++c) v[c] += ke(3 * p + c, 3 * q + d);
+      }
+    }
+  }
+}
+
+/// Element matrices of a batch of elements, computed by several threads.
+void computeBatch(const Mesh& mesh, const MaterialTable& materials, int pointsPerDirection, std::size_t first,
+                  std::size_t last, std::vector<ElementMatrix>& out, std::exception_ptr& error) {
   try {
-    ElementMatrix ke;
-    out.triplets.reserve((last - first) * (kHex20DofCount * (kHex20DofCount + 1) / 2));
     for (std::size_t e = first; e < last; ++e) {
       const Element& el = mesh.elements[e];
       const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
       assembleElementStiffness(shape, mesh.elementCoordinates(e), materials.at(el.region),
-                               integrationRule(el.kind, pointsPerDirection), int(e), ke);
-      for (int p = 0; p < kHex20DofCount; ++p) {
-        const int np = el.nodes[p / 3];
-        if (np < 0) continue;
-        const int gp = 3 * np + p % 3;
-        for (int q = 0; q < kHex20DofCount; ++q) {
-          const int nq = el.nodes[q / 3];
-          if (nq < 0) continue;
-          const int gq = 3 * nq + q % 3;
-          if (gp <= gq) out.triplets.emplace_back(gp, gq, ke(p, q));
-        }
-      }
+                               integrationRule(el.kind, pointsPerDirection), int(e), out[e % out.size()]);
     }
   } catch (...) {
-    out.error = std::current_exception();
+    error = std::current_exception();
   }
 }
 
 }  // namespace
 
-Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
-                                              const AssemblyOptions& options) {
+Eigen::SparseMatrix<double> stiffnessPattern(const Mesh& mesh) {
+  const StiffnessPattern pattern(mesh);
+  const Eigen::Index dofs = mesh.dofCount();
+  Eigen::SparseMatrix<double> k(dofs, dofs);
+  k.resizeNonZeros(Eigen::Index(pattern.inner.size()));
+  std::copy(pattern.outer.begin(), pattern.outer.end(), k.outerIndexPtr());
+  std::copy(pattern.inner.begin(), pattern.inner.end(), k.innerIndexPtr());
+  std::fill_n(k.valuePtr(), pattern.inner.size(), 0.0);
+  return k;
+}
+
+void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,
+                             Eigen::SparseMatrix<double>& k) {
   // Fail early on a bad rule, not in a worker thread.
   gaussRule(options.gaussPointsPerDirection);
   for (const Element& el : mesh.elements)
@@ -56,36 +149,43 @@ Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTa
       wedgeRule(options.gaussPointsPerDirection);
       break;
     }
+  if (k.rows() != mesh.dofCount() || k.cols() != mesh.dofCount() || !k.isCompressed())
+    throw std::invalid_argument("assembleStiffnessValues: the matrix does not have the mesh's stiffness pattern");
   const int n = options.gaussPointsPerDirection;
   const std::size_t ne = mesh.elements.size();
-  const std::size_t threads =
-      std::max<std::size_t>(1, std::min<std::size_t>(std::size_t(std::max(1, options.threads)), ne));
-  std::vector<ChunkResult> chunks(threads);
-  std::vector<std::thread> workers;
-  for (std::size_t t = 0; t < threads; ++t) {
-    const std::size_t first = ne * t / threads, last = ne * (t + 1) / threads;
-    if (t + 1 == threads) {
-      assembleRange(mesh, materials, n, first, last, chunks[t]);
-    } else {
-      workers.emplace_back(assembleRange, std::cref(mesh), std::cref(materials), n, first, last,
-                           std::ref(chunks[t]));
-    }
-  }
-  for (auto& w : workers) w.join();
-  for (auto& c : chunks)
-    if (c.error) std::rethrow_exception(c.error);  // chunks are in element order
+  const std::size_t threads = std::size_t(std::max(1, options.threads));
+  double* values = k.valuePtr();
+  std::fill_n(values, k.nonZeros(), 0.0);
 
-  std::size_t total = 0;
-  for (auto& c : chunks) total += c.triplets.size();
-  std::vector<Triplet> all;
-  all.reserve(total);
-  for (auto& c : chunks) {
-    all.insert(all.end(), c.triplets.begin(), c.triplets.end());
-    std::vector<Triplet>().swap(c.triplets);
+  // Element matrices in batches, threads splitting each batch; the scatter
+  // runs in element order on this thread, so the sums are bit-identical for
+  // any thread count. Straight into the pattern's places: no triplet list to
+  // sort (that was most of the assembly time).
+  constexpr std::size_t kBatch = 256;
+  std::vector<ElementMatrix> batch(kBatch);
+  for (std::size_t begin = 0; begin < ne; begin += kBatch) {
+    const std::size_t end = std::min(ne, begin + kBatch);
+    const std::size_t workers = std::min(threads, end - begin);
+    std::vector<std::exception_ptr> errors(workers);
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < workers; ++t) {
+      const std::size_t first = begin + (end - begin) * t / workers, last = begin + (end - begin) * (t + 1) / workers;
+      pool.emplace_back(computeBatch, std::cref(mesh), std::cref(materials), n, first, last, std::ref(batch),
+                        std::ref(errors[t]));
+    }
+    computeBatch(mesh, materials, n, begin, begin + (end - begin) / workers, batch, errors[0]);
+    for (auto& w : pool) w.join();
+    for (auto& err : errors)
+      if (err) std::rethrow_exception(err);  // the lowest-numbered bad element's range first
+    for (std::size_t e = begin; e < end; ++e)
+      scatter(k.outerIndexPtr(), k.innerIndexPtr(), mesh.elements[e], batch[e % kBatch], values);
   }
-  Eigen::SparseMatrix<double> k(mesh.dofCount(), mesh.dofCount());
-  k.setFromTriplets(all.begin(), all.end());
-  k.makeCompressed();
+}
+
+Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
+                                              const AssemblyOptions& options) {
+  Eigen::SparseMatrix<double> k = stiffnessPattern(mesh);
+  assembleStiffnessValues(mesh, materials, options, k);
   return k;
 }
 

@@ -26,6 +26,17 @@ struct AssemblyOptions {
 Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
                                               const AssemblyOptions& options = {});
 
+/// The pattern of assembleStiffness()'s matrix, values zero: known from the
+/// connectivity alone, so the solver can analyse it while the values are
+/// computed. Column 3n + d holds rows 3m..3m+2 of each neighbour m < n, then
+/// 3n..3n+d.
+Eigen::SparseMatrix<double> stiffnessPattern(const Mesh& mesh);
+
+/// Fills the values of @a k, which has stiffnessPattern(mesh)'s pattern
+/// (throws std::invalid_argument otherwise, on size).
+void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,
+                             Eigen::SparseMatrix<double>& k);
+
 /**
  * @brief Gravity loads (eq. 4.35-4.39): each element's density times
  *        @a acceleration (mm/s^2, e.g. (0, 0, -9810)) integrated over its

@@ -1,5 +1,6 @@
 #include "fem/Constraints.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -112,23 +113,108 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
 }
 
 Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatrix<double>& k) const {
-  std::vector<Eigen::Triplet<double>> t;
-  t.reserve(std::size_t(k.nonZeros()));
-  for (Eigen::Index j = 0; j < k.outerSize(); ++j) {
+  // Each full DOF stands for at most one reduced DOF with coefficient 1, so
+  // T^T K T just renames rows and columns and sums what lands together.
+  // Counted into compressed columns directly (a triplet sort took most of
+  // the time); columns are then sorted and their duplicates summed.
+  const Eigen::Index n = reducedCount();
+  // Fixed and prescribed DOFs only (no sutures): K-bar is K without their
+  // rows and columns, renumbered in the same order, so one copying pass.
+  bool selection = true;
+  for (std::size_t d = 0, last = 0; d < reduced.size() && selection; ++d)
+    if (reduced[d] >= 0) {
+      selection = std::size_t(reduced[d]) == last;
+      ++last;
+    }
+  if (selection && k.isCompressed()) {
+    // Straight into the result's arrays: an extra copy of ~100 MB of
+    // entries costs as much as the pass itself (page faults).
+    Eigen::SparseMatrix<double> r(n, n);
+    r.resizeNonZeros(k.nonZeros());
+    int* outer = r.outerIndexPtr();
+    int* inner = r.innerIndexPtr();
+    double* values = r.valuePtr();
+    Eigen::Index at = 0;
+    outer[0] = 0;
+    for (Eigen::Index j = 0; j < k.outerSize(); ++j) {
+      const int b = reduced[std::size_t(j)];
+      if (b < 0) continue;
+      for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
+        if (it.row() > j) break;  // rows are sorted: the rest is below the diagonal
+        const int a = reduced[std::size_t(it.row())];
+        if (a < 0) continue;
+        inner[at] = a;
+        values[at] = it.value();
+        ++at;
+      }
+      outer[b + 1] = int(at);
+    }
+    r.resizeNonZeros(at);  // shrinks without reallocating
+    return r;
+  }
+
+  std::vector<int> count(std::size_t(n) + 1, 0);
+  auto target = [this](Eigen::Index i, Eigen::Index j, int& a, int& b) {
+    a = reduced[std::size_t(i)];
+    b = reduced[std::size_t(j)];
+    if (a > b) std::swap(a, b);
+  };
+  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
+      if (it.row() > j) continue;  // upper triangle only
+      int a, b;
+      target(it.row(), j, a, b);
+      if (a >= 0) ++count[std::size_t(b) + 1];
+    }
+  for (std::size_t c = 0; c < std::size_t(n); ++c) count[c + 1] += count[c];
+  std::vector<int> rows(std::size_t(count.back()));
+  std::vector<double> vals(rows.size());
+  std::vector<int> fill(count.begin(), count.end() - 1);
+  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
     for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
       const Eigen::Index i = it.row();
-      if (i > j) continue;  // upper triangle only
-      int a = reduced[std::size_t(i)], b = reduced[std::size_t(j)];
-      if (a < 0 || b < 0) continue;
+      if (i > j) continue;
+      int a, b;
+      target(i, j, a, b);
+      if (a < 0) continue;
       double v = it.value();
       if (a == b && i != j) v *= 2.0;  // K_ij and K_ji both land on the diagonal
-      if (a > b) std::swap(a, b);
-      t.emplace_back(a, b, v);
+      const int at = fill[std::size_t(b)]++;
+      rows[std::size_t(at)] = a;
+      vals[std::size_t(at)] = v;
     }
+
+  Eigen::SparseMatrix<double> r(n, n);
+  std::vector<int> order;
+  std::vector<int> outer(std::size_t(n) + 1, 0);
+  std::vector<int> inner;
+  std::vector<double> values;
+  inner.reserve(rows.size());
+  values.reserve(rows.size());
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const int first = count[std::size_t(c)], last = count[std::size_t(c) + 1];
+    order.resize(std::size_t(last - first));
+    for (int e = first; e < last; ++e) order[std::size_t(e - first)] = e;
+    // By row, then by position: duplicates are summed in the order K holds
+    // them (deterministic).
+    const auto byRow = [&rows](int x, int y) {
+      return rows[std::size_t(x)] < rows[std::size_t(y)] || (rows[std::size_t(x)] == rows[std::size_t(y)] && x < y);
+    };
+    if (!std::is_sorted(order.begin(), order.end(), byRow)) std::sort(order.begin(), order.end(), byRow);
+    for (int e : order) {
+      if (int(inner.size()) > outer[std::size_t(c)] && inner.back() == rows[std::size_t(e)])
+        values.back() += vals[std::size_t(e)];
+      else {
+        inner.push_back(rows[std::size_t(e)]);
+        values.push_back(vals[std::size_t(e)]);
+      }
+    }
+    outer[std::size_t(c) + 1] = int(inner.size());
   }
-  Eigen::SparseMatrix<double> r(reducedCount(), reducedCount());
-  r.setFromTriplets(t.begin(), t.end());
-  r.makeCompressed();
+  r.resizeNonZeros(Eigen::Index(inner.size()));
+  std::copy(outer.begin(), outer.end(), r.outerIndexPtr());
+  std::copy(inner.begin(), inner.end(), r.innerIndexPtr());
+  std::copy(values.begin(), values.end(), r.valuePtr());
   return r;
 }
 

@@ -1,5 +1,7 @@
 #include "fem/ElasticityIntegrator.h"
 
+#include <cmath>
+
 namespace caps::fem {
 
 void strainDisplacementMatrix(const PointGeometry& g, StrainDisplacement& b) {
@@ -23,37 +25,45 @@ void assembleElementStiffness(const ElementShape& shape, const ElementCoordinate
                               const LinearElasticMaterial& material, const IntegrationRule& rule,
                               int elementIndex, ElementMatrix& ke) {
   // B^T C B for an isotropic C, one 3x3 block per node pair (a, b):
-  //   K_ab = sum_g alpha_g det J [lambda g_a g_b^T + mu g_b g_a^T + mu (g_a . g_b) I],
-  // g = world gradient of h. Only a <= b is computed; the rest is mirrored,
-  // so ke is exactly symmetric. Absent nodes have g = 0 and give zero blocks.
+  //   K_ab(i, j) = sum_g alpha_g det J [lambda g_a,i g_b,j + mu g_a,j g_b,i + mu (g_a . g_b) delta_ij],
+  // g = world gradient of h. All three terms are entries of one Gram matrix
+  //   S(20 i + a, 20 j + b) = sum_g alpha_g det J g_a,i g_b,j,
+  // which a single symmetric rank-k update (BLAS-3 style, vectorised) gives
+  // for all pairs at once; the pair loop then only gathers. Absent nodes have
+  // g = 0 and give zero blocks.
   const double e = material.youngsModulus, nu = material.poissonRatio;
   const double lambda = e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
   const double mu = e / (2.0 * (1.0 + nu));
-  ke.setZero();
   // A native wedge uses slots 0..14 only; skip the empty rest.
   const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
+  constexpr int kMaxPoints = 64;  // 4 x 4 x 4, the largest rule
+  Eigen::Matrix<double, 3 * kHex20NodeCount, Eigen::Dynamic, Eigen::ColMajor, 3 * kHex20NodeCount, kMaxPoints>
+      gradients(3 * kHex20NodeCount, Eigen::Index(rule.size()));
   PointGeometry g;
   for (std::size_t q = 0; q < rule.size(); ++q) {
     evaluateGeometry(shape, x, rule.points[q], elementIndex, g);
-    const double w = rule.weights[q] * g.detJ;
-    const Eigen::Matrix<double, kHex20NodeCount, 3> lg = (w * lambda) * g.dhWorld;
-    const Eigen::Matrix<double, kHex20NodeCount, 3> mg = (w * mu) * g.dhWorld;
-    for (int b = 0; b < slots; ++b) {
-      const double gb0 = g.dhWorld(b, 0), gb1 = g.dhWorld(b, 1), gb2 = g.dhWorld(b, 2);
-      for (int a = 0; a <= b; ++a) {
-        const double dot = mg(a, 0) * gb0 + mg(a, 1) * gb1 + mg(a, 2) * gb2;
-        double* col0 = &ke(3 * a, 3 * b);
-        double* col1 = &ke(3 * a, 3 * b + 1);
-        double* col2 = &ke(3 * a, 3 * b + 2);
-        const double gbv[3] = {gb0, gb1, gb2};
-        double* cols[3] = {col0, col1, col2};
-        for (int j = 0; j < 3; ++j) {
-          for (int i = 0; i < 3; ++i) cols[j][i] += lg(a, i) * gbv[j] + mg(a, j) * g.dhWorld(b, i);
-          cols[j][j] += dot;
-        }
-      }
-    }
+    const double root = std::sqrt(rule.weights[q] * g.detJ);  // weights and det J are positive
+    for (int i = 0; i < 3; ++i)
+      gradients.col(Eigen::Index(q)).segment<kHex20NodeCount>(kHex20NodeCount * i) = root * g.dhWorld.col(i);
   }
+  Eigen::Matrix<double, 3 * kHex20NodeCount, 3 * kHex20NodeCount> gram;
+  gram.setZero();
+  gram.selfadjointView<Eigen::Upper>().rankUpdate(gradients);
+  const auto s = [&gram](int p, int q) { return p <= q ? gram(p, q) : gram(q, p); };
+
+  ke.setZero();
+  for (int b = 0; b < slots; ++b)
+    for (int a = 0; a <= b; ++a) {
+      const double trace = s(a, b) + s(kHex20NodeCount + a, kHex20NodeCount + b) +
+                           s(2 * kHex20NodeCount + a, 2 * kHex20NodeCount + b);
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) {
+          double v = lambda * s(kHex20NodeCount * i + a, kHex20NodeCount * j + b) +
+                     mu * s(kHex20NodeCount * j + a, kHex20NodeCount * i + b);
+          if (i == j) v += mu * trace;
+          ke(3 * a + i, 3 * b + j) = v;
+        }
+    }
   for (int b = 0; b < slots; ++b)
     for (int a = 0; a < b; ++a) ke.block<3, 3>(3 * b, 3 * a) = ke.block<3, 3>(3 * a, 3 * b).transpose();
 }

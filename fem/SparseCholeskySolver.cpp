@@ -49,6 +49,91 @@ cholmod_dense denseViewOf(const double* data, Eigen::Index rows, Eigen::Index co
   return b;
 }
 
+// A fill-reducing ordering of the columns computed on the graph of column
+// groups (a node's three DOFs): METIS nested dissection of the group graph,
+// each group's columns kept together in their own order. Falls back to AMD
+// on the group graph if CHOLMOD was built without METIS.
+std::vector<int> groupedOrdering(const Eigen::SparseMatrix<double>& a, const std::vector<int>& group,
+                                 cholmod_common& common) {
+  // Renumber the groups 0..ng-1 and list each group's columns.
+  const int n = int(a.cols());
+  int ng = 0;
+  std::vector<int> id(std::size_t(*std::max_element(group.begin(), group.end())) + 1, -1);
+  std::vector<int> g(static_cast<std::size_t>(n), 0);
+  for (int j = 0; j < n; ++j) {
+    int& k = id[std::size_t(group[std::size_t(j)])];
+    if (k < 0) k = ng++;
+    g[std::size_t(j)] = k;
+  }
+  std::vector<int> first(std::size_t(ng) + 1, 0);
+  for (int j = 0; j < n; ++j) ++first[std::size_t(g[std::size_t(j)]) + 1];
+  for (int k = 0; k < ng; ++k) first[std::size_t(k) + 1] += first[std::size_t(k)];
+  std::vector<int> columns(static_cast<std::size_t>(n), 0);
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (int j = 0; j < n; ++j) columns[std::size_t(fill[std::size_t(g[std::size_t(j)])]++)] = j;
+  }
+  // Group pairs (lo < hi) from the upper triangle, once per group column
+  // (stamps), counted into the column of the higher group, then each
+  // column sorted (a pair can come from both of its groups).
+  std::vector<int> stamp(std::size_t(ng), -1);
+  std::vector<int> outer(std::size_t(ng) + 1, 0);
+  auto eachPair = [&](auto&& visit) {
+    std::fill(stamp.begin(), stamp.end(), -1);
+    for (int k = 0; k < ng; ++k)
+      for (int c = first[std::size_t(k)]; c < first[std::size_t(k) + 1]; ++c)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, columns[std::size_t(c)]); it; ++it) {
+          if (it.row() > it.col()) continue;
+          const int h = g[std::size_t(it.row())];
+          if (h == k || stamp[std::size_t(h)] == k) continue;
+          stamp[std::size_t(h)] = k;
+          visit(std::min(h, k), std::max(h, k));
+        }
+  };
+  eachPair([&outer](int, int hi) { ++outer[std::size_t(hi) + 1]; });
+  for (int k = 0; k < ng; ++k) outer[std::size_t(k) + 1] += outer[std::size_t(k)] + 1;  // + the diagonal
+  std::vector<int> inner(std::size_t(outer.back()));
+  {
+    std::vector<int> fill(outer.begin(), outer.end() - 1);
+    eachPair([&](int lo, int hi) { inner[std::size_t(fill[std::size_t(hi)]++)] = lo; });
+    for (int k = 0; k < ng; ++k) inner[std::size_t(fill[std::size_t(k)]++)] = k;
+    // Sort and drop repeats, compacting in place.
+    int write = 0;
+    for (int k = 0; k < ng; ++k) {
+      const auto begin = inner.begin() + outer[std::size_t(k)], end = inner.begin() + fill[std::size_t(k)];
+      std::sort(begin, end);
+      const int start = write;
+      for (auto it = begin; it != end; ++it)
+        if (write == start || inner[std::size_t(write - 1)] != *it) inner[std::size_t(write++)] = *it;
+      outer[std::size_t(k)] = start;
+    }
+    outer[std::size_t(ng)] = write;
+    inner.resize(std::size_t(write));
+  }
+  cholmod_sparse graph{};
+  graph.nrow = graph.ncol = std::size_t(ng);
+  graph.nzmax = inner.size();
+  graph.p = outer.data();
+  graph.i = inner.data();
+  graph.stype = 1;
+  graph.itype = CHOLMOD_INT;
+  graph.xtype = CHOLMOD_PATTERN;
+  graph.dtype = CHOLMOD_DOUBLE;
+  graph.sorted = 1;
+  graph.packed = 1;
+  std::vector<int> groupPerm(static_cast<std::size_t>(ng), 0);
+  if (!cholmod_metis(&graph, nullptr, 0, 1, groupPerm.data(), &common)) {
+    common.status = CHOLMOD_OK;
+    if (!cholmod_amd(&graph, nullptr, 0, groupPerm.data(), &common))
+      throw std::runtime_error("CHOLMOD could not order the matrix (status " + std::to_string(common.status) + ")");
+  }
+  std::vector<int> perm;
+  perm.reserve(std::size_t(n));
+  for (int k : groupPerm)
+    for (int c = first[std::size_t(k)]; c < first[std::size_t(k) + 1]; ++c) perm.push_back(columns[std::size_t(c)]);
+  return perm;
+}
+
 std::string notPositiveDefiniteMessage(Eigen::Index column, const std::string& detail) {
   std::ostringstream out;
   out << "The stiffness matrix is not positive definite: the Cholesky factorization "
@@ -76,6 +161,7 @@ struct SparseCholeskySolver::Impl {
   // Below about 1e-12 only rounding is left of a zero pivot; real soft-tissue
   // models with fixed bone stay far above it.
   double pivotTolerance = 1e-12;
+  std::vector<int> groups;  // setColumnGroups()
 
   Impl() {
     cholmod_start(&common);
@@ -222,7 +308,16 @@ void SparseCholeskySolver::analyzePattern(const SparseMatrix& input) {
   SparseMatrix compressed;
   const SparseMatrix& a = input.isCompressed() ? input : (compressed = input, compressed);
   cholmod_sparse view = viewOf(a);
-  d->factor = cholmod_analyze(&view, &d->common);
+  if (d->groups.size() == std::size_t(a.rows())) {
+    const std::vector<int> perm = groupedOrdering(a, d->groups, d->common);
+    d->common.nmethods = 1;
+    d->common.method[0].ordering = CHOLMOD_GIVEN;
+    d->factor = cholmod_analyze_p(&view, const_cast<int*>(perm.data()), nullptr, 0, &d->common);
+    d->common.nmethods = 0;  // back to CHOLMOD's own choice
+    d->common.method[0].ordering = CHOLMOD_GIVEN;
+  } else {
+    d->factor = cholmod_analyze(&view, &d->common);
+  }
   if (!d->factor) {
     d->throwOnCholmodError("analysis");
     throw std::runtime_error("CHOLMOD analysis returned no factor");
@@ -315,6 +410,10 @@ std::string SparseCholeskySolver::message() const { return d->message; }
 Eigen::Index SparseCholeskySolver::failedColumn() const { return d->failedColumn; }
 Eigen::Index SparseCholeskySolver::rows() const { return d->n; }
 void SparseCholeskySolver::setPivotTolerance(double tolerance) { d->pivotTolerance = tolerance; }
+void SparseCholeskySolver::setColumnGroups(std::vector<int> group) { d->groups = std::move(group); }
+double SparseCholeskySolver::factorFlops() const { return d->common.fl; }
+double SparseCholeskySolver::factorNonZeros() const { return d->common.lnz; }
+double SparseCholeskySolver::peakMemoryBytes() const { return double(d->common.memory_usage); }
 double SparseCholeskySolver::pivotTolerance() const { return d->pivotTolerance; }
 
 }  // namespace caps::fem

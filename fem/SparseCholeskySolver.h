@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace caps::fem {
 
@@ -94,6 +95,25 @@ public:
   /// Smallest accepted ratio pivot / diagonal entry; 0 disables the check.
   void setPivotTolerance(double tolerance);
   double pivotTolerance() const;
+
+  /// Columns that belong together, e.g. the three DOFs of a node: @a group[j]
+  /// for column j (any non-negative ids). analyzePattern() then orders the
+  /// graph of groups by nested dissection (METIS; about 9x fewer edges than the
+  /// DOF graph, so the analysis takes a fraction of the time for the same fill)
+  /// and keeps each group's columns together. Empty (the default), or a size
+  /// that does not match the matrix: CHOLMOD chooses (AMD, then METIS if AMD
+  /// fills badly).
+  void setColumnGroups(std::vector<int> group);
+
+  /// @name Statistics of the last successful factorization (CHOLMOD's counts)
+  ///@{
+  /// Floating-point operations of the numeric factorization.
+  double factorFlops() const;
+  /// Entries of the factor L.
+  double factorNonZeros() const;
+  /// Peak memory CHOLMOD held, bytes (its own accounting).
+  double peakMemoryBytes() const;
+  ///@}
 
 private:
   struct Impl;

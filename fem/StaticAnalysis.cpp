@@ -1,5 +1,9 @@
 #include "fem/StaticAnalysis.h"
 
+#include <algorithm>
+#include <exception>
+#include <thread>
+
 #include <chrono>
 #include <sstream>
 #include <stdexcept>
@@ -37,24 +41,56 @@ SolverStatus LinearStaticAnalysis::prepare() {
 SolverStatus LinearStaticAnalysis::prepareStages() {
   validateMesh(mesh_, materials_);
 
+  // The pattern of K, and so of K̄, follows from the connectivity and the
+  // constraints alone: the solver orders and analyses it on its own thread
+  // while the element matrices are computed (§4.6.1 steps 2a-2f beside the
+  // ordering), which hides most of the analysis on two cores.
   auto t0 = Clock::now();
-  k_ = assembleStiffness(mesh_, materials_, options_);
-  times_.assemble = secondsSince(t0);
-
-  t0 = Clock::now();
   map_ = resolveConstraints(mesh_, constraints_);
-  kbar_ = map_.reduceMatrix(k_);
-  kg_ = k_.selfadjointView<Eigen::Upper>() * map_.offset;
-  times_.constrain = secondsSince(t0);
-
-  if (map_.reducedCount() == 0) {
+  k_ = stiffnessPattern(mesh_);
+  const double patternSeconds = secondsSince(t0);
+  std::thread analysis;
+  std::exception_ptr analysisError;
+  if (map_.reducedCount() > 0) {
+    t0 = Clock::now();
+    Eigen::SparseMatrix<double> pattern = map_.reduceMatrix(k_);
+    times_.constrain = secondsSince(t0);
+    analysis = std::thread([this, pattern = std::move(pattern), &analysisError]() mutable {
+      try {
+        const auto start = Clock::now();
+        // Order by nodes: the graph of nodes is ~9x smaller than the DOF graph.
+        std::vector<int> nodeOfDof(map_.masterOf.size());
+        for (std::size_t d = 0; d < nodeOfDof.size(); ++d) nodeOfDof[d] = map_.masterOf[d] / 3;
+        solver_.setColumnGroups(std::move(nodeOfDof));
+        solver_.analyzePattern(pattern);
+        times_.analyse = secondsSince(start);
+      } catch (...) {
+        analysisError = std::current_exception();
+      }
+    });
+  }
+  try {
+    t0 = Clock::now();
+    // One core is busy with the analysis: one thread fewer for the elements.
+    AssemblyOptions assembly = options_;
+    if (analysis.joinable()) assembly.threads = std::max(1, assembly.threads - 1);
+    assembleStiffnessValues(mesh_, materials_, assembly, k_);
+    times_.assemble = patternSeconds + secondsSince(t0);
+    t0 = Clock::now();
+    kbar_ = map_.reduceMatrix(k_);
+    kg_ = k_.selfadjointView<Eigen::Upper>() * map_.offset;
+    times_.constrain += secondsSince(t0);
+  } catch (...) {
+    if (analysis.joinable()) analysis.join();
+    throw;
+  }
+  if (!analysis.joinable()) {
     status_ = SolverStatus::Success;
     message_.clear();
     return status_;
   }
-  t0 = Clock::now();
-  solver_.analyzePattern(kbar_);
-  times_.analyse = secondsSince(t0);
+  analysis.join();
+  if (analysisError) std::rethrow_exception(analysisError);
   if (solver_.status() != SolverStatus::Success) {
     status_ = solver_.status();
     message_ = solver_.message();

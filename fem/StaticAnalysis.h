@@ -27,9 +27,9 @@ struct LoadCase {
 
 /// Wall-clock seconds of each phase of the last prepare()/solve().
 struct PhaseTimes {
-  double assemble = 0.0;   ///< element stiffnesses and the global K
-  double constrain = 0.0;  ///< master-slave map, K̄ = T^T K T, K g
-  double analyse = 0.0;    ///< ordering and symbolic factorization
+  double assemble = 0.0;   ///< master-slave map, K's pattern, element stiffnesses into K
+  double constrain = 0.0;  ///< K̄'s pattern, K̄ = T^T K T, K g
+  double analyse = 0.0;    ///< ordering and symbolic factorization (on its own thread, beside assemble)
   double factor = 0.0;     ///< numeric factorization
   double solve = 0.0;      ///< loads, reduction, substitution, expansion (last solve())
 };
@@ -70,6 +70,8 @@ public:
   const Eigen::SparseMatrix<double>& stiffness() const { return k_; }
   /// Upper triangle of K̄.
   const Eigen::SparseMatrix<double>& reducedStiffness() const { return kbar_; }
+  /// The factorization (flop count, fill, CHOLMOD's peak memory).
+  const SparseCholeskySolver& solver() const { return solver_; }
 
 private:
   SolverStatus prepareStages();

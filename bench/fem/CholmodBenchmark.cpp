@@ -5,6 +5,7 @@
 // Usage: caps_bench_cholmod [n]   (n x n x n node grid, 3 DOFs per node,
 //                                  bottom layer clamped; default n = 15)
 
+#include "fem/BlasKernels.h"
 #include "fem/SparseCholeskySolver.h"
 
 #include <Eigen/SparseCholesky>
@@ -82,6 +83,7 @@ double seconds(Clock::time_point from, Clock::time_point to) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  caps::fem::useBestBlasKernels(argv);
   const int n = argc > 1 ? std::atoi(argv[1]) : 15;
   if (n < 2) {
     std::fprintf(stderr, "usage: %s [n >= 2]\n", argv[0]);
