@@ -1,0 +1,357 @@
+#include "fem/ContinuumMesher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace caps::fem {
+namespace {
+
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("continuum mesher: " + what); }
+
+std::string chartText(const ChartPoint& p) {
+  std::ostringstream s;
+  s << "(u, v) = (" << p.x() << ", " << p.y() << ") mm";
+  return s.str();
+}
+
+std::array<int, 2> edgeKey(int a, int b) { return a < b ? std::array<int, 2>{a, b} : std::array<int, 2>{b, a}; }
+
+void validateOptions(const ContinuumMeshOptions& o) {
+  if (o.layerCount < 1)
+    fail("the mesh needs at least one layer of elements from skin to bone (layerCount = " +
+         std::to_string(o.layerCount) + ")");
+  if (!o.layerFractions.empty()) {
+    if (int(o.layerFractions.size()) != o.layerCount)
+      fail(std::to_string(o.layerFractions.size()) + " layer fractions given for " + std::to_string(o.layerCount) +
+           " layers");
+    double sum = 0.0;
+    for (std::size_t k = 0; k < o.layerFractions.size(); ++k) {
+      const double f = o.layerFractions[k];
+      if (!std::isfinite(f) || f <= 0.0)
+        fail("layer " + std::to_string(k) + " has thickness fraction " + std::to_string(f) + "; it must be positive");
+      sum += f;
+    }
+    if (std::abs(sum - 1.0) > 1e-9) fail("the layer fractions sum to " + std::to_string(sum) + ", not 1");
+  }
+  if (!o.layerRegions.empty() && int(o.layerRegions.size()) != o.layerCount)
+    fail(std::to_string(o.layerRegions.size()) + " layer regions given for " + std::to_string(o.layerCount) +
+         " layers");
+  if (!std::isfinite(o.minDepth) || o.minDepth < 0.0)
+    fail("the minimum tissue depth must be finite and >= 0 mm (got " + std::to_string(o.minDepth) + ")");
+  if (std::isnan(o.maxDepth) || o.maxDepth <= 0.0 || o.maxDepth < o.minDepth)
+    fail("the maximum tissue depth (" + std::to_string(o.maxDepth) + " mm) must be positive and >= the minimum (" +
+         std::to_string(o.minDepth) + " mm)");
+  if (o.noBoneDepth && (!std::isfinite(*o.noBoneDepth) || *o.noBoneDepth <= 0.0))
+    fail("the depth used where there is no bone must be positive (got " + std::to_string(*o.noBoneDepth) + " mm)");
+}
+
+/// Cumulative fractions of the depth at the N_l + 1 layer boundaries; the
+/// last is exactly 1 so the bone layer lies at the full depth.
+std::vector<double> levelFractionsOf(const ContinuumMeshOptions& o) {
+  std::vector<double> levels(std::size_t(o.layerCount) + 1, 0.0);
+  for (int k = 0; k < o.layerCount; ++k)
+    levels[std::size_t(k) + 1] =
+        levels[std::size_t(k)] + (o.layerFractions.empty() ? 1.0 / o.layerCount : o.layerFractions[std::size_t(k)]);
+  levels.back() = 1.0;
+  return levels;
+}
+
+/// Union-find over nodes, to merge suture groups (three points closing
+/// together, or a chain of edge pairs through one vertex).
+struct NodeGroups {
+  std::map<int, int> parent;
+  int find(int n) {
+    auto it = parent.find(n);
+    if (it == parent.end()) {
+      parent[n] = n;
+      return n;
+    }
+    if (it->second == n) return n;
+    const int root = find(it->second);
+    parent[n] = root;
+    return root;
+  }
+  /// The root of b's group becomes the root of a's, so a lone pair keeps the
+  /// thesis direction: a0 onto b0.
+  void join(int a, int b) {
+    const int ra = find(a), rb = find(b);
+    if (ra != rb) parent[ra] = rb;
+  }
+};
+
+}  // namespace
+
+double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options, const char* where) {
+  double depth = 0.0;
+  if (std::isnan(rawDepth)) {
+    if (!options.noBoneDepth)
+      fail(std::string("no bone under ") + where +
+           " and no default depth for missing bone is set (ContinuumMeshOptions::noBoneDepth)");
+    depth = *options.noBoneDepth;
+  } else if (!std::isfinite(rawDepth)) {
+    fail(std::string("the tissue depth at ") + where + " is infinite");
+  } else {
+    depth = std::clamp(rawDepth, options.minDepth, options.maxDepth);
+  }
+  if (depth <= 0.0)
+    fail(std::string("the tissue depth at ") + where + " is " + std::to_string(depth) +
+         " mm; the bone must lie below the skin (set a positive minimum depth to clamp it)");
+  return depth;
+}
+
+Constraints ContinuumMesh::constraints() const {
+  Constraints c;
+  for (int n : fixedNodes) c.fixNode(n);
+  for (const Suture& s : sutures) c.suture(s.node, s.target);
+  return c;
+}
+
+int ContinuumMesh::edgeIndex(int a, int b) const {
+  const auto key = edgeKey(a, b);
+  const auto it = std::find(edges.begin(), edges.end(), key);
+  return it == edges.end() ? -1 : int(it - edges.begin());
+}
+
+ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
+                            const TissueGeometry& geometry, const ContinuumMeshOptions& options) {
+  validateOptions(options);
+  if (!geometry.skinPoint || !geometry.tissueDepth || !geometry.inwardDirection)
+    fail("the tissue geometry needs all three callbacks (skin point, tissue depth, inward direction)");
+  const int vertexCount = int(surface.vertices.size());
+  const int holeCount = surface.holeVertexCount;
+  if (holeCount < 0 || holeCount > vertexCount)
+    fail("the hole loop has " + std::to_string(holeCount) + " vertices but the surface mesh only " +
+         std::to_string(vertexCount));
+  if (surface.polygons.empty()) fail("the surface mesh has no polygons");
+
+  ContinuumMesh out;
+  const int layers = options.layerCount;
+  out.levelFractions = levelFractionsOf(options);
+
+  // 1. Edges of the surface mesh (§4.5.2: each polygon edge, last to first
+  //    included), with the polygons on each side, checking the polygons.
+  std::map<std::array<int, 2>, int> edgeOf;
+  std::vector<std::vector<int>> edgeUses;  // per edge: +1 for a use a->b with a < b, -1 reversed
+  std::vector<std::vector<int>> polygonEdges(surface.polygons.size());
+  for (std::size_t p = 0; p < surface.polygons.size(); ++p) {
+    const auto& poly = surface.polygons[p];
+    const std::string name = "surface polygon " + std::to_string(p);
+    if (poly.size() != 3 && poly.size() != 4)
+      fail(name + " has " + std::to_string(poly.size()) +
+           " vertices; only triangles (wedges) and quadrilaterals (bricks) can be extruded (§4.5.2)");
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      if (poly[i] < 0 || poly[i] >= vertexCount)
+        fail(name + " refers to vertex " + std::to_string(poly[i]) + " of a mesh with " + std::to_string(vertexCount) +
+             " vertices");
+      for (std::size_t j = 0; j < i; ++j)
+        if (poly[i] == poly[j]) fail(name + " repeats vertex " + std::to_string(poly[i]));
+    }
+    // Counter-clockwise in the chart = seen from outside the head, so the
+    // skin face is the top face (t = +1) of a positive-Jacobian element.
+    double twiceArea = 0.0;
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const ChartPoint& a = surface.vertices[std::size_t(poly[i])];
+      const ChartPoint& b = surface.vertices[std::size_t(poly[(i + 1) % poly.size()])];
+      twiceArea += a.x() * b.y() - a.y() * b.x();
+    }
+    if (!(twiceArea > 0.0))
+      fail(name + " is not counter-clockwise in the chart (signed area " + std::to_string(0.5 * twiceArea) +
+           " mm^2); polygons must be seen from outside the head");
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+      const int a = poly[i], b = poly[(i + 1) % poly.size()];
+      const auto key = edgeKey(a, b);
+      auto [it, added] = edgeOf.emplace(key, int(out.edges.size()));
+      if (added) {
+        out.edges.push_back(key);
+        edgeUses.emplace_back();
+      }
+      auto& uses = edgeUses[std::size_t(it->second)];
+      const int direction = a < b ? 1 : -1;
+      if (uses.size() == 2 || (uses.size() == 1 && uses[0] == direction))
+        fail("surface edge (" + std::to_string(a) + ", " + std::to_string(b) + ") of " + name +
+             (uses.size() == 2
+                  ? " is shared by more than two polygons"
+                  : " is used twice in the same direction (polygons overlap or are not all counter-clockwise)"));
+      uses.push_back(direction);
+      polygonEdges[p].push_back(it->second);
+    }
+  }
+  const int edgeCount = int(out.edges.size());
+
+  // 2. Node positions, layer by layer as in the thesis: the skin level, then
+  //    for each layer its vertical mid-edge nodes and its lower boundary.
+  auto unitInward = [&](const ChartPoint& c, const std::string& where) {
+    const Eigen::Vector3d n = geometry.inwardDirection(c);
+    const double len = n.norm();
+    if (!std::isfinite(len) || len < 1e-12) fail("the inward direction at " + where + " is zero or not finite");
+    return Eigen::Vector3d(n / len);
+  };
+  auto skinAt = [&](const ChartPoint& c, const std::string& where) {
+    const Eigen::Vector3d s = geometry.skinPoint(c);
+    if (!s.allFinite()) fail("the skin point at " + where + " is not finite");
+    return s;
+  };
+  struct ColumnGeometry {
+    Eigen::Vector3d skin, inward;
+    double depth = 0.0;
+  };
+  std::vector<ColumnGeometry> vertexGeometry(static_cast<std::size_t>(vertexCount));
+  out.vertexDepths.resize(std::size_t(vertexCount));
+  for (int v = 0; v < vertexCount; ++v) {
+    const ChartPoint& c = surface.vertices[std::size_t(v)];
+    const std::string where = "vertex " + std::to_string(v) + " " + chartText(c);
+    auto& g = vertexGeometry[std::size_t(v)];
+    g.skin = skinAt(c, where);
+    g.inward = unitInward(c, where);
+    g.depth = effectiveTissueDepth(geometry.tissueDepth(c), options, where.c_str());
+    out.vertexDepths[std::size_t(v)] = g.depth;
+  }
+  // Mid-edge columns stand on the skin point of the chart midpoint, so the
+  // top mid-edge nodes lie on the skin (§4.5.2: midpoints offset to the skin).
+  std::vector<ColumnGeometry> edgeGeometry(static_cast<std::size_t>(edgeCount));
+  out.edgeDepths.resize(std::size_t(edgeCount));
+  for (int e = 0; e < edgeCount; ++e) {
+    const auto& [a, b] = out.edges[std::size_t(e)];
+    const ChartPoint c = 0.5 * (surface.vertices[std::size_t(a)] + surface.vertices[std::size_t(b)]);
+    const std::string where =
+        "the midpoint of edge (" + std::to_string(a) + ", " + std::to_string(b) + ") " + chartText(c);
+    auto& g = edgeGeometry[std::size_t(e)];
+    g.skin = skinAt(c, where);
+    g.inward = unitInward(c, where);
+    g.depth = effectiveTissueDepth(geometry.tissueDepth(c), options, where.c_str());
+    out.edgeDepths[std::size_t(e)] = g.depth;
+  }
+
+  const Eigen::Index nodeTotal = Eigen::Index(layers) * (2 * vertexCount + edgeCount) + vertexCount + edgeCount;
+  out.mesh.nodes.resize(3, nodeTotal);
+  out.vertexColumns.assign(std::size_t(vertexCount), std::vector<int>(std::size_t(2 * layers + 1), -1));
+  out.edgeColumns.assign(std::size_t(edgeCount), std::vector<int>(std::size_t(layers + 1), -1));
+  int next = 0;
+  auto place = [&](const ColumnGeometry& g, double fraction) {
+    out.mesh.nodes.col(next) = g.skin + fraction * g.depth * g.inward;
+    return next++;
+  };
+  for (int level = 0; level <= layers; ++level) {
+    const double f = out.levelFractions[std::size_t(level)];
+    if (level > 0) {
+      // Vertical mid-edge nodes (Bathe 16-19, wedge 12-14) at half the layer.
+      const double mid = 0.5 * (out.levelFractions[std::size_t(level) - 1] + f);
+      for (int v = 0; v < vertexCount; ++v)
+        out.vertexColumns[std::size_t(v)][std::size_t(2 * level - 1)] = place(vertexGeometry[std::size_t(v)], mid);
+    }
+    for (int v = 0; v < vertexCount; ++v)
+      out.vertexColumns[std::size_t(v)][std::size_t(2 * level)] = place(vertexGeometry[std::size_t(v)], f);
+    for (int e = 0; e < edgeCount; ++e)
+      out.edgeColumns[std::size_t(e)][std::size_t(level)] = place(edgeGeometry[std::size_t(e)], f);
+  }
+  // The thesis's count (§4.5.2); holds for wedges too (corner, mid-edge and
+  // vertical mid-edge nodes only).
+  if (next != nodeTotal)
+    throw std::logic_error("continuum mesher: node count differs from N_l(2N_v + N_e) + N_v + N_e");
+
+  // 3. Elements: one per polygon per layer, node slots read from the columns.
+  out.mesh.elements.reserve(surface.polygons.size() * std::size_t(layers));
+  for (int k = 0; k < layers; ++k) {
+    const int region = options.layerRegions.empty() ? k : options.layerRegions[std::size_t(k)];
+    for (std::size_t p = 0; p < surface.polygons.size(); ++p) {
+      const auto& poly = surface.polygons[p];
+      const int n = int(poly.size());
+      Element el;
+      el.nodes.fill(-1);
+      el.region = region;
+      el.kind = n == 4 ? ElementKind::Hex20 : ElementKind::Wedge15;
+      // Bathe: corners 0-3 top, 4-7 bottom, 8-11 / 12-15 top / bottom
+      // mid-edges i-(i+1), 16-19 vertical. Wedge: 0-2, 3-5, 6-8, 9-11, 12-14.
+      for (int i = 0; i < n; ++i) {
+        const auto& column = out.vertexColumns[std::size_t(poly[std::size_t(i)])];
+        const auto& edgeColumn = out.edgeColumns[std::size_t(polygonEdges[p][std::size_t(i)])];
+        el.nodes[std::size_t(i)] = column[std::size_t(2 * k)];
+        el.nodes[std::size_t(n + i)] = column[std::size_t(2 * k + 2)];
+        el.nodes[std::size_t(2 * n + i)] = edgeColumn[std::size_t(k)];
+        el.nodes[std::size_t(3 * n + i)] = edgeColumn[std::size_t(k + 1)];
+        el.nodes[std::size_t(4 * n + i)] = column[std::size_t(2 * k + 1)];
+      }
+      out.mesh.elements.push_back(el);
+      out.elementPolygon.push_back(int(p));
+      out.elementLayer.push_back(k);
+    }
+  }
+
+  // 4. Sutures (§4.4.5): edge a onto edge b through every layer, vertex
+  //    columns a0 -> b0, a1 -> b1 (not at a corner being closed) and the
+  //    mid-edge columns.
+  auto isHoleBorderEdge = [&](int a, int b) {
+    if (a < 0 || b < 0 || a >= holeCount || b >= holeCount || a == b) return -1;
+    const auto it = edgeOf.find(edgeKey(a, b));
+    if (it == edgeOf.end() || edgeUses[std::size_t(it->second)].size() != 1) return -1;
+    return it->second;
+  };
+  NodeGroups groups;
+  std::vector<int> joinOrder;  // nodes in order of first suture, for a stable output
+  auto sew = [&](const std::vector<int>& from, const std::vector<int>& onto) {
+    for (std::size_t i = 0; i < from.size(); ++i) {
+      for (int node : {from[i], onto[i]})
+        if (groups.parent.find(node) == groups.parent.end()) joinOrder.push_back(node);
+      groups.join(from[i], onto[i]);
+    }
+  };
+  for (std::size_t s = 0; s < sutures.size(); ++s) {
+    const auto& edgePair = sutures[s];
+    const int ea = isHoleBorderEdge(edgePair.a[0], edgePair.a[1]);
+    const int eb = isHoleBorderEdge(edgePair.b[0], edgePair.b[1]);
+    auto edgeName = [](const std::array<int, 2>& e) {
+      std::ostringstream text;
+      text << "(" << e[0] << ", " << e[1] << ")";
+      return text.str();
+    };
+    for (const auto& [index, e] : {std::pair{ea, edgePair.a}, std::pair{eb, edgePair.b}})
+      if (index < 0)
+        fail("suture pair " + std::to_string(s) + " refers to edge " + edgeName(e) +
+             ", which is not a border edge of the hole loop (loop vertices 0.." + std::to_string(holeCount - 1) + ")");
+    if (ea == eb) fail("suture pair " + std::to_string(s) + " sews edge " + edgeName(edgePair.a) + " onto itself");
+    for (int i = 0; i < 2; ++i)
+      if (edgePair.a[std::size_t(i)] != edgePair.b[std::size_t(i)])  // corner rule
+        sew(out.vertexColumns[std::size_t(edgePair.a[std::size_t(i)])],
+            out.vertexColumns[std::size_t(edgePair.b[std::size_t(i)])]);
+    sew(out.edgeColumns[std::size_t(ea)], out.edgeColumns[std::size_t(eb)]);
+  }
+  std::vector<char> sutured(std::size_t(nodeTotal), 0);
+  for (int node : joinOrder) {
+    sutured[std::size_t(node)] = 1;
+    const int root = groups.find(node);
+    if (root != node) out.sutures.push_back({node, root});
+  }
+
+  // 5. Supports: the bone layer (§4.5) and, if asked, the rim columns. The
+  //    rim is every border edge that is not an edge of the hole loop.
+  for (const auto& column : out.vertexColumns) out.boneNodes.push_back(column.back());
+  for (const auto& column : out.edgeColumns) out.boneNodes.push_back(column.back());
+  std::sort(out.boneNodes.begin(), out.boneNodes.end());
+  std::vector<char> onRim(std::size_t(nodeTotal), 0);
+  for (int e = 0; e < edgeCount; ++e) {
+    if (edgeUses[std::size_t(e)].size() != 1) continue;
+    const auto& [a, b] = out.edges[std::size_t(e)];
+    const bool holeEdge = a < holeCount && b < holeCount && (b == a + 1 || (a == 0 && b == holeCount - 1));
+    if (holeEdge) continue;
+    for (int node : out.edgeColumns[std::size_t(e)]) onRim[std::size_t(node)] = 1;
+    for (int v : {a, b})
+      for (int node : out.vertexColumns[std::size_t(v)]) onRim[std::size_t(node)] = 1;
+  }
+  for (int node = 0; node < nodeTotal; ++node)
+    if (onRim[std::size_t(node)]) out.rimNodes.push_back(node);
+  std::vector<char> fixed(std::size_t(nodeTotal), 0);
+  for (int node : out.boneNodes) fixed[std::size_t(node)] = 1;
+  if (options.rim == RimCondition::Clamped)
+    for (int node : out.rimNodes) fixed[std::size_t(node)] = 1;
+  for (int node = 0; node < nodeTotal; ++node)
+    if (fixed[std::size_t(node)] && !sutured[std::size_t(node)]) out.fixedNodes.push_back(node);
+  return out;
+}
+
+}  // namespace caps::fem

@@ -1,0 +1,156 @@
+#pragma once
+/// @file ContinuumMesher.h
+/// @brief Extrusion of the skin's surface mesh down to the bone into layers
+/// of 20-node bricks and 15-node wedges (thesis §4.5.2), with the sutures of
+/// §4.4.5 and the bone supports of §4.5.
+
+#include "fem/Constraints.h"
+#include "fem/Mesh.h"
+#include "fem/SurfaceMesh.h"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace caps::fem {
+
+/**
+ * @brief Where the tissue lies under the chart, supplied by the caller (who
+ *        reads the skin and bone range maps, §4.2.1 eq. 4.9, and maps chart
+ *        (u, v) to (θ, z)). fem/ knows nothing of range maps.
+ *
+ * All three are called with chart points (mm) of surface vertices and of
+ * surface edge midpoints.
+ */
+struct TissueGeometry {
+  /// Skin point in the patient frame (LPS, mm).
+  std::function<Eigen::Vector3d(const ChartPoint&)> skinPoint;
+  /// Soft-tissue depth (mm) from the skin to the bone along inwardDirection;
+  /// NaN where the bone range map has no bone (ContinuumMeshOptions say what
+  /// to do there).
+  std::function<double(const ChartPoint&)> tissueDepth;
+  /// Direction towards the bone (−radial, towards the head axis, §4.5); need
+  /// not be unit length, it is normalised.
+  std::function<Eigen::Vector3d(const ChartPoint&)> inwardDirection;
+};
+
+/// What holds the outer rim of the meshed region.
+enum class RimCondition {
+  Free,     ///< as in the thesis (§4.5): only the bone layer is fixed
+  Clamped,  ///< every node of the rim's columns is fixed (tissue beyond the mesh held in place)
+};
+
+/// Options of meshContinuum().
+struct ContinuumMeshOptions {
+  /// Number of element layers N_l from the skin to the bone (>= 1).
+  int layerCount = 1;
+  /// Thickness of each layer as a fraction of the local depth, skin first
+  /// (e.g. skin, fat, muscle). Empty: N_l equal layers. Otherwise N_l
+  /// positive numbers summing to 1.
+  std::vector<double> layerFractions;
+  /// Element region (material) of each layer, skin first. Empty: the layer
+  /// index. Otherwise N_l ids.
+  std::vector<int> layerRegions;
+  /// The depth from TissueGeometry::tissueDepth is clamped to
+  /// [minDepth, maxDepth] (mm): range data near the bone's edge or over the
+  /// sinuses is unreliable, and a thin sliver of tissue makes flat elements.
+  double minDepth = 0.0;
+  double maxDepth = std::numeric_limits<double>::infinity();
+  /// Depth (mm) used where there is no bone (tissueDepth is NaN). Unset: no
+  /// bone under a vertex is an error naming the chart point.
+  std::optional<double> noBoneDepth;
+  RimCondition rim = RimCondition::Free;
+};
+
+/**
+ * @brief The continuum mesh and what the analysis and the display need from
+ *        its construction.
+ *
+ * Node columns: every surface vertex owns 2 N_l + 1 nodes from the skin
+ * (index 0) to the bone (index 2 N_l): the layer boundaries at even indices,
+ * the middles of the layers' vertical edges at odd ones. Every surface edge
+ * owns N_l + 1 nodes, one per layer boundary. So there are
+ * N_l (2 N_v + N_e) + N_v + N_e nodes and N_l N_p elements (§4.5.2).
+ */
+struct ContinuumMesh {
+  Mesh mesh;
+
+  /// Suture constraints (§4.4.5): node ends where target ends. Node pairs of
+  /// all layers of the sutured edges' vertex and mid-edge columns, with the
+  /// corner rule applied. A node met by several suture edge pairs (three
+  /// points closing together) is sutured once, onto one node of its group.
+  std::vector<Suture> sutures;
+  /// Nodes fixed in x, y, z (ascending): the bone layer (§4.5), plus the rim
+  /// columns if RimCondition::Clamped, less every sutured node.
+  std::vector<int> fixedNodes;
+  /// Every node of the bone layer (ascending), sutured or not.
+  std::vector<int> boneNodes;
+  /// Every node of the rim's vertex and edge columns (ascending).
+  std::vector<int> rimNodes;
+
+  /// Surface edges (smaller vertex index first), in order of first use by
+  /// the polygons; indices into edgeColumns.
+  std::vector<std::array<int, 2>> edges;
+  /// Node column of each surface vertex (2 N_l + 1 nodes, skin to bone).
+  std::vector<std::vector<int>> vertexColumns;
+  /// Node column of each surface edge (N_l + 1 nodes, skin to bone).
+  std::vector<std::vector<int>> edgeColumns;
+  /// Depth used at each vertex and at each edge's chart midpoint (mm,
+  /// after clamping and the no-bone default).
+  std::vector<double> vertexDepths;
+  std::vector<double> edgeDepths;
+  /// Fraction of the local depth at each layer boundary: N_l + 1 values from
+  /// 0 (skin) to 1 (bone).
+  std::vector<double> levelFractions;
+
+  /// For each element, its surface polygon and its layer (0 at the skin).
+  std::vector<int> elementPolygon;
+  std::vector<int> elementLayer;
+
+  /// The fixed nodes and sutures as constraints for LinearStaticAnalysis.
+  Constraints constraints() const;
+  /// Index of the surface edge joining vertices @a a and @a b, or -1.
+  int edgeIndex(int a, int b) const;
+};
+
+/**
+ * @brief Extrudes @a surface from the skin to the bone (thesis §4.5.2).
+ *
+ * Every quadrilateral becomes a 20-node hexahedron (Bathe order, top face
+ * t = +1 on the skin) and every triangle a native 15-node wedge (top
+ * triangle on the skin), one per layer; edges shared by polygons become
+ * shared faces. Corner and mid-edge nodes of the skin lie on the skin
+ * (skinPoint of the vertex, and of the edge's chart midpoint, so curved
+ * skin is followed); deeper nodes are offset along inwardDirection by the
+ * layer boundaries' fractions of the local depth, so the bone layer lies
+ * at the full depth. Twins of the hole loop are distinct vertices, so the
+ * hole stays open until @a sutures close it: edge a is sewn onto edge b,
+ * a0 onto b0 and a1 onto b1, through every layer; a vertex shared by both
+ * edges (a corner being closed) gets no suture.
+ *
+ * Throws std::invalid_argument with a message naming the culprit for: no
+ * layers, bad layer fractions or regions, bad depth limits, a polygon with
+ * other than 3 or 4 vertices, a vertex index out of range or repeated, a
+ * polygon that is not counter-clockwise in the chart, an edge used by more
+ * than two polygons or twice in the same direction, a suture edge that is
+ * not a border edge of the hole loop, a missing callback, a non-finite skin
+ * point or inward direction, no bone and no default depth, or a depth that
+ * is not positive after clamping.
+ */
+ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
+                            const TissueGeometry& geometry, const ContinuumMeshOptions& options = {});
+
+/**
+ * @brief The depth the mesher uses for a raw depth @a rawDepth (mm) from
+ *        TissueGeometry::tissueDepth: clamped to [minDepth, maxDepth], or
+ *        noBoneDepth when @a rawDepth is NaN. Throws std::invalid_argument
+ *        if there is no bone and no default, or the result is not positive;
+ *        @a where names the point in the message.
+ */
+double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options, const char* where = "a point");
+
+}  // namespace caps::fem
