@@ -1,0 +1,44 @@
+#pragma once
+/// @file IncisionLogic.h
+/// @brief Logic of the Incision module: the procedure library and plans
+/// placed on a skin range map; no widgets (the panel comes later).
+
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "modules/core/Module.h"
+#include "modules/incision/IncisionPlan.h"
+#include "modules/incision/ProcedureTemplate.h"
+#include "modules/incision/SkinMeasurements.h"
+
+namespace caps {
+
+/// @class IncisionLogic
+/// @brief The procedures of data/procedures/ (§4.1) and plans made from them.
+class IncisionLogic : public ModuleLogic
+{
+public:
+  using ModuleLogic::ModuleLogic;
+
+  /// The procedure library, read from incision::defaultProceduresFolder()
+  /// the first time it is asked for.
+  /// @throws std::runtime_error when the folder does not exist.
+  const incision::ProcedureLibrary& procedures();
+  /// Reads the library again from folder (a surgeon added a procedure file).
+  const incision::ProcedureLibrary& reloadProcedures(const std::filesystem::path& folder);
+
+  /// The plan of procedure `id` centred at a skin point with the given
+  /// parameter values (API units; the rest default).
+  /// @throws std::invalid_argument for an unknown procedure, bad values, or
+  /// a cut that does not fit on the measured skin.
+  incision::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin,
+                                        const incision::SkinPoint& at,
+                                        const std::map<std::string, double>& values = {});
+
+private:
+  std::optional<incision::ProcedureLibrary> library_;
+};
+
+} // namespace caps

@@ -1,0 +1,48 @@
+#pragma once
+// Skins whose lengths, angles and areas are known in closed form.
+
+#include <cmath>
+#include <filesystem>
+
+#include "modules/incision/ProcedureTemplate.h"
+#include "segmentation/RangeMap.h"
+
+namespace caps::test {
+
+inline constexpr double pi = 3.14159265358979323846;
+inline constexpr double degree = pi / 180.0;
+
+/// A cylinder of radius R about the frame's axis: r(θ, z) = R.
+inline seg::RangeMap cylinderSkin(double radius, double zMin = -100.0, double zMax = 100.0)
+{
+  return seg::RangeMap(seg::CylindricalFrame({0, 0, 0}, {0, 0, 1}, zMin, zMax, 720, 401), float(radius));
+}
+
+/// A sphere of radius ρ centred on the axis at z = 0, scanned over |z| ≤ 0.8 ρ
+/// with rows 0.05 mm apart (bilinear reading between rows is then exact to ~1e-6).
+inline seg::RangeMap sphereSkin(double rho)
+{
+  const double zMax = 0.8 * rho;
+  const int nz = int(std::lround(2.0 * zMax / 0.05)) + 1;
+  seg::RangeMap map(seg::CylindricalFrame({0, 0, 0}, {0, 0, 1}, -zMax, zMax, 360, nz));
+  for (int j = 0; j < nz; ++j)
+  {
+    const double z = map.frame().indexToZ(j);
+    for (int i = 0; i < map.nTheta(); ++i)
+      map.at(i, j) = float(std::sqrt(rho * rho - z * z));
+  }
+  return map;
+}
+
+inline std::filesystem::path proceduresFolder()
+{
+  return std::filesystem::path(CAPS_TEST_DATA_DIR) / "procedures";
+}
+
+inline const incision::ProcedureLibrary& shippedProcedures()
+{
+  static const incision::ProcedureLibrary library = incision::ProcedureLibrary::load(proceduresFolder());
+  return library;
+}
+
+} // namespace caps::test
