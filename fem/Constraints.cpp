@@ -218,6 +218,38 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
   return r;
 }
 
+void ConstraintMap::reduceValues(const Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>& kbar) const {
+  bool selection = k.isCompressed();
+  for (std::size_t d = 0, last = 0; d < reduced.size() && selection; ++d)
+    if (reduced[d] >= 0) {
+      selection = std::size_t(reduced[d]) == last;
+      ++last;
+    }
+  if (!selection) {
+    // Sutures sum entries into shared places: rebuild (same pattern, same order).
+    Eigen::SparseMatrix<double> fresh = reduceMatrix(k);
+    if (fresh.nonZeros() != kbar.nonZeros())
+      throw std::invalid_argument("reduceValues: the reduced matrix was made from another pattern");
+    std::copy(fresh.valuePtr(), fresh.valuePtr() + fresh.nonZeros(), kbar.valuePtr());
+    return;
+  }
+  // The same walk as reduceMatrix()'s copying pass, values only.
+  double* values = kbar.valuePtr();
+  Eigen::Index at = 0;
+  for (Eigen::Index j = 0; j < k.outerSize(); ++j) {
+    if (reduced[std::size_t(j)] < 0) continue;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
+      if (it.row() > j) break;
+      if (reduced[std::size_t(it.row())] < 0) continue;
+      if (at >= kbar.nonZeros())
+        throw std::invalid_argument("reduceValues: the reduced matrix was made from another pattern");
+      values[at++] = it.value();
+    }
+  }
+  if (at != kbar.nonZeros())
+    throw std::invalid_argument("reduceValues: the reduced matrix was made from another pattern");
+}
+
 Eigen::MatrixXd ConstraintMap::reduceVector(const Eigen::MatrixXd& r) const {
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(reducedCount(), r.cols());
   for (std::size_t d = 0; d < reduced.size(); ++d)

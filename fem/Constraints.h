@@ -61,6 +61,10 @@ struct ConstraintMap {
 
   /// K̄ = T^T K T from @a kUpper (upper triangle of K) to an upper-triangle K̄.
   Eigen::SparseMatrix<double> reduceMatrix(const Eigen::SparseMatrix<double>& kUpper) const;
+  /// The values of T^T K T into @a kbar, which holds reduceMatrix()'s result
+  /// for a matrix with @a kUpper's pattern (e.g. made from the pattern alone,
+  /// before the values were known): no new arrays.
+  void reduceValues(const Eigen::SparseMatrix<double>& kUpper, Eigen::SparseMatrix<double>& kbar) const;
   /// T^T r for full-size vectors (one column per load case).
   Eigen::MatrixXd reduceVector(const Eigen::MatrixXd& r) const;
   /// U = T Ubar + g (one column per load case).

@@ -307,7 +307,11 @@ void SparseCholeskySolver::analyzePattern(const SparseMatrix& input) {
   // CHOLMOD wants packed columns; copy only if Eigen left slack.
   SparseMatrix compressed;
   const SparseMatrix& a = input.isCompressed() ? input : (compressed = input, compressed);
+  // The pattern only: the analysis never reads a value, so the caller may
+  // fill the values on another thread meanwhile (LinearStaticAnalysis does).
   cholmod_sparse view = viewOf(a);
+  view.x = nullptr;
+  view.xtype = CHOLMOD_PATTERN;
   if (d->groups.size() == std::size_t(a.rows())) {
     const std::vector<int> perm = groupedOrdering(a, d->groups, d->common);
     d->common.nmethods = 1;

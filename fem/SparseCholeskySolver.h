@@ -61,7 +61,8 @@ public:
   SparseCholeskySolver(SparseCholeskySolver&&) noexcept;
   SparseCholeskySolver& operator=(SparseCholeskySolver&&) noexcept;
 
-  /// Ordering and symbolic factorization; reads only the pattern of @a a.
+  /// Ordering and symbolic factorization; reads only the pattern of @a a
+  /// (never its values, which another thread may be filling meanwhile).
   void analyzePattern(const SparseMatrix& a);
   /// Numeric factorization; @a a must have the pattern given to analyzePattern().
   void factorize(const SparseMatrix& a);

@@ -53,16 +53,18 @@ SolverStatus LinearStaticAnalysis::prepareStages() {
   std::exception_ptr analysisError;
   if (map_.reducedCount() > 0) {
     t0 = Clock::now();
-    Eigen::SparseMatrix<double> pattern = map_.reduceMatrix(k_);
+    // K̄'s pattern; the analysis reads only its indices (CHOLMOD's analysis
+    // is pattern-only), its values are filled in below once K is known.
+    kbar_ = map_.reduceMatrix(k_);
     times_.constrain = secondsSince(t0);
-    analysis = std::thread([this, pattern = std::move(pattern), &analysisError]() mutable {
+    analysis = std::thread([this, &analysisError]() {
       try {
         const auto start = Clock::now();
         // Order by nodes: the graph of nodes is ~9x smaller than the DOF graph.
         std::vector<int> nodeOfDof(map_.masterOf.size());
         for (std::size_t d = 0; d < nodeOfDof.size(); ++d) nodeOfDof[d] = map_.masterOf[d] / 3;
         solver_.setColumnGroups(std::move(nodeOfDof));
-        solver_.analyzePattern(pattern);
+        solver_.analyzePattern(kbar_);
         times_.analyse = secondsSince(start);
       } catch (...) {
         analysisError = std::current_exception();
@@ -77,7 +79,10 @@ SolverStatus LinearStaticAnalysis::prepareStages() {
     assembleStiffnessValues(mesh_, materials_, assembly, k_);
     times_.assemble = patternSeconds + secondsSince(t0);
     t0 = Clock::now();
-    kbar_ = map_.reduceMatrix(k_);
+    if (analysis.joinable())
+      map_.reduceValues(k_, kbar_);
+    else
+      kbar_ = map_.reduceMatrix(k_);
     kg_ = k_.selfadjointView<Eigen::Upper>() * map_.offset;
     times_.constrain += secondsSince(t0);
   } catch (...) {
