@@ -60,19 +60,6 @@ struct RangeMapArgs : cli::CtCommandArgs
   fs::path landmarks; ///< the user's landmarks; empty: placed automatically
 };
 
-/// "PX,PY,PZ,DX,DY,DZ" into an axis; false when it is not six finite numbers.
-bool parseAxis(const std::string& text, RangeMapLogic::Parameters::Axis& axis)
-{
-  double v[6];
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4],
-                  &v[5], &tail) != 6)
-    return false;
-  axis.point = Eigen::Vector3d(v[0], v[1], v[2]);
-  axis.direction = Eigen::Vector3d(v[3], v[4], v[5]);
-  return axis.point.allFinite() && axis.direction.allFinite() && axis.direction.norm() > 1e-9;
-}
-
 std::optional<std::string> parse(const std::vector<std::string>& argv, RangeMapArgs& parsed)
 {
   return cli::parseCtCommand(
@@ -95,7 +82,7 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, RangeMapA
       else if (a == "--axis")
       {
         RangeMapLogic::Parameters::Axis axis;
-        if (i + 1 >= args.size() || !parseAxis(args[++i], axis))
+        if (i + 1 >= args.size() || !parseAxis(args[++i], axis.point, axis.direction))
           return "--axis needs a point and a non-zero direction, PX,PY,PZ,DX,DY,DZ in LPS mm "
                  "(e.g. 0,-200,750,0,0,1)";
         parsed.parameters.axis = axis;

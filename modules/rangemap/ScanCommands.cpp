@@ -70,62 +70,41 @@ struct ScanArgs
   bool help = false;
 };
 
-std::optional<std::string> parse(const std::vector<std::string>& args, ScanArgs& parsed)
+std::optional<std::string> parse(const std::vector<std::string>& argv, ScanArgs& parsed)
 {
-  for (std::size_t i = 0; i < args.size(); ++i)
-  {
-    const std::string& a = args[i];
-    const bool hasValue = i + 1 < args.size();
-    if (a == "--help" || a == "-h")
-      parsed.help = true;
-    else if (a == "--out")
-    {
-      if (!hasValue)
-        return "--out needs a folder";
-      parsed.out = args[++i];
-    }
-    else if (a == "--size")
-    {
-      char tail = 0;
-      if (!hasValue ||
-          std::sscanf(args[++i].c_str(), "%dx%d%c", &parsed.nTheta, &parsed.nZ, &tail) != 2 ||
-          parsed.nTheta < 8 || parsed.nZ < 4 || parsed.nTheta > 8192 || parsed.nZ > 8192)
-        return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
-    }
-    else if (a == "--axis")
-    {
-      double v[6];
-      char tail = 0;
-      if (!hasValue || std::sscanf(args[++i].c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1],
-                                   &v[2], &v[3], &v[4], &v[5], &tail) != 6)
-        return "--axis needs a point and a non-zero direction, PX,PY,PZ,DX,DY,DZ";
-      const Eigen::Vector3d p(v[0], v[1], v[2]), d(v[3], v[4], v[5]);
-      if (!p.allFinite() || !d.allFinite() || d.norm() < 1e-9)
-        return "--axis needs a point and a non-zero direction, PX,PY,PZ,DX,DY,DZ";
-      parsed.axis = std::pair{p, d};
-    }
-    else if (a == "--vertices")
-      parsed.vertices = true;
-    else if (a == "--calibrate")
-    {
-      if (!hasValue)
-        return "--calibrate needs a CSV file of measured distances";
-      parsed.distances = args[++i];
-    }
-    else if (!a.empty() && a[0] == '-')
-      return "unknown option " + a;
-    else if (parsed.mesh.empty())
-      parsed.mesh = a;
-    else
-      return "one mesh only (got '" + parsed.mesh.string() + "' and '" + a + "')";
-  }
-  if (parsed.help)
-    return std::nullopt;
-  if (parsed.mesh.empty())
-    return "MESH missing";
-  if (parsed.out.empty())
-    return "--out DIR missing: where should the results go?";
-  return std::nullopt;
+  return cli::parseInputOutputCommand(
+    argv, parsed.mesh, parsed.out, parsed.help,
+    [&parsed](const std::string& a, const std::vector<std::string>& args,
+              std::size_t& i) -> std::optional<std::string> {
+      const bool hasValue = i + 1 < args.size();
+      if (a == "--size")
+      {
+        char tail = 0;
+        if (!hasValue ||
+            std::sscanf(args[++i].c_str(), "%dx%d%c", &parsed.nTheta, &parsed.nZ, &tail) != 2 ||
+            parsed.nTheta < 8 || parsed.nZ < 4 || parsed.nTheta > 8192 || parsed.nZ > 8192)
+          return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
+      }
+      else if (a == "--axis")
+      {
+        Eigen::Vector3d p, d;
+        if (!hasValue || !parseAxis(args[++i], p, d))
+          return "--axis needs a point and a non-zero direction, PX,PY,PZ,DX,DY,DZ";
+        parsed.axis = std::pair{p, d};
+      }
+      else if (a == "--vertices")
+        parsed.vertices = true;
+      else if (a == "--calibrate")
+      {
+        if (!hasValue)
+          return "--calibrate needs a CSV file of measured distances";
+        parsed.distances = args[++i];
+      }
+      else
+        return "unknown option " + a;
+      return std::nullopt;
+    },
+    "MESH");
 }
 
 std::vector<std::string> splitCsv(const std::string& line)
@@ -327,6 +306,18 @@ int runScan(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& ou
 }
 
 } // namespace
+
+bool parseAxis(const std::string& text, Eigen::Vector3d& point, Eigen::Vector3d& direction)
+{
+  double v[6];
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4],
+                  &v[5], &tail) != 6)
+    return false;
+  point = Eigen::Vector3d(v[0], v[1], v[2]);
+  direction = Eigen::Vector3d(v[3], v[4], v[5]);
+  return point.allFinite() && direction.allFinite() && direction.norm() > 1e-9;
+}
 
 ModuleCommand scanCommand()
 {

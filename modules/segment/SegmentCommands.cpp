@@ -44,45 +44,55 @@ std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOpti
   return std::nullopt;
 }
 
-std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
-                                          CtCommandArgs& parsed, const CommandOption& option)
+std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args,
+                                                   std::filesystem::path& input, std::filesystem::path& out,
+                                                   bool& help, const CommandOption& option,
+                                                   const char* inputName)
 {
   for (std::size_t i = 0; i < args.size(); ++i)
   {
     const std::string& a = args[i];
-    const bool hasValue = i + 1 < args.size();
     if (a == "--help" || a == "-h")
-      parsed.help = true;
+      help = true;
     else if (a == "--out")
     {
-      if (!hasValue)
+      if (i + 1 >= args.size())
         return "--out needs a folder";
-      parsed.out = args[++i];
-    }
-    else if (a == "--series")
-    {
-      if (!hasValue)
-        return "--series needs a number or a series UID";
-      if (auto problem = parseSeries(args[++i], parsed.read))
-        return problem;
+      out = args[++i];
     }
     else if (!a.empty() && a[0] == '-')
     {
       if (auto problem = option(a, args, i))
         return problem;
     }
-    else if (parsed.ct.empty())
-      parsed.ct = a;
+    else if (input.empty())
+      input = a;
     else
-      return "one CT only (got '" + parsed.ct.string() + "' and '" + a + "')";
+      return std::string("one ") + inputName + " only (got '" + input.string() + "' and '" + a + "')";
   }
-  if (parsed.help)
+  if (help)
     return std::nullopt;
-  if (parsed.ct.empty())
-    return "CT missing";
-  if (parsed.out.empty())
+  if (input.empty())
+    return std::string(inputName) + " missing";
+  if (out.empty())
     return "--out DIR missing: where should the results go?";
   return std::nullopt;
+}
+
+std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
+                                          CtCommandArgs& parsed, const CommandOption& option)
+{
+  return parseInputOutputCommand(
+    args, parsed.ct, parsed.out, parsed.help,
+    [&](const std::string& a, const std::vector<std::string>& all,
+        std::size_t& i) -> std::optional<std::string> {
+      if (a != "--series")
+        return option(a, all, i);
+      if (i + 1 >= all.size())
+        return "--series needs a number or a series UID";
+      return parseSeries(all[++i], parsed.read);
+    },
+    "CT");
 }
 
 void makeOutputFolder(const fs::path& folder)

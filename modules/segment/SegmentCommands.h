@@ -40,9 +40,16 @@ struct CtCommandArgs
 using CommandOption = std::function<std::optional<std::string>(
   const std::string& option, const std::vector<std::string>& args, std::size_t& i)>;
 
-/// Parses a CT command's arguments: the shared ones here, the others through
-/// @a option; then checks that the CT and --out are there (unless --help).
-/// Returns an error text for the usage message, or nothing.
+/// Parses a command's arguments of the form INPUT --out DIR [options]:
+/// INPUT, --out and --help here, the others through @a option; then checks
+/// that INPUT (named @a inputName in messages) and --out are there (unless
+/// --help). Returns an error text for the usage message, or nothing.
+std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args,
+                                                   std::filesystem::path& input, std::filesystem::path& out,
+                                                   bool& help, const CommandOption& option,
+                                                   const char* inputName);
+
+/// parseInputOutputCommand() for a CT command, which also takes --series.
 std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
                                           CtCommandArgs& parsed, const CommandOption& option);
 

@@ -1,0 +1,383 @@
+#include "modules/incision/PlanSimulation.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "fem/StaticAnalysis.h"
+
+namespace caps::incision {
+namespace {
+
+constexpr double pi = 3.14159265358979323846;
+constexpr double degrees = 180.0 / pi;
+
+double secondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+int findRoot(std::vector<int>& parent, int i)
+{
+  while (parent[i] != i)
+    i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+/// Cut segment (path index of its first point) of loop edge (v, w).
+int segmentOfEdge(int v, int w, int pathPoints)
+{
+  return std::min(pathIndexOfVertex(v, pathPoints), pathIndexOfVertex(w, pathPoints));
+}
+
+std::string where(const SkinChart& chart, const ChartPoint& c)
+{
+  const SkinPoint s = chart.fromChart(c);
+  std::ostringstream out;
+  out << "chart (" << c.x() << ", " << c.y() << ") mm, θ = " << s.theta * degrees << "°, z = " << s.z << " mm";
+  return out.str();
+}
+
+void checkOptions(const SimulationOptions& o)
+{
+  auto bad = [](const std::string& what) { throw std::invalid_argument("simulation options: " + what); };
+  if (!(o.elementSize > 0.0) || !std::isfinite(o.elementSize))
+    bad("the element size must be a positive number of mm");
+  if (!(o.regionRadius > 0.0) || !std::isfinite(o.regionRadius))
+    bad("the region radius must be a positive number of mm");
+  if (!(o.layerGrowth >= 1.0) || !std::isfinite(o.layerGrowth))
+    bad("the layer growth must be at least 1");
+  if (o.layerCount < 1)
+    bad("at least one element layer is needed from the skin to the bone");
+  if (!(o.minDepth > 0.0) || !(o.maxDepth >= o.minDepth) || !std::isfinite(o.maxDepth))
+    bad("the depth limits must satisfy 0 < minDepth <= maxDepth");
+  if (!(o.noBoneDepth > 0.0) || !std::isfinite(o.noBoneDepth))
+    bad("the depth used where there is no bone must be positive");
+  if (o.threads < 1)
+    bad("at least one thread");
+}
+
+} // namespace
+
+// Default soft-tissue materials.
+//
+// Linear isotropic elasticity is a small-strain simplification of tissue
+// that is in fact hyperelastic and viscoelastic; the values below are
+// ASSUMPTIONS of the order of magnitude used by published finite element
+// models of the face, not measurements, and were not re-checked against the
+// papers in this code's session:
+//  - single-material linear face models use E of a few to tens of kPa with
+//    ν ≈ 0.45–0.49 (Chabanas, Luboz & Payan, "Patient specific finite element
+//    model of the face soft tissues for computer-assisted maxillofacial
+//    surgery", Med. Image Anal. 7(2), 2003; Keeve et al., "Deformable
+//    modeling of facial tissue for craniofacial surgery simulation", Comput.
+//    Aided Surg. 3, 1998);
+//  - layered models give skin (dermis) the stiffest layer, of the order of
+//    0.1 MPa at small strain, fat the softest (a few kPa) and muscle / SMAS
+//    in between (Barbarino, Jabareen, Trzewik, Nkengne, Stamatas & Mazza,
+//    "Development and validation of a three-dimensional finite element model
+//    of the face", J. Biomech. Eng. 131(4), 2009; Mazza & Barbarino, "3D
+//    mechanical modeling of facial soft tissue for surgery simulation",
+//    Facial Plast. Surg. Clin. N. Am. 19(4), 2011).
+// We take skin E = 0.15 MPa, fat 0.01 MPa, muscle 0.05 MPa and ν = 0.45
+// everywhere (nearly incompressible but far enough from 0.5 that quadratic
+// elements do not lock). A suture-driven solve without loads gives
+// displacements that depend only on the ratios of the moduli and on ν.
+// Density ≈ that of water (1e-9 t/mm³), used only by gravity loads.
+fem::MaterialTable defaultFacialTissueMaterials(int layerCount)
+{
+  static const double modulus[] = {0.15, 0.01, 0.05};
+  fem::MaterialTable table;
+  for (int layer = 0; layer < std::max(layerCount, 1); ++layer)
+    table[layer] = fem::LinearElasticMaterial{modulus[std::min(layer, 2)], 0.45, 1.0e-9};
+  return table;
+}
+
+Eigen::Vector3d PlanPrediction::displacedNode(int i) const
+{
+  return continuum.mesh.nodes.col(i) + displacements.segment<3>(3 * Eigen::Index(i));
+}
+
+RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<ChartPoint>& offsets,
+                       const std::vector<fem::SutureEdgePair>& sutures, double maxSpacing)
+{
+  const int n = int(path.size());
+  if (n < 2)
+    throw std::invalid_argument("a cut needs at least two points");
+  if (!(maxSpacing > 0.0))
+    throw std::invalid_argument("the element size at the wound must be positive");
+  const int loop = holeLoopSize(n);
+  if (!offsets.empty() && int(offsets.size()) != loop)
+    throw std::invalid_argument("one border offset per hole-loop vertex is needed");
+  auto offsetOf = [&](int v) { return offsets.empty() ? ChartPoint(0, 0) : offsets[v]; };
+  auto position = [&](int v) -> ChartPoint { return path[pathIndexOfVertex(v, n)] + offsetOf(v); };
+
+  // Border length of each segment (the longer of its two sides), and groups
+  // of segments tied by sutures: sutured edges must be cut into as many pieces.
+  const int segments = n - 1;
+  std::vector<double> length(segments, 0.0);
+  for (int v = 0; v < loop; ++v)
+  {
+    const int w = (v + 1) % loop;
+    const int s = segmentOfEdge(v, w, n);
+    length[s] = std::max(length[s], (position(w) - position(v)).norm());
+  }
+  std::vector<int> parent(segments);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto checkEdge = [&](const std::array<int, 2>& e) {
+    if (e[0] < 0 || e[0] >= loop || e[1] < 0 || e[1] >= loop ||
+        !(e[1] == (e[0] + 1) % loop || e[0] == (e[1] + 1) % loop))
+      throw std::invalid_argument("suture edge (" + std::to_string(e[0]) + "," + std::to_string(e[1]) +
+                                  ") is not a border edge of the hole loop");
+  };
+  for (const auto& s : sutures)
+  {
+    checkEdge(s.a);
+    checkEdge(s.b);
+    const int ra = findRoot(parent, segmentOfEdge(s.a[0], s.a[1], n));
+    const int rb = findRoot(parent, segmentOfEdge(s.b[0], s.b[1], n));
+    parent[ra] = rb;
+  }
+  std::vector<int> groupPieces(segments, 1);
+  for (int s = 0; s < segments; ++s)
+  {
+    const int r = findRoot(parent, s);
+    groupPieces[r] = std::max(groupPieces[r], int(std::ceil(length[s] / maxSpacing - 1e-9)));
+  }
+  RefinedHole out;
+  out.piecesPerSegment.resize(segments);
+  for (int s = 0; s < segments; ++s)
+    out.piecesPerSegment[s] = groupPieces[findRoot(parent, s)];
+
+  // Refined path and where the original points went.
+  std::vector<ChartPoint> points;
+  std::vector<int> originalIndex(n);
+  std::vector<int> segmentOf;   // per refined point: its segment
+  std::vector<double> fraction; // and its place on it
+  for (int s = 0; s < segments; ++s)
+  {
+    originalIndex[s] = int(points.size());
+    const int k = out.piecesPerSegment[s];
+    for (int i = 0; i < k; ++i)
+    {
+      const double t = double(i) / k;
+      points.push_back(path[s] + t * (path[s + 1] - path[s]));
+      segmentOf.push_back(s);
+      fraction.push_back(t);
+    }
+  }
+  originalIndex[n - 1] = int(points.size());
+  points.push_back(path[n - 1]);
+  segmentOf.push_back(segments - 1);
+  fraction.push_back(1.0);
+  const int m = int(points.size());
+  const int refinedLoop = holeLoopSize(m);
+
+  // Offsets interpolated along each side.
+  std::vector<ChartPoint> refinedOffsets(refinedLoop, ChartPoint(0, 0));
+  for (int k = 1; k + 1 < m; ++k)
+  {
+    const int s = segmentOf[k];
+    const double t = fraction[k];
+    auto left = [&](int p) { return offsetOf(p); };
+    auto right = [&](int p) { return offsetOf(rightSideVertex(p, n)); };
+    refinedOffsets[k] = (1 - t) * left(s) + t * left(s + 1);
+    refinedOffsets[rightSideVertex(k, m)] = (1 - t) * right(s) + t * right(s + 1);
+  }
+  out.hole = makeHoleLoop(points, refinedOffsets);
+
+  out.refinedVertexOf.resize(loop);
+  for (int v = 0; v < loop; ++v)
+  {
+    const int k = originalIndex[pathIndexOfVertex(v, n)];
+    out.refinedVertexOf[v] = v < n ? k : rightSideVertex(k, m);
+  }
+
+  // Each sutured edge walked along the refined loop, piece by piece.
+  auto walk = [&](const std::array<int, 2>& e) {
+    const int step = e[1] == (e[0] + 1) % loop ? 1 : -1;
+    std::vector<int> seq{out.refinedVertexOf[e[0]]};
+    const int end = out.refinedVertexOf[e[1]];
+    while (seq.back() != end && int(seq.size()) <= refinedLoop)
+      seq.push_back((seq.back() + step + refinedLoop) % refinedLoop);
+    return seq;
+  };
+  for (const auto& s : sutures)
+  {
+    const std::vector<int> a = walk(s.a), b = walk(s.b);
+    if (a.size() != b.size())
+      throw std::logic_error("refineHole: sutured edges were refined into different numbers of pieces");
+    for (std::size_t t = 0; t + 1 < a.size(); ++t)
+      out.sutures.push_back({{a[t], a[t + 1]}, {b[t], b[t + 1]}});
+  }
+  return out;
+}
+
+PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                            const SimulationOptions& options)
+{
+  checkOptions(options);
+  if (skin.empty())
+    throw std::invalid_argument("the skin range map is empty: build it from the CT first");
+  if (plan.pointCount() < 2)
+    throw std::invalid_argument("the plan has no cut (fewer than two cut points)");
+  if (!options.layerFractions.empty() && int(options.layerFractions.size()) != options.layerCount)
+    throw std::invalid_argument("simulation options: one layer fraction per layer is needed");
+  const seg::CylindricalFrame& frame = skin.frame();
+  const bool haveBone = !bone.empty();
+  if (haveBone && ((bone.frame().origin() - frame.origin()).norm() > 1e-6 ||
+                   (bone.frame().direction() - frame.direction()).norm() > 1e-9))
+    throw std::invalid_argument("the bone range map is on another cylinder axis than the skin map: "
+                                "build both on the same frame");
+
+  const SkinChart chart = plan.chart(skin); // throws when the centre is off the skin
+  checkPlan(plan, skin);
+
+  PlanPrediction out;
+  const auto meshStart = std::chrono::steady_clock::now();
+
+  // 1. The hole, refined to the element size consistently with the sutures.
+  RefinedHole refined = refineHole(plan.chartPath(chart), plan.borderOffsets(), plan.sutures(), options.elementSize);
+  out.hole = refined.hole;
+  out.sutures = refined.sutures;
+  out.refinedVertexOf = refined.refinedVertexOf;
+
+  // 2. The surface mesh in the chart (§4.5.1), inside the scanned z range.
+  fem::SurfaceMesherOptions surfaceOptions;
+  surfaceOptions.firstLayerThickness = options.elementSize;
+  surfaceOptions.layerGrowth = options.layerGrowth;
+  surfaceOptions.regionRadius = options.regionRadius;
+  surfaceOptions.vMin = frame.zMin() - chart.centreZ();
+  surfaceOptions.vMax = frame.zMax() - chart.centreZ();
+  surfaceOptions.minPointSpacing = std::min(1.0, 0.4 * options.elementSize);
+  out.surface = fem::meshAroundHole(out.hole, surfaceOptions);
+  if (!out.surface.quality.valid())
+  {
+    std::string message = "the surface mesh around the plan is not valid:";
+    for (const auto& p : out.surface.quality.problems)
+      message += "\n  " + p;
+    throw std::runtime_error(message);
+  }
+  const fem::SurfaceMesh& surface = out.surface.mesh;
+
+  // Measured skin under every vertex and edge midpoint of the region.
+  auto checkSkin = [&](const ChartPoint& c) {
+    if (!chart.lift(c).allFinite())
+      throw std::invalid_argument("the skin map has no surface under the meshed region at " + where(chart, c) +
+                                  " (a hole in the map or beyond the scan): reduce the region radius or move the plan");
+  };
+  for (const auto& v : surface.vertices)
+    checkSkin(v);
+  for (const auto& polygon : surface.polygons)
+    for (std::size_t i = 0; i < polygon.size(); ++i)
+      checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
+
+  // 3. Skin to bone (§4.5.2): along the ray towards the axis.
+  fem::TissueGeometry geometry;
+  geometry.skinPoint = [&chart](const ChartPoint& c) { return chart.lift(c); };
+  geometry.inwardDirection = [&chart, &frame](const ChartPoint& c) -> Eigen::Vector3d {
+    return -frame.radialDirection(chart.fromChart(c).theta);
+  };
+  geometry.tissueDepth = [&](const ChartPoint& c) {
+    const SkinPoint s = chart.fromChart(c);
+    const double rSkin = skin.sample(s.theta, s.z);
+    const double rBone = haveBone ? bone.sample(s.theta, s.z) : std::nan("");
+    return rSkin - rBone; // NaN where there is no bone: noBoneDepth
+  };
+  fem::ContinuumMeshOptions continuumOptions;
+  continuumOptions.layerCount = options.layerCount;
+  continuumOptions.layerFractions = options.layerFractions;
+  continuumOptions.minDepth = options.minDepth;
+  continuumOptions.maxDepth = options.maxDepth;
+  continuumOptions.noBoneDepth = options.noBoneDepth;
+  continuumOptions.rim = options.rim;
+  out.continuum = fem::meshContinuum(surface, out.sutures, geometry, continuumOptions);
+  out.times.mesh = secondsSince(meshStart);
+
+  // The thesis's counts (§4.5.2).
+  {
+    const Eigen::Index nv = Eigen::Index(surface.vertices.size());
+    const Eigen::Index ne = Eigen::Index(out.continuum.edges.size());
+    const Eigen::Index nl = options.layerCount;
+    const Eigen::Index np = Eigen::Index(surface.polygons.size());
+    if (out.continuum.mesh.nodeCount() != nl * (2 * nv + ne) + nv + ne ||
+        Eigen::Index(out.continuum.mesh.elements.size()) != nl * np)
+      throw std::runtime_error("the continuum mesh does not have N_l(2N_v + N_e) + N_v + N_e nodes and N_l N_p "
+                               "elements (§4.5.2): a mesher bug");
+  }
+
+  // 4. Materials, constraints, solve.
+  out.materials = options.materials.empty() ? defaultFacialTissueMaterials(options.layerCount) : options.materials;
+  for (int layer = 0; layer < options.layerCount; ++layer)
+    if (!out.materials.count(layer))
+      throw std::invalid_argument("simulation options: no material for layer " + std::to_string(layer));
+  fem::AssemblyOptions assembly;
+  assembly.threads = options.threads;
+  fem::LinearStaticAnalysis analysis(out.continuum.mesh, out.materials, out.continuum.constraints(), assembly);
+  const fem::SolverStatus status = analysis.prepare();
+  if (status != fem::SolverStatus::Success)
+    throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
+  out.displacements = analysis.solve(fem::LoadCase{});
+  out.times.assemble = analysis.times().assemble + analysis.times().constrain;
+  out.times.factor = analysis.times().analyse + analysis.times().factor;
+  out.times.solve = analysis.times().solve;
+  out.dofCount = out.continuum.mesh.dofCount();
+  out.reducedDofCount = analysis.constraintMap().reducedCount();
+  if (!out.displacements.allFinite())
+    throw std::runtime_error("the solve of the plan gave non-finite displacements");
+
+  // 5. What the display and the report need.
+  for (const auto& s : out.continuum.sutures)
+  {
+    const auto& x = out.continuum.mesh.nodes;
+    out.maxSutureGapBefore = std::max(out.maxSutureGapBefore, (x.col(s.node) - x.col(s.target)).norm());
+    out.maxSutureGap = std::max(out.maxSutureGap, (out.displacedNode(s.node) - out.displacedNode(s.target)).norm());
+  }
+  DisplacedSkin& top = out.skin;
+  top.chart = surface.vertices;
+  top.polygons = surface.polygons;
+  top.holeVertexCount = surface.holeVertexCount;
+  for (std::size_t v = 0; v < surface.vertices.size(); ++v)
+  {
+    const int node = out.continuum.vertexColumns[v].front();
+    top.nodes.push_back(node);
+    top.original.push_back(out.continuum.mesh.nodes.col(node));
+    top.displaced.push_back(out.displacedNode(node));
+  }
+
+  // 6. Z-plasty: the flap tips (the ends of the central limb) carried by the
+  // sutures; of each tip's two copies on the border, the one that moved.
+  if (plan.generator() == "z" || plan.generator() == "multiple-z")
+  {
+    const std::array<int, 2> tips = zPlastyFlapTips(plan);
+    const int n = plan.pointCount();
+    std::array<Eigen::Vector3d, 2> before, after;
+    for (int t = 0; t < 2; ++t)
+    {
+      const int left = out.refinedVertexOf[tips[t]];
+      const int right = out.refinedVertexOf[rightSideVertex(tips[t], n)];
+      const int v = (top.displaced[left] - top.original[left]).norm() >= (top.displaced[right] - top.original[right]).norm()
+                      ? left
+                      : right;
+      before[t] = chart.lift(plan.chartPath(chart)[tips[t]]);
+      after[t] = top.displaced[v];
+    }
+    ZPlastyPrediction z;
+    z.predicted = zPlastyPredictedGain(before, after, centralAxis(plan, skin));
+    const auto angle = plan.parameters().find("limb_angle");
+    if (angle != plan.parameters().end())
+    {
+      z.limbAngle = angle->second;
+      z.geometric = zPlastyGeometricGain(z.limbAngle);
+      if (z.limbAngle >= 30.0 * pi / 180.0 - 1e-12 && z.limbAngle <= 90.0 * pi / 180.0 + 1e-12)
+        z.theoretical = zPlastyTheoreticalGain(std::clamp(z.limbAngle, 30.0 * pi / 180.0, 90.0 * pi / 180.0));
+    }
+    out.zPlasty = z;
+  }
+  return out;
+}
+
+} // namespace caps::incision

@@ -1,0 +1,147 @@
+#pragma once
+/// @file PlanSimulation.h
+/// @brief The simulation pipeline of a plan (thesis §4.5–4.6): plan + skin
+/// and bone range maps + materials → surface mesh → skin-to-bone continuum
+/// mesh → sutures closed by a linear static solve → the displaced skin.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fem/ContinuumMesher.h"
+#include "fem/LinearElasticMaterial.h"
+#include "fem/Mesh.h"
+#include "fem/SurfaceMesher.h"
+#include "modules/incision/IncisionPlan.h"
+#include "modules/incision/SkinMeasurements.h"
+#include "segmentation/RangeMap.h"
+
+namespace caps::incision {
+
+/// Default materials of the facial soft tissue, one per layer from the skin
+/// down: region 0 skin (dermis), 1 subcutaneous fat, 2 muscle / SMAS. With
+/// fewer layers the first ones are used; with more, the last repeats.
+/// See PlanSimulation.cpp for the values and where they come from.
+fem::MaterialTable defaultFacialTissueMaterials(int layerCount = 3);
+
+/// Options of simulatePlan(). Lengths in mm.
+struct SimulationOptions
+{
+  /// Element size at the wound: cut-path segments are split so every hole
+  /// border edge is at most this long (sutured edges into equal numbers of
+  /// pieces on both sides), and it is the first quad layer's thickness.
+  double elementSize = 2.0;
+  /// Distance from the hole to the rim of the meshed region.
+  double regionRadius = 25.0;
+  /// Growth of the quad layers' thickness away from the wound (SurfaceMesherOptions).
+  double layerGrowth = 1.25;
+  /// Element layers from the skin to the bone.
+  int layerCount = 3;
+  /// Fractions of the local depth per layer, skin first (e.g. skin, fat,
+  /// muscle: {0.2, 0.4, 0.4}); empty: equal layers.
+  std::vector<double> layerFractions;
+  /// Soft-tissue depth clamping (mm) and the depth where the bone map has no bone.
+  double minDepth = 2.0;
+  double maxDepth = 40.0;
+  double noBoneDepth = 10.0;
+  fem::RimCondition rim = fem::RimCondition::Free;
+  /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
+  fem::MaterialTable materials;
+  /// Threads of the assembly.
+  int threads = 1;
+};
+
+/// The skin surface after the operation, for a display: one entry per
+/// surface-mesh vertex (its skin node), and the surface polygons.
+struct DisplacedSkin
+{
+  std::vector<ChartPoint> chart;         ///< chart position (mm) before the operation
+  std::vector<Eigen::Vector3d> original; ///< world (LPS mm) before
+  std::vector<Eigen::Vector3d> displaced;///< world after the solve
+  std::vector<int> nodes;                ///< FE node of each vertex (the skin node of its column)
+  std::vector<std::vector<int>> polygons;///< surface-mesh polygons (counter-clockwise seen from outside)
+  int holeVertexCount = 0;               ///< leading vertices that are the hole loop
+};
+
+/// Wall-clock seconds of the pipeline's phases.
+struct SimulationTimes
+{
+  double mesh = 0.0;     ///< surface and continuum meshing
+  double assemble = 0.0; ///< stiffness assembly and constraint reduction
+  double factor = 0.0;   ///< ordering, symbolic and numeric factorisation
+  double solve = 0.0;    ///< substitution and expansion
+};
+
+/// Z-plasty gain predicted by the simulation next to the Fig. 2.2 table.
+struct ZPlastyPrediction
+{
+  double limbAngle = 0.0;   ///< radians (plan parameter)
+  ZPlastyGain predicted;    ///< from the flap tips' displaced positions
+  double theoretical = 0.0; ///< zPlastyTheoreticalGain(limbAngle), fraction
+  double geometric = 0.0;   ///< zPlastyGeometricGain(limbAngle), fraction
+};
+
+/// Everything simulatePlan() computed.
+struct PlanPrediction
+{
+  fem::SurfaceMesherResult surface;  ///< the surface mesh of the refined hole (chart mm)
+  fem::HoleLoop hole;                ///< the refined hole loop the mesh was grown from
+  std::vector<fem::SutureEdgePair> sutures; ///< the plan's sutures on the refined loop
+  /// For each loop vertex of the plan's own hole loop, its vertex in the refined loop.
+  std::vector<int> refinedVertexOf;
+  fem::ContinuumMesh continuum;      ///< FE mesh, constraints, node columns
+  Eigen::VectorXd displacements;     ///< 3N: (x, y, z) of node i at 3i..3i+2 (mm)
+  DisplacedSkin skin;
+  /// Largest distance between the two nodes of a suture after the solve (mm).
+  double maxSutureGap = 0.0;
+  /// The same before the solve: how wide the wound was.
+  double maxSutureGapBefore = 0.0;
+  Eigen::Index dofCount = 0;         ///< 3 × nodes
+  Eigen::Index reducedDofCount = 0;  ///< unknowns after constraints
+  SimulationTimes times;
+  std::optional<ZPlastyPrediction> zPlasty; ///< for plans of a Z generator
+  fem::MaterialTable materials;      ///< what was used
+
+  /// Displaced world position of FE node i.
+  Eigen::Vector3d displacedNode(int i) const;
+};
+
+/// @brief Simulates a plan: meshes the skin around its hole down to the bone
+/// and closes its sutures with a linear static solve (thesis §4.5–4.6).
+///
+/// The chart is the plan's (centre()). The cut path is refined to
+/// options.elementSize consistently with the sutures; offsets (excisions)
+/// are interpolated along each side. The chart bounds are the skin map's z
+/// range. The tissue under chart point c runs along the ray towards the
+/// axis from the skin point lift(c); its depth is skin r − bone r, clamped to
+/// [minDepth, maxDepth], noBoneDepth where the bone map has no bone. Bone
+/// nodes are fixed, the rim as options.rim says.
+///
+/// @throws std::invalid_argument for a bad plan (checkPlan()), a plan off the
+/// skin, holes in the skin map under the meshed region, a bone map on another
+/// axis, bad options; std::runtime_error when the model cannot be solved
+/// (the message says why).
+PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                            const SimulationOptions& options = {});
+
+/// @name Pieces of the pipeline, exposed for tests
+///@{
+/// The cut path refined so no hole border edge is longer than maxSpacing,
+/// with every group of suture-connected segments split into the same number
+/// of pieces; returns the refined hole loop (offsets interpolated along each
+/// side) and the sutures on it. refinedVertexOf maps old loop vertices to new.
+struct RefinedHole
+{
+  fem::HoleLoop hole;
+  std::vector<fem::SutureEdgePair> sutures;
+  std::vector<int> refinedVertexOf;
+  std::vector<int> piecesPerSegment;
+};
+RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<ChartPoint>& offsets,
+                       const std::vector<fem::SutureEdgePair>& sutures, double maxSpacing);
+///@}
+
+} // namespace caps::incision
