@@ -348,21 +348,35 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     top.displaced.push_back(out.displacedNode(node));
   }
 
-  // 6. Z-plasty: the flap tips (the ends of the central limb) carried by the
-  // sutures; of each tip's two copies on the border, the one that moved.
+  // 6. Z-plasty (§2.1, Fig. 2.2). Each end of the central limb has two
+  // copies on the border: one is a flap tip, carried by the sutures to a limb
+  // tip, where it ends on the new central limb across the axis; the other is
+  // the corner the other flap pivots about (a shared vertex of a suture pair,
+  // corner rule) and stays in the surrounding skin. The lengthening along the
+  // old central axis is the change of distance between those pivot copies
+  // (ideally from the short diagonal to the long one of the Z's
+  // parallelogram, zPlastyGeometricGain()); that is what is measured here.
   if (plan.generator() == "z" || plan.generator() == "multiple-z")
   {
     const std::array<int, 2> tips = zPlastyFlapTips(plan);
     const int n = plan.pointCount();
+    std::vector<bool> corner(holeLoopSize(n), false);
+    for (const auto& s : plan.sutures())
+    {
+      if (s.a[0] == s.b[0])
+        corner[s.a[0]] = true;
+      if (s.a[1] == s.b[1])
+        corner[s.a[1]] = true;
+    }
     std::array<Eigen::Vector3d, 2> before, after;
     for (int t = 0; t < 2; ++t)
     {
-      const int left = out.refinedVertexOf[tips[t]];
-      const int right = out.refinedVertexOf[rightSideVertex(tips[t], n)];
-      const int v = (top.displaced[left] - top.original[left]).norm() >= (top.displaced[right] - top.original[right]).norm()
-                      ? left
-                      : right;
-      before[t] = chart.lift(plan.chartPath(chart)[tips[t]]);
+      const int left = tips[t], right = rightSideVertex(tips[t], n);
+      const int l = out.refinedVertexOf[left], r = out.refinedVertexOf[right];
+      int v = (top.displaced[l] - top.original[l]).norm() <= (top.displaced[r] - top.original[r]).norm() ? l : r;
+      if (corner[left] != corner[right])
+        v = corner[left] ? l : r;
+      before[t] = top.original[v];
       after[t] = top.displaced[v];
     }
     ZPlastyPrediction z;

@@ -79,7 +79,9 @@ struct SimulationTimes
 struct ZPlastyPrediction
 {
   double limbAngle = 0.0;   ///< radians (plan parameter)
-  ZPlastyGain predicted;    ///< from the flap tips' displaced positions
+  /// From the displaced pivot corners at the ends of the central limb (the
+  /// copies the sutures do not carry; see simulatePlan()).
+  ZPlastyGain predicted;
   double theoretical = 0.0; ///< zPlastyTheoreticalGain(limbAngle), fraction
   double geometric = 0.0;   ///< zPlastyGeometricGain(limbAngle), fraction
 };

@@ -85,8 +85,11 @@ double zPlastyTheoreticalGain(double limbAngle);
 double zPlastyGeometricGain(double limbAngle);
 
 /// The gain a simulation predicts: the change of the distance, along the
-/// Z's central axis, between the flap tips (the two ends of the central
-/// limb, which the sutures carry to the limb tips).
+/// Z's old central axis, between the two ends of the central limb as they
+/// stay in the surrounding skin: at each end the copy (of the twin pair) that
+/// the opposite flap pivots about, the corner the sutures close, not the copy
+/// a flap carries onto a limb tip (that one ends up across the old axis).
+/// Ideally the distance grows from the Z's short diagonal to its long one.
 struct ZPlastyGain
 {
   double before = 0.0;   ///< |(tip1 − tip0) · axis| before the operation (mm)

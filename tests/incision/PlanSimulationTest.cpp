@@ -1,0 +1,301 @@
+// The simulation pipeline on a cylinder phantom: skin r = 80 mm, bone
+// r = 70 mm (10 mm of soft tissue), plans placed with the shipped procedures.
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "AnalyticSkins.h"
+#include "modules/incision/PlanSimulation.h"
+
+namespace caps::incision {
+namespace {
+
+using test::degree;
+
+struct Phantom
+{
+  seg::RangeMap skin = test::cylinderSkin(80.0);
+  seg::RangeMap bone = test::cylinderSkin(70.0);
+};
+
+const Phantom& phantom()
+{
+  static const Phantom p;
+  return p;
+}
+
+const ProcedureTemplate& procedure(const std::string& id)
+{
+  const ProcedureTemplate* t = test::shippedProcedures().find(id);
+  if (!t)
+    throw std::runtime_error("no procedure " + id);
+  return *t;
+}
+
+SimulationOptions testOptions()
+{
+  SimulationOptions o;
+  o.elementSize = 2.0;
+  o.regionRadius = 20.0;
+  o.layerCount = 3;
+  o.threads = 1;
+  return o;
+}
+
+/// §4.5.2: N_l(2N_v + N_e) + N_v + N_e nodes, N_l N_p elements.
+void expectThesisCounts(const PlanPrediction& p, int layers)
+{
+  const long nv = long(p.surface.mesh.vertices.size());
+  const long ne = long(p.continuum.edges.size());
+  const long np = long(p.surface.mesh.polygons.size());
+  EXPECT_EQ(long(p.continuum.mesh.nodeCount()), layers * (2 * nv + ne) + nv + ne);
+  EXPECT_EQ(long(p.continuum.mesh.elements.size()), layers * np);
+  EXPECT_EQ(long(p.dofCount), 3 * long(p.continuum.mesh.nodeCount()));
+}
+
+void printSummary(const char* name, const PlanPrediction& p)
+{
+  std::printf("[%s] vertices %zu polygons %zu nodes %ld elements %zu DOF %ld (reduced %ld); gap %.3g mm -> %.3g mm; "
+              "times mesh %.3f s assemble %.3f s factor %.3f s solve %.3f s\n",
+              name, p.surface.mesh.vertices.size(), p.surface.mesh.polygons.size(), long(p.continuum.mesh.nodeCount()),
+              p.continuum.mesh.elements.size(), long(p.dofCount), long(p.reducedDofCount), p.maxSutureGapBefore,
+              p.maxSutureGap, p.times.mesh, p.times.assemble, p.times.factor, p.times.solve);
+}
+
+/// Outward radial displacement of skin vertex v (mm).
+double radialDisplacement(const PlanPrediction& p, int v)
+{
+  const Eigen::Vector3d x = p.skin.original[v];
+  const Eigen::Vector3d radial = Eigen::Vector3d(x.x(), x.y(), 0.0).normalized();
+  return (p.skin.displaced[v] - x).dot(radial);
+}
+
+TEST(PlanSimulation, RefineHoleCutsSuturedEdgesIntoEqualPieces)
+{
+  // A Z: every segment tied to the others by the sutures, so all get the
+  // pieces of the longest side.
+  const IncisionPlan z = procedure("z-plasty").place(phantom().skin, {0.0, 0.0}, {{"central_length", 10.0}});
+  const SkinChart chart = z.chart(phantom().skin);
+  const RefinedHole r = refineHole(z.chartPath(chart), z.borderOffsets(), z.sutures(), 2.0);
+  ASSERT_EQ(r.piecesPerSegment.size(), 3u);
+  EXPECT_EQ(r.piecesPerSegment[0], r.piecesPerSegment[1]);
+  EXPECT_EQ(r.piecesPerSegment[1], r.piecesPerSegment[2]);
+  EXPECT_GE(r.piecesPerSegment[0], 5);
+  for (std::size_t i = 0; i < r.hole.points.size(); ++i)
+    EXPECT_LE((r.hole.points[(i + 1) % r.hole.points.size()] - r.hole.points[i]).norm(), 2.0 + 1e-9);
+  // Each original suture pair became pieces-many sub-pairs.
+  EXPECT_EQ(r.sutures.size(), z.sutures().size() * std::size_t(r.piecesPerSegment[0]));
+  // Original loop vertices keep their places.
+  const fem::HoleLoop original = z.holeLoop(chart);
+  for (std::size_t v = 0; v < original.points.size(); ++v)
+    EXPECT_LT((r.hole.points[r.refinedVertexOf[v]] - original.points[v]).norm(), 1e-12);
+}
+
+TEST(PlanSimulation, EllipticalExcisionClosesIntoASymmetricLine)
+{
+  const IncisionPlan plan = procedure("elliptical-excision")
+                              .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  ASSERT_TRUE(plan.isExcision());
+  const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
+  printSummary("ellipse 24 mm 3:1", p);
+  expectThesisCounts(p, 3);
+  EXPECT_GT(p.maxSutureGapBefore, 1.0);
+  EXPECT_LT(p.maxSutureGap, 1e-9);
+
+  // The two sides of the wound meet: each refined cut point and its twin coincide.
+  const int m = int(p.hole.points.size()) / 2 + 1; // refined path points
+  double twinGap = 0.0, offLine = 0.0;
+  for (int k = 1; k + 1 < m; ++k)
+  {
+    const int twin = rightSideVertex(k, m);
+    twinGap = std::max(twinGap, (p.skin.displaced[k] - p.skin.displaced[twin]).norm());
+    offLine = std::max(offLine, std::abs(p.skin.displaced[k].z())); // the closed wound lies on z = 0 by symmetry
+  }
+  std::printf("[ellipse] twins' largest distance after closure %.3g mm, largest |z| of the closed wound %.3g mm\n",
+              twinGap, offLine);
+  EXPECT_LT(twinGap, 1e-9);
+  EXPECT_LT(offLine, 1e-6);
+
+  // Mirror symmetry about the plane θ = 0 (y → −y) and about z = 0, node by node.
+  const auto& x = p.continuum.mesh.nodes;
+  std::map<std::tuple<long, long, long>, int> index;
+  auto key = [](double a, double b, double c) {
+    return std::make_tuple(std::lround(a * 1e5), std::lround(b * 1e5), std::lround(c * 1e5));
+  };
+  for (int i = 0; i < int(x.cols()); ++i)
+    index[key(x(0, i), x(1, i), x(2, i))] = i;
+  const double scale = p.displacements.cwiseAbs().maxCoeff();
+  for (int mirror = 0; mirror < 2; ++mirror)
+  {
+    const Eigen::Vector3d flip = mirror == 0 ? Eigen::Vector3d(1, -1, 1) : Eigen::Vector3d(1, 1, -1);
+    int matched = 0;
+    double worst = 0.0;
+    for (int i = 0; i < int(x.cols()); ++i)
+    {
+      const Eigen::Vector3d y = x.col(i).cwiseProduct(flip);
+      const auto it = index.find(key(y.x(), y.y(), y.z()));
+      if (it == index.end())
+        continue;
+      ++matched;
+      const Eigen::Vector3d ui = p.displacements.segment<3>(3 * i).cwiseProduct(flip);
+      const Eigen::Vector3d uj = p.displacements.segment<3>(3 * it->second);
+      worst = std::max(worst, (ui - uj).norm() / scale);
+    }
+    std::printf("[ellipse] mirror %s: %d of %ld nodes have a mirror node; largest relative asymmetry %.3g "
+                "(max |u| %.3g mm)\n",
+                mirror == 0 ? "θ → −θ" : "z → −z", matched, long(x.cols()), worst, scale);
+    EXPECT_EQ(matched, int(x.cols())) << "the mesh is not mirror symmetric";
+    EXPECT_LT(worst, 1e-6);
+  }
+}
+
+TEST(PlanSimulation, ShortEllipsesMakeBiggerDogEars)
+{
+  // Same width (10 mm), 2:1 and 4:1 (thesis §2.1, Fig. 2.1).
+  const double width = 10.0;
+  double bulge[2] = {0, 0};
+  for (int i = 0; i < 2; ++i)
+  {
+    const double ratio = i == 0 ? 2.0 : 4.0;
+    const double length = ratio * width;
+    const IncisionPlan plan = procedure("elliptical-excision")
+                                .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", ratio}, {"axis_angle", 0.0}});
+    const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
+    printSummary(i == 0 ? "ellipse 2:1" : "ellipse 4:1", p);
+    expectThesisCounts(p, 3);
+    EXPECT_LT(p.maxSutureGap, 1e-9);
+    // Skin points near the ends: within one width of either end of the major axis.
+    for (std::size_t v = 0; v < p.skin.chart.size(); ++v)
+    {
+      const ChartPoint c = p.skin.chart[v];
+      const double toEnd = std::min((c - ChartPoint(length / 2, 0)).norm(), (c - ChartPoint(-length / 2, 0)).norm());
+      if (toEnd <= width)
+        bulge[i] = std::max(bulge[i], radialDisplacement(p, int(v)));
+    }
+  }
+  std::printf("[dog ears] width %.0f mm: largest outward bulge near the ends 2:1 %.4f mm, 4:1 %.4f mm\n", width,
+              bulge[0], bulge[1]);
+  EXPECT_GT(bulge[0], 0.0);
+  EXPECT_GT(bulge[0], bulge[1]);
+}
+
+TEST(PlanSimulation, ZPlastyGainGrowsWithTheLimbAngle)
+{
+  double previous = -1.0;
+  for (const double angle : {30.0, 45.0, 60.0, 75.0, 90.0})
+  {
+    const IncisionPlan plan =
+      procedure("z-plasty").place(phantom().skin, {0.0, 0.0},
+                                  {{"central_length", 16.0}, {"limb_angle", angle * degree}, {"axis_angle", 90.0 * degree}});
+    const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
+    char name[32];
+    std::snprintf(name, sizeof name, "Z %.0f°", angle);
+    printSummary(name, p);
+    expectThesisCounts(p, 3);
+    EXPECT_LT(p.maxSutureGap, 1e-9);
+    ASSERT_TRUE(p.zPlasty.has_value());
+    const ZPlastyPrediction& z = *p.zPlasty;
+    std::printf("[Z %.0f°] predicted gain %.3f mm of %.3f mm = %.1f %%; Fig. 2.2 table %.0f %%, geometric %.1f %%\n",
+                angle, z.predicted.gain, z.predicted.before, 100 * z.predicted.fraction, 100 * z.theoretical,
+                100 * z.geometric);
+    EXPECT_GT(z.predicted.gain, 0.0);
+    EXPECT_GT(z.predicted.fraction, previous);
+    previous = z.predicted.fraction;
+  }
+}
+
+TEST(PlanSimulation, EveryShippedProcedureClosesIncludingAcrossTheSeam)
+{
+  // Every template at its defaults, on the face side and across θ = ±π.
+  for (const ProcedureTemplate& t : test::shippedProcedures().procedures())
+    for (const double theta : {-test::pi / 2, test::pi})
+    {
+      SCOPED_TRACE(t.id() + " at θ = " + std::to_string(theta));
+      const IncisionPlan plan = t.place(phantom().skin, {theta, 5.0});
+      const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
+      printSummary(t.id().c_str(), p);
+      expectThesisCounts(p, 3);
+      EXPECT_LT(p.maxSutureGap, 1e-9);
+      EXPECT_EQ(p.zPlasty.has_value(), t.generator() == "z" || t.generator() == "multiple-z");
+      if (p.zPlasty)
+        std::printf("[%s] predicted gain %.1f %% of the central limb (geometric %.1f %%)\n", t.id().c_str(),
+                    100 * p.zPlasty->predicted.fraction, 100 * p.zPlasty->geometric);
+    }
+}
+
+TEST(PlanSimulation, LayersFollowTheBoneAndTheStatedFractions)
+{
+  const IncisionPlan plan = procedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
+  SimulationOptions o = testOptions();
+  o.layerFractions = {0.2, 0.4, 0.4}; // skin, fat, muscle
+  const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  expectThesisCounts(p, 3);
+  ASSERT_EQ(p.continuum.levelFractions.size(), 4u);
+  EXPECT_NEAR(p.continuum.levelFractions[1], 0.2, 1e-12);
+  EXPECT_NEAR(p.continuum.levelFractions[2], 0.6, 1e-12);
+  for (double d : p.continuum.vertexDepths)
+    EXPECT_NEAR(d, 10.0, 1e-6); // skin r 80 − bone r 70
+  // Bone nodes sit on the bone cylinder; the fixed ones (all but the wound's,
+  // which the sutures sew together through the whole depth) do not move.
+  for (int node : p.continuum.boneNodes)
+  {
+    const Eigen::Vector3d x = p.continuum.mesh.nodes.col(node);
+    EXPECT_NEAR(std::hypot(x.x(), x.y()), 70.0, 1e-6);
+  }
+  EXPECT_GT(p.continuum.fixedNodes.size(), 0u);
+  for (int node : p.continuum.fixedNodes)
+    EXPECT_EQ(p.displacements.segment<3>(3 * node).norm(), 0.0);
+  EXPECT_LT(p.maxSutureGap, 1e-9);
+  EXPECT_EQ(p.materials.size(), 3u);
+}
+
+TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
+{
+  const Phantom& ph = phantom();
+  // Centre beyond the scanned z range.
+  IncisionPlan off({{0.0, 0.0}, {0.05, 0.0}}, SkinPoint{0.0, 150.0});
+  EXPECT_THROW(simulatePlan(ph.skin, ph.bone, off, testOptions()), std::invalid_argument);
+
+  // A hole in the skin map 12 mm from the wound, inside the meshed region.
+  seg::RangeMap holed = ph.skin;
+  for (int j = 0; j < holed.nZ(); ++j)
+  {
+    const double z = holed.frame().indexToZ(j);
+    if (z > 10.0 && z < 14.0)
+      for (int i = 0; i < holed.nTheta(); ++i)
+        holed.at(i, j) = seg::RangeMap::quietNaN();
+  }
+  const IncisionPlan plan = procedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
+  try
+  {
+    simulatePlan(holed, ph.bone, plan, testOptions());
+    ADD_FAILURE() << "a hole under the region was accepted";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("no surface"), std::string::npos) << e.what();
+  }
+
+  SimulationOptions bad = testOptions();
+  bad.elementSize = 0.0;
+  EXPECT_THROW(simulatePlan(ph.skin, ph.bone, plan, bad), std::invalid_argument);
+  bad = testOptions();
+  bad.layerCount = 0;
+  EXPECT_THROW(simulatePlan(ph.skin, ph.bone, plan, bad), std::invalid_argument);
+
+  // No bone anywhere: the stated default depth.
+  const seg::RangeMap noBone(ph.skin.frame());
+  SimulationOptions o = testOptions();
+  o.noBoneDepth = 8.0;
+  const PlanPrediction p = simulatePlan(ph.skin, noBone, plan, o);
+  for (double d : p.continuum.vertexDepths)
+    EXPECT_DOUBLE_EQ(d, 8.0);
+  EXPECT_LT(p.maxSutureGap, 1e-9);
+}
+
+} // namespace
+} // namespace caps::incision
