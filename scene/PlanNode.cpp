@@ -38,6 +38,21 @@ void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures) {
   modified();
 }
 
+void PlanNode::setGenerator(std::string generator) {
+  generator_ = std::move(generator);
+  modified();
+}
+
+void PlanNode::setCentre(const Eigen::Vector2d& thetaZ) {
+  centre_ = thetaZ;
+  modified();
+}
+
+void PlanNode::setBorderOffsets(std::vector<Eigen::Vector2d> offsets) {
+  borderOffsets_ = std::move(offsets);
+  modified();
+}
+
 void PlanNode::setNotes(std::string notes) {
   notes_ = std::move(notes);
   modified();
@@ -54,6 +69,10 @@ void PlanNode::writeFields(nlohmann::json& j) const {
   auto& path = j["cutPath"] = nlohmann::json::array();
   for (const auto& p : cutPath_) path.push_back({p.x(), p.y()});
   j["sutures"] = sutures_;
+  j["generator"] = generator_;
+  j["centre"] = {centre_.x(), centre_.y()};
+  auto& offsets = j["borderOffsets"] = nlohmann::json::array();
+  for (const auto& d : borderOffsets_) offsets.push_back({d.x(), d.y()});
   j["notes"] = notes_;
   j["rangeMapId"] = rangeMapId_;
 }
@@ -61,11 +80,25 @@ void PlanNode::writeFields(nlohmann::json& j) const {
 void PlanNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "procedure", procedure_);
   jsonfields::read(j, "parameters", parameters_);
-  if (const auto* points = jsonfields::find(j, "cutPath")) {
-    std::vector<Eigen::Vector2d> path;
-    for (const auto& p : jsonfields::list(*points, "cutPath")) path.emplace_back(p.at(0).get<double>(), p.at(1).get<double>());
-    cutPath_ = std::move(path);
+  const auto readPoints = [&j](const char* key, std::vector<Eigen::Vector2d>& out) {
+    if (const auto* points = jsonfields::find(j, key)) {
+      std::vector<Eigen::Vector2d> read;
+      for (const auto& p : jsonfields::list(*points, key)) {
+        if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number())
+          throw SceneError(std::string("a point of ") + key + " must be two numbers, not " + p.dump());
+        read.emplace_back(p[0].get<double>(), p[1].get<double>());
+      }
+      out = std::move(read);
+    }
+  };
+  readPoints("cutPath", cutPath_);
+  readPoints("borderOffsets", borderOffsets_);
+  if (const auto* c = jsonfields::find(j, "centre")) {
+    if (!c->is_array() || c->size() != 2 || !(*c)[0].is_number() || !(*c)[1].is_number())
+      throw SceneError("the plan's centre must be two numbers (theta, z), not " + c->dump());
+    centre_ = Eigen::Vector2d((*c)[0].get<double>(), (*c)[1].get<double>());
   }
+  jsonfields::read(j, "generator", generator_);
   if (const auto* given = jsonfields::find(j, "sutures")) {
     std::vector<std::array<int, 4>> sutures;
     for (const auto& s : jsonfields::list(*given, "sutures")) {

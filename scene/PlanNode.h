@@ -31,9 +31,24 @@ class PlanNode : public Node {
   /// Moves one point; throws SceneError when @a index is out of range.
   void setCutPoint(std::size_t index, const Eigen::Vector2d& p);
 
-  /// Each suture joins two hole-border edges {a0, a1, b0, b1} (cut path point indices).
+  /// Each suture joins two hole-border edges {a0, a1, b0, b1}, as hole-loop
+  /// vertex indices (Fig. 4.11: twins of a cut point are different
+  /// vertices), written as the thesis and the procedure files write them.
   const std::vector<std::array<int, 4>>& sutures() const { return sutures_; }
   void setSutures(std::vector<std::array<int, 4>> sutures);
+
+  /// The cut generator of the procedure ("z", "ellipse", ...); empty for a hand-drawn cut.
+  const std::string& generator() const { return generator_; }
+  void setGenerator(std::string generator);
+
+  /// Where the plan's skin chart is centred: (θ radians, z mm) on the range map's frame.
+  const Eigen::Vector2d& centre() const { return centre_; }
+  void setCentre(const Eigen::Vector2d& thetaZ);
+
+  /// Excision offsets (§4.4.4): per hole-loop vertex, its move away from its
+  /// twin in the skin chart (mm); empty or all zero for a plain incision.
+  const std::vector<Eigen::Vector2d>& borderOffsets() const { return borderOffsets_; }
+  void setBorderOffsets(std::vector<Eigen::Vector2d> offsets);
 
   const std::string& notes() const { return notes_; }
   void setNotes(std::string notes);
@@ -51,6 +66,9 @@ class PlanNode : public Node {
   std::map<std::string, double> parameters_;
   std::vector<Eigen::Vector2d> cutPath_;
   std::vector<std::array<int, 4>> sutures_;
+  std::string generator_;
+  Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> borderOffsets_;
   std::string notes_;
   NodeId rangeMapId_;
 };

@@ -1,5 +1,7 @@
 #include "modules/incision/IncisionLogic.h"
 
+#include "scene/PlanNode.h"
+
 #include <stdexcept>
 
 namespace caps {
@@ -30,6 +32,44 @@ incision::IncisionPlan IncisionLogic::placeProcedure(const std::string& id, cons
     throw std::invalid_argument("no procedure '" + id + "'; the procedures are: " + known);
   }
   return procedure->place(skin, at, values);
+}
+
+void IncisionLogic::writePlan(const incision::IncisionPlan& plan, PlanNode& node)
+{
+  node.setProcedure(plan.procedure());
+  node.setGenerator(plan.generator());
+  node.setParameters(plan.parameters());
+  node.setCutPath(plan.cutPath());
+  node.setCentre(Eigen::Vector2d(plan.centre().theta, plan.centre().z));
+  const auto offsets = plan.borderOffsets();
+  node.setBorderOffsets(plan.isExcision() ? std::vector<Eigen::Vector2d>(offsets.begin(), offsets.end())
+                                          : std::vector<Eigen::Vector2d>{});
+  std::vector<std::array<int, 4>> sutures;
+  for (const auto& s : plan.writtenSutures())
+    sutures.push_back({s.a[0], s.a[1], s.b[0], s.b[1]});
+  node.setSutures(std::move(sutures));
+}
+
+incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
+{
+  incision::IncisionPlan plan(node.cutPath(), incision::SkinPoint{node.centre().x(), node.centre().y()});
+  plan.setProcedure(node.procedure());
+  plan.setGenerator(node.generator());
+  plan.setParameters(node.parameters());
+  const int loop = incision::holeLoopSize(plan.pointCount());
+  const auto& offsets = node.borderOffsets();
+  if (!offsets.empty() && int(offsets.size()) != loop)
+    throw std::invalid_argument("plan '" + node.name() + "' has " + std::to_string(offsets.size()) +
+                                " excision offsets but its cut has " + std::to_string(loop) +
+                                " border points: the scene was edited by hand; draw the excision again.");
+  for (int v = 0; v < int(offsets.size()); ++v)
+    if (!offsets[std::size_t(v)].isZero(0.0))
+      plan.offsetBorderPoint(v, offsets[std::size_t(v)]);
+  std::vector<incision::SutureEdges> written;
+  for (const auto& s : node.sutures())
+    written.push_back({{s[0], s[1]}, {s[2], s[3]}});
+  plan.setSutures(std::move(written));  // throws SutureError (an invalid_argument) naming the pair
+  return plan;
 }
 
 } // namespace caps

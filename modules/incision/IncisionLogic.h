@@ -15,6 +15,8 @@
 
 namespace caps {
 
+class PlanNode;
+
 /// @class IncisionLogic
 /// @brief The procedures of data/procedures/ (§4.1) and plans made from them.
 class IncisionLogic : public ModuleLogic
@@ -36,6 +38,17 @@ public:
   incision::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin,
                                         const incision::SkinPoint& at,
                                         const std::map<std::string, double>& values = {});
+
+  /// @name The plan in the scene (a PlanNode holds everything a plan is)
+  ///@{
+  /// Writes @a plan into @a node (procedure, generator, parameters, cut path,
+  /// chart centre, excision offsets, sutures as written).
+  static void writePlan(const incision::IncisionPlan& plan, PlanNode& node);
+  /// The plan a node holds.
+  /// @throws std::invalid_argument when its offsets or sutures do not fit its
+  /// cut path (a hand-edited scene), naming what is wrong.
+  static incision::IncisionPlan readPlan(const PlanNode& node);
+  ///@}
 
 private:
   std::optional<incision::ProcedureLibrary> library_;

@@ -176,6 +176,9 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
   p.setSutures({{0, 1, 2, 3}, {4, 5, 6, 7}});
   p.setNotes("left cheek");
   p.setRangeMapId("RangeMap1");
+  p.setGenerator("z");
+  p.setCentre({-1.5707963267948966, -42.25});
+  p.setBorderOffsets({{0, 0}, {0.5, -1.25}, {0, 0}, {-0.5, 1.25}});
   EXPECT_EQ(p.bulkFileExtension(), "");
   PlanNode q;
   q.fromJson(nlohmann::json::parse(p.toJson().dump()));
@@ -186,7 +189,12 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
   EXPECT_EQ(q.sutures(), p.sutures());
   EXPECT_EQ(q.notes(), "left cheek");
   EXPECT_EQ(q.rangeMapId(), "RangeMap1");
+  EXPECT_EQ(q.generator(), "z");
+  EXPECT_EQ(q.centre(), p.centre());  // exact: JSON keeps doubles to the last bit
+  EXPECT_EQ(q.borderOffsets(), p.borderOffsets());
   EXPECT_EQ(q.toJson(), p.toJson());
+  EXPECT_THROW(q.fromJson({{"centre", {1.0}}}), SceneError);
+  EXPECT_THROW(q.fromJson({{"borderOffsets", {{1.0, "x"}}}}), SceneError);
 }
 
 // A missing or null key keeps the field (the JsonFields rule) for lists too,
