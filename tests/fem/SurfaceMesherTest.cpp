@@ -5,6 +5,8 @@
 
 #include "fem/SurfaceMesher.h"
 
+#include <sstream>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -329,8 +331,9 @@ TEST(SurfaceMesher, RandomCutPaths) {
       continue;
     }
     ++meshed;
-    std::string loop;
-    for (const ChartPoint& p : hole.points) loop += "(" + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ") ";
+    std::ostringstream loopText;  // (a stream: GCC 12 warns falsely on "(" + std::string)
+    for (const ChartPoint& p : hole.points) loopText << "(" << p.x() << ", " << p.y() << ") ";
+    const std::string loop = loopText.str();
     ASSERT_TRUE(r.quality.valid()) << "trial " << trial << " " << loop << ":\n" << problems(r.quality);
     EXPECT_NEAR(r.quality.meshArea, r.quality.outerArea - r.quality.holeArea, 1e-6 * r.quality.outerArea);
     if (r.stoppedEarly) ++stopped, std::printf("trial %d: %s\n", trial, r.message.c_str());
