@@ -67,8 +67,8 @@ void checkOptions(const SimulationOptions& o)
 // Linear isotropic elasticity is a small-strain simplification of tissue
 // that is in fact hyperelastic and viscoelastic; the values below are
 // ASSUMPTIONS of the order of magnitude used by published finite element
-// models of the face, not measurements, and were not re-checked against the
-// papers in this code's session:
+// models of the face, not measurements of this patient; the exact values in
+// the papers below are still to be confirmed against them:
 //  - single-material linear face models use E of a few to tens of kPa with
 //    ν ≈ 0.45–0.49 (Chabanas, Luboz & Payan, "Patient specific finite element
 //    model of the face soft tissues for computer-assisted maxillofacial
