@@ -2,6 +2,7 @@
 
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionLogic.h"
+#include "modules/incision/PlanCommands.h"
 
 namespace caps {
 namespace {
@@ -18,6 +19,7 @@ public:
            "lengths, angles and excised area measured on the 3D skin. Procedures are the files of "
            "data/procedures/.";
   }
+  std::vector<ModuleCommand> commands() const override { return planCommands(); }
   std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const override
   {
     return std::make_unique<IncisionLogic>(scene);

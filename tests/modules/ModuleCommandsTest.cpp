@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -207,6 +208,40 @@ TEST(ModuleCommands, RangeMapWithTheUsersAxisAndLandmarks)
   EXPECT_EQ(bad.exitCode, 1) << bad.output;
   EXPECT_NE(bad.output.find("bad.csv"), std::string::npos) << bad.output;
   EXPECT_EQ(bad.output.find("Range maps of"), std::string::npos) << bad.output;
+}
+
+// `caps plan` end to end on the phantom head: an elliptical excision on the
+// front closes (its sutures meet) and the files are written; usage errors.
+TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const fs::path ct = phantomCt(folder);
+  const fs::path out = folder / "plan";
+  auto r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
+                   "--element-size 2.5 --out " + quoted(out.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("Wound ([0-9.]+) mm wide before, sutures within ([0-9.e+-]+) mm")))
+    << r.output;
+  EXPECT_GT(std::stod(m[1]), 2.0) << r.output;   // the excision is open before
+  EXPECT_LT(std::stod(m[2]), 1e-9) << r.output;  // and closed after
+  for (const char* file : {"measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
+    EXPECT_TRUE(fs::exists(out / file)) << file;
+  std::ifstream csv(out / "measurements.csv");
+  const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("excised area,hole,,"), std::string::npos) << text;
+
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure face-lift --at -90,0 --out " + quoted(out.string()));
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("z-plasty"), std::string::npos) << "lists the procedures there are\n" << r.output;
+  EXPECT_EQ(r.output.find("Reading"), std::string::npos) << "stops before reading the CT\n" << r.output;
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure z-plasty --out " + quoted(out.string()));
+  EXPECT_EQ(r.exitCode, 2) << r.output;
+  EXPECT_NE(r.output.find("--at THETA,Z missing"), std::string::npos) << r.output;
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure z-plasty --at -90,0 --param limb_angle=150 --out " +
+              quoted(out.string()));
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_FALSE(r.crashed);
 }
 
 TEST(ModuleCommands, BadInputAndUsage)
