@@ -26,8 +26,10 @@ const char* kDemoUsage =
   "label map (labels.nrrd, as `caps segment`; its surfaces are in the scene); the\n"
   "range and thickness maps (skin-range, bone-range, thickness, thickness-normal\n"
   ".nrrd, and the thickness review pictures skin-range.png, thickness.png,\n"
-  "thickness-normal.png, as `caps rangemap`); and sample.caps (the scene, which\n"
-  "`caps` opens and ParaView or 3D Slicer can read file by file).\n";
+  "thickness-normal.png, as `caps rangemap`); a Z-plasty on the left cheek and an\n"
+  "elliptical excision on the forehead, predicted (z-plasty/ and elliptical-excision/,\n"
+  "as `caps plan`); and sample.caps (the scene, which `caps` opens and ParaView or\n"
+  "3D Slicer can read file by file).\n";
 
 // Seconds since @a start, for the demo's step times.
 double secondsSince(std::chrono::steady_clock::time_point start)
@@ -151,7 +153,22 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
     return code;
   stepDone("rangemap");
 
-  // 5. The scene, as the workstation would save it.
+  // 5. Two plans on the sample's face, predicted (as `caps plan`, on step 4's
+  // range maps): a Z-plasty on the left cheek and an elliptical excision on
+  // the forehead.
+  const std::pair<const char*, std::vector<std::string>> plans[] = {
+    {"z-plasty", {"--at", "-40,-47"}}, {"elliptical-excision", {"--at", "-90,25"}}};
+  for (const auto& [procedure, where] : plans)
+  {
+    std::vector<std::string> planArgs{sample.string(), "--procedure", procedure,
+                                      "--out", (folder / procedure).string()};
+    planArgs.insert(planArgs.end(), where.begin(), where.end());
+    if (int code = runModuleCommand(session, "plan", planArgs, out, err))
+      return code;
+  }
+  stepDone("plans");
+
+  // 6. The scene, as the workstation would save it.
   const fs::path bundle = folder / "sample.caps";
   try
   {

@@ -23,6 +23,8 @@
 #include "modules/incision/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
+#include "scene/RangeMapNode.h"
+#include "scene/Scene.h"
 #include "scene/VolumeNode.h"
 
 namespace fs = std::filesystem;
@@ -222,9 +224,31 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
 
     args.read.progress = cli::consoleProgress(err);
     VolumeNode* volume = cli::loadCt(logic, args.ct, args.read, err);
-    RangeMapLogic rangeMaps(logic.scene());
+    // The range maps: those already in the scene when it holds this one CT
+    // (`caps demo` made them a step earlier), else made now.
     RangeMapOutput maps;
-    rangeMaps.run(*volume, RangeMapLogic::Parameters{}, cli::consoleProgress(err), &maps);
+    {
+      const RangeMapNode* skinNode = nullptr;
+      const RangeMapNode* boneNode = nullptr;
+      for (Node* n : logic.scene().nodesOfType(NodeType::RangeMap))
+      {
+        const auto* map = static_cast<const RangeMapNode*>(n);
+        if (map->role() == "skin")
+          skinNode = map;
+        else if (map->role() == "bone")
+          boneNode = map;
+      }
+      if (skinNode && boneNode && logic.scene().nodesOfType(NodeType::Volume).size() == 1)
+      {
+        maps.skin = RangeMapLogic::toRangeMap(*skinNode);
+        maps.bone = RangeMapLogic::toRangeMap(*boneNode);
+      }
+      else
+      {
+        RangeMapLogic rangeMaps(logic.scene());
+        rangeMaps.run(*volume, RangeMapLogic::Parameters{}, cli::consoleProgress(err), &maps);
+      }
+    }
 
     const incision::SkinPoint at{args.at->first * kDegree, args.at->second};
     const incision::IncisionPlan plan = logic.placeProcedure(args.procedure, maps.skin, at, values);
@@ -234,9 +258,9 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     options.threads = 2;
     const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, plan, options);
 
+    out << std::fixed << std::setprecision(1);
     out << "Plan: " << procedure->title() << " at theta " << args.at->first << " deg, z " << args.at->second
         << " mm\n";
-    out << std::fixed << std::setprecision(1);
     for (const auto& l : measured.limbs)
       out << "  limb p" << l.from << "-p" << l.to << ": " << l.skin << " mm on the skin\n";
     for (const auto& a : measured.limbAngles)

@@ -228,6 +228,8 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     throw std::invalid_argument("simulation options: one layer fraction per layer is needed");
   const seg::CylindricalFrame& frame = skin.frame();
   const bool haveBone = !bone.empty();
+  if (options.boneSmoothingPasses < 0)
+    throw std::invalid_argument("the bone smoothing passes must be 0 or more");
   if (haveBone && ((bone.frame().origin() - frame.origin()).norm() > 1e-6 ||
                    (bone.frame().direction() - frame.direction()).norm() > 1e-9))
     throw std::invalid_argument("the bone range map is on another cylinder axis than the skin map: "
@@ -275,6 +277,25 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     for (std::size_t i = 0; i < polygon.size(); ++i)
       checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
 
+  // The bone surface for the depth: holes filled at the default depth under
+  // the skin, then smoothed so neighbouring columns do not jump (a jump of
+  // a centimetre between 2 mm columns folds the deep elements).
+  seg::RangeMap boneForDepth = bone;
+  if (haveBone && options.boneSmoothingPasses > 0)
+  {
+    const seg::CylindricalFrame& bf = bone.frame();
+    for (int j = 0; j < bf.nZ(); ++j)
+      for (int i = 0; i < bf.nTheta(); ++i)
+        if (!std::isfinite(boneForDepth.at(i, j)))
+        {
+          const double rSkin = skin.sample(bf.indexToTheta(i), bf.indexToZ(j));
+          if (std::isfinite(rSkin))
+            boneForDepth.at(i, j) = float(rSkin - options.noBoneDepth);
+        }
+    for (int pass = 0; pass < options.boneSmoothingPasses; ++pass)
+      boneForDepth = seg::boxSmooth(boneForDepth);
+  }
+
   // 3. Skin to bone (§4.5.2): along the ray towards the axis.
   fem::TissueGeometry geometry;
   geometry.skinPoint = [&chart](const ChartPoint& c) { return chart.lift(c); };
@@ -284,7 +305,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   geometry.tissueDepth = [&](const ChartPoint& c) {
     const SkinPoint s = chart.fromChart(c);
     const double rSkin = skin.sample(s.theta, s.z);
-    const double rBone = haveBone ? bone.sample(s.theta, s.z) : std::nan("");
+    const double rBone = haveBone ? boneForDepth.sample(s.theta, s.z) : std::nan("");
     return rSkin - rBone; // NaN where there is no bone: noBoneDepth
   };
   fem::ContinuumMeshOptions continuumOptions;

@@ -47,6 +47,11 @@ struct SimulationOptions
   double minDepth = 2.0;
   double maxDepth = 40.0;
   double noBoneDepth = 10.0;
+  /// Passes of 3 × 3 box smoothing (eq. 4.2) of the bone surface used for the
+  /// depth, after its holes are filled at noBoneDepth under the skin: the raw
+  /// map jumps between neighbouring samples (sinus walls, holes), which folds
+  /// deep elements; 0 uses the raw map.
+  int boneSmoothingPasses = 8;
   fem::RimCondition rim = fem::RimCondition::Free;
   /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
   fem::MaterialTable materials;
