@@ -26,24 +26,14 @@
 #include "segmentation/RangeMapBuilder.h"
 #include "segmentation/RangeMapImageGeometry.h"
 #include "segmentation/Thickness.h"
+#include "bench/BestOf.h"
 
 namespace fs = std::filesystem;
 using namespace caps::seg;
 
-namespace {
+using caps::bench::secondsOf;
 
-double secondsOf(const std::function<void()>& work, int repeats)
-{
-  double best = 1e300;
-  for (int i = 0; i < repeats; ++i)
-  {
-    const auto start = std::chrono::steady_clock::now();
-    work();
-    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
-    best = std::min(best, elapsed.count());
-  }
-  return best;
-}
+namespace {
 
 /// The last `slices` slices (the superior end for this head-first series) as a new image.
 vtkSmartPointer<vtkImageData> topSlices(vtkImageData* ct, int slices)

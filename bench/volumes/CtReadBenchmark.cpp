@@ -15,25 +15,11 @@
 
 #include "segmentation/CtReader.h"
 #include "segmentation/DicomFileCheck.h"
+#include "bench/BestOf.h"
 
 namespace fs = std::filesystem;
 
-namespace {
-
-double secondsOf(const std::function<void()>& work, int repeats)
-{
-  double best = 1e300;
-  for (int i = 0; i < repeats; ++i)
-  {
-    const auto start = std::chrono::steady_clock::now();
-    work();
-    const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
-    best = std::min(best, elapsed.count());
-  }
-  return best;
-}
-
-} // namespace
+using caps::bench::secondsOf;
 
 int main(int argc, char** argv)
 {

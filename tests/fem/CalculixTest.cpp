@@ -6,6 +6,7 @@
 #include "fem/CalculixIO.h"
 #include "fem/StaticAnalysis.h"
 
+#include "CcxRunner.h"
 #include "FemTestMeshes.h"
 
 #include <gtest/gtest.h>
@@ -22,58 +23,21 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::boxMesh;
-
-bool ccxAvailable() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
-
-struct CcxResult {
-  Eigen::Matrix3Xd frd, dat;
-};
-
-// Writes the deck into a fresh temporary folder, runs "ccx -i job" there.
-CcxResult runCcx(const std::string& name, const Mesh& mesh, const MaterialTable& materials,
-                 const Constraints& c, const LoadCase& load) {
-  const fs::path dir = fs::temp_directory_path() / ("caps_fem_ccx_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  writeCalculixInput((dir / "job.inp").string(), mesh, materials, c, load);
-  const std::string cmd = "cd '" + dir.string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
-  const int rc = std::system(cmd.c_str());
-  if (rc != 0 || !fs::exists(dir / "job.frd")) {
-    std::ifstream log(dir / "ccx.log");
-    std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
-    throw std::runtime_error("ccx failed on " + (dir / "job.inp").string() + ":\n" +
-                             text.substr(text.size() > 3000 ? text.size() - 3000 : 0));
-  }
-  CcxResult r;
-  r.frd = readFrdDisplacements((dir / "job.frd").string(), mesh.nodeCount());
-  r.dat = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
-  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
-  return r;
-}
-
-double relativeDifference(const Eigen::Matrix3Xd& a, const Eigen::VectorXd& ours) {
-  const Eigen::Map<const Eigen::VectorXd> flat(a.data(), a.size());
-  return (flat - ours).cwiseAbs().maxCoeff() / ours.cwiseAbs().maxCoeff();
-}
+using test::wobble;
 
 void compareWithCcx(const std::string& name, const Mesh& mesh, const MaterialTable& materials,
                     const Constraints& c, const LoadCase& load) {
-  ASSERT_TRUE(ccxAvailable()) << "CalculiX 'ccx' was not found on PATH: install Debian package "
+  ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH: install Debian package "
                                  "calculix-ccx (these comparisons must not be skipped)";
   LinearStaticAnalysis analysis(mesh, materials, c);
   ASSERT_EQ(analysis.prepare(), SolverStatus::Success) << analysis.message();
   const Eigen::VectorXd u = analysis.solve(load);
-  const CcxResult r = runCcx(name, mesh, materials, c, load);
-  const double dat = relativeDifference(r.dat, u), frd = relativeDifference(r.frd, u);
+  const test::CcxResult r = test::runCcx(name, calculixInput(mesh, materials, c, load), mesh.nodeCount(), true);
+  const double dat = test::relativeDifference(r.dat, u), frd = test::relativeDifference(r.frd, u);
   std::cout << "ccx " << name << ": " << mesh.elements.size() << " elements, max |u| "
             << u.cwiseAbs().maxCoeff() << " mm, relative difference .dat " << dat << ", .frd " << frd << "\n";
   EXPECT_LT(dat, 1e-6) << name;
   EXPECT_LT(frd, 1e-5) << name << " (.frd keeps 6 significant digits)";
-}
-
-Eigen::Vector3d wobble(const Eigen::Vector3d& x) {
-  return x + 0.4 * Eigen::Vector3d(std::sin(0.3 * x[1] + 0.2 * x[2]), std::sin(0.25 * x[0]),
-                                   std::sin(0.2 * x[0] + 0.3 * x[1]));
 }
 
 TEST(Calculix, DistortedHexCantileverWithPrescribedDisplacement) {

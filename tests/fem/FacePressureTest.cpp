@@ -10,6 +10,7 @@
 #include "fem/StaticAnalysis.h"
 #include "fem/StressRecovery.h"
 
+#include "CcxRunner.h"
 #include "FemTestMeshes.h"
 
 #include <gtest/gtest.h>
@@ -35,6 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::boxMesh;
+using test::wobble;
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -84,11 +86,6 @@ std::vector<FacePressure> boundaryFaces(const Mesh& mesh) {
 
 ElementShape shapeOf(const Mesh& mesh, std::size_t e) {
   return ElementShape::fromConnectivity(mesh.elements[e].kind, mesh.elements[e].nodes);
-}
-
-Eigen::Vector3d wobble(const Eigen::Vector3d& x) {
-  return x + 0.4 * Eigen::Vector3d(std::sin(0.3 * x[1] + 0.2 * x[2]), std::sin(0.25 * x[0]),
-                                   std::sin(0.2 * x[0] + 0.3 * x[1]));
 }
 
 /// Quarter of a thick-walled tube, inner radius @a a, outer @a b, height
@@ -483,40 +480,15 @@ TEST(FacePressure, ThickWalledCylinderMatchesLame) {
 // ---------------------------------------------------------------------------
 // CalculiX
 
-bool ccxAvailable() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
-
-/// Runs ccx on @a deck in a fresh folder and returns the .dat displacements.
-Eigen::Matrix3Xd runCcx(const std::string& name, const std::string& deck, Eigen::Index nodeCount) {
-  const fs::path dir = fs::temp_directory_path() / ("caps_pressure_ccx_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  std::ofstream((dir / "job.inp").string()) << deck;
-  const std::string cmd = "cd '" + dir.string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
-  if (std::system(cmd.c_str()) != 0 || !fs::exists(dir / "job.dat")) {
-    std::ifstream log(dir / "ccx.log");
-    const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
-    throw std::runtime_error("ccx failed on " + (dir / "job.inp").string() + ":\n" +
-                             text.substr(text.size() > 3000 ? text.size() - 3000 : 0));
-  }
-  Eigen::Matrix3Xd u = readDatDisplacements((dir / "job.dat").string(), nodeCount);
-  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
-  return u;
-}
-
-double relativeDifference(const Eigen::Matrix3Xd& dat, const Eigen::VectorXd& u) {
-  const Eigen::Map<const Eigen::VectorXd> flat(dat.data(), dat.size());
-  return (flat - u.head(flat.size())).cwiseAbs().maxCoeff() / u.cwiseAbs().maxCoeff();
-}
-
 /// Max |ours - ccx| / max |ours| for the exported model (also printed).
 double ccxDifference(const std::string& name, const Mesh& mesh, const MaterialTable& materials, const Constraints& c,
                      const LoadCase& load, const AssemblyOptions& options = {}) {
-  if (!ccxAvailable())
+  if (!test::ccxAvailable())
     throw std::runtime_error("CalculiX 'ccx' was not found on PATH: install Debian package calculix-ccx");
   LinearStaticAnalysis analysis(mesh, materials, c, options);
   if (analysis.prepare() != SolverStatus::Success) throw std::runtime_error(analysis.message());
   const Eigen::VectorXd u = analysis.solve(load);
-  const double diff = relativeDifference(runCcx(name, calculixInput(mesh, materials, c, load), mesh.nodeCount()), u);
+  const double diff = test::relativeDifference(test::runCcx(name, calculixInput(mesh, materials, c, load), mesh.nodeCount()).dat, u);
   std::cout << "ccx " << name << ": " << mesh.elements.size() << " elements, " << load.facePressures.size()
             << " loaded faces, max |u| " << u.cwiseAbs().maxCoeff() << " mm, relative difference (.dat) " << diff
             << "\n";
@@ -658,8 +630,8 @@ TEST(FacePressure, ReaderTakesDloadP3AndSolvesLikeTheModelInMemory) {
   ASSERT_EQ(read.prepare(), SolverStatus::Success);
   const Eigen::VectorXd u = ours.solve(load), v = read.solve(m.load);
   EXPECT_LT((v.head(u.size()) - u).cwiseAbs().maxCoeff(), 1e-12 * u.cwiseAbs().maxCoeff());
-  ASSERT_TRUE(ccxAvailable()) << "CalculiX 'ccx' was not found on PATH: install Debian package calculix-ccx";
-  const double diff = relativeDifference(runCcx("p3deck", deck, mesh.nodeCount()), u);
+  ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH: install Debian package calculix-ccx";
+  const double diff = test::relativeDifference(test::runCcx("p3deck", deck, mesh.nodeCount()).dat, u);
   std::cout << "ccx on the hand-edited P3/P4 deck: relative difference (.dat) " << diff << "\n";
   EXPECT_LT(diff, 1e-6);
 }

@@ -11,10 +11,18 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cmath>
 #include <functional>
 #include <map>
 
 namespace caps::fem::test {
+
+/// A smooth distortion of a point (mm), to make straight meshes curved and
+/// uneven without inverting them; @a amplitude in mm.
+inline Eigen::Vector3d wobble(const Eigen::Vector3d& x, double amplitude = 0.4) {
+  return x + amplitude * Eigen::Vector3d(std::sin(0.3 * x[1] + 0.2 * x[2]), std::sin(0.25 * x[0]),
+                                         std::sin(0.2 * x[0] + 0.3 * x[1]));
+}
 
 /// In-plane doubled-grid positions of the natural corners (r, s) = (1,1),
 /// (-1,1), (-1,-1), (1,-1); a wedge repeats the first position twice.

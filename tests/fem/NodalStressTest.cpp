@@ -20,11 +20,6 @@ Eigen::VectorXd displacementField(const Mesh& mesh, const std::function<Eigen::V
   return u;
 }
 
-Eigen::Vector3d wobble(const Eigen::Vector3d& x) {
-  return x + 0.3 * Eigen::Vector3d(std::sin(0.3 * x[1] + 0.2 * x[2]), std::sin(0.25 * x[0]),
-                                   std::sin(0.2 * x[0] + 0.3 * x[1]));
-}
-
 }  // namespace
 
 TEST(NodalStress, ExtrapolationRowsArePartitionsOfUnity) {
@@ -44,7 +39,7 @@ TEST(NodalStress, ConstantStressPatchIsExactOnDistortedHexesAndWedges) {
   const Eigen::Matrix3d a = (Eigen::Matrix3d() << 1e-3, 2e-4, -3e-4, 5e-4, -2e-3, 1e-4, 0, 7e-4, 4e-4).finished();
   for (bool wedges : {false, true}) {
     Mesh mesh = boxMesh(3, 2, 2, 30, 20, 10, Eigen::Vector3d::Zero(), wedges);
-    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) mesh.nodes.col(i) = wobble(mesh.nodes.col(i));
+    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) mesh.nodes.col(i) = caps::fem::test::wobble(mesh.nodes.col(i), 0.3);
     const MaterialTable materials{{0, {1000.0, 0.3, 0.0}}};
     const Eigen::VectorXd u = displacementField(mesh, [&](const Eigen::Vector3d& x) { return Eigen::Vector3d(a * x); });
     Vector6d strain;

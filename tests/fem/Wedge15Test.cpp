@@ -17,6 +17,7 @@
 #include "fem/VtuWriter.h"
 #include "fem/Wedge15Shape.h"
 
+#include "CcxRunner.h"
 #include "FemTestMeshes.h"
 
 #include <Eigen/Eigenvalues>
@@ -38,6 +39,7 @@ namespace caps::fem {
 namespace {
 
 using test::boxMesh;
+using test::wobble;
 
 std::vector<Eigen::Vector3d> wedgePoints() {
   std::vector<Eigen::Vector3d> p;
@@ -636,21 +638,10 @@ TEST(NativeWedges, ExportIsC3D15AndReadsBackIdentically) {
 
 // ---- CalculiX ----
 
-bool ccxAvailable() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
-
-// Solves the exported deck with ccx in a fresh folder; displacements from the .dat (7 digits).
+// Displacements ccx computes for the exported deck (.dat, 7 digits).
 Eigen::VectorXd ccxDisplacements(const std::string& name, const Mesh& mesh, const MaterialTable& materials,
                                  const Constraints& c, const LoadCase& load) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("caps_wedge_ccx_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  writeCalculixInput((dir / "job.inp").string(), mesh, materials, c, load);
-  const std::string cmd = "cd '" + dir.string() + "' && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1";
-  if (std::system(cmd.c_str()) != 0 || !fs::exists(dir / "job.dat"))
-    throw std::runtime_error("ccx failed on " + (dir / "job.inp").string());
-  const Eigen::Matrix3Xd u = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
-  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
+  const Eigen::Matrix3Xd u = test::runCcx(name, calculixInput(mesh, materials, c, load), mesh.nodeCount()).dat;
   return Eigen::Map<const Eigen::VectorXd>(u.data(), u.size());
 }
 
@@ -666,15 +657,10 @@ double differenceFromCcx(const std::string& name, const Mesh& mesh, const Materi
   return (u - v).cwiseAbs().maxCoeff() / u.cwiseAbs().maxCoeff();
 }
 
-Eigen::Vector3d wobble(const Eigen::Vector3d& x) {
-  return x + 0.4 * Eigen::Vector3d(std::sin(0.3 * x[1] + 0.2 * x[2]), std::sin(0.25 * x[0]),
-                                   std::sin(0.2 * x[0] + 0.3 * x[1]));
-}
-
 // ccx integrates C3D15 with the 9 points of wedgeRule(2): the same element
 // must give the same displacements (the .dat has 7 significant digits).
 TEST(WedgeCalculix, DistortedNativeWedgesUnderGravityAndLoadsAgreeWithC3D15) {
-  ASSERT_TRUE(ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
+  ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
   Mesh mesh = withNativeWedges(boxMesh(3, 2, 2, 30, 20, 10, Eigen::Vector3d::Zero(), true));
   for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) mesh.nodes.col(i) = wobble(mesh.nodes.col(i));
   Constraints c;
@@ -697,7 +683,7 @@ TEST(WedgeCalculix, DistortedNativeWedgesUnderGravityAndLoadsAgreeWithC3D15) {
 // *EQUATION on nodes repeated in a degenerate C3D20 (CalculixIO.h); a C3D15
 // repeats no node, so the equations must hold as written.
 TEST(WedgeCalculix, SuturedNativeWedgeBlocksAgreeWithC3D15) {
-  ASSERT_TRUE(ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
+  ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
   Mesh mesh = withNativeWedges(boxMesh(2, 2, 1, 20, 20, 10, Eigen::Vector3d::Zero(), true));
   const int top = test::appendMesh(
       mesh, withNativeWedges(boxMesh(2, 2, 1, 20, 20, 5, Eigen::Vector3d(0.5, 1.0, 10.7), true)));
@@ -727,7 +713,7 @@ TEST(WedgeCalculix, SuturedNativeWedgeBlocksAgreeWithC3D15) {
 // wedges is as stiff as ours, its C3D15 as accurate, so the gap is the
 // element's, not our implementation's.
 TEST(WedgeCalculix, CantileverDegenerateAndNativeWedgesInCcx) {
-  ASSERT_TRUE(ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
+  ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH (Debian package calculix-ccx)";
   const double l = 200.0, h = 10.0, e = 1000.0, inertia = h * h * h * h / 12.0;
   const double timoshenko = -l * l * l / (3 * e * inertia) - l / (5.0 / 6.0 * 0.5 * e * h * h);
   const Mesh degenerate = boxMesh(10, 2, 2, l, h, h, Eigen::Vector3d::Zero(), true);
