@@ -1,6 +1,7 @@
 #include "fem/SurfaceMesher.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -393,7 +394,8 @@ std::string Mesher::addLayer(double l, double lNext) {
       offspring[i] = {v};
       continue;
     }
-    const P &a = vertices_[front_[(i + n - 1) % n]], &p = vertices_[v], &c = vertices_[front_[(i + 1) % n]];
+    // Copies: newVertex() grows vertices_ and would leave references dangling.
+    const P a = vertices_[front_[(i + n - 1) % n]], p = vertices_[v], c = vertices_[front_[(i + 1) % n]];
     const P n1 = leftNormal(p - a), n2 = leftNormal(c - p);
     const double turn = turnAngle(a, p, c);
     if (-turn > expandTurn + 1e-9) {
@@ -427,8 +429,8 @@ std::string Mesher::addLayer(double l, double lNext) {
   std::vector<char> merged(vertices_.size() + n, 0);
   std::vector<int> midpoint(n, -1);
   auto resolve = [&](int id) {
-    const auto it = alias.find(id);
-    return it == alias.end() ? id : it->second;
+    for (auto it = alias.find(id); it != alias.end(); it = alias.find(id)) id = it->second;
+    return id;
   };
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t i1 = (i + 1) % n;
@@ -456,6 +458,43 @@ std::string Mesher::addLayer(double l, double lNext) {
     }
   }
 
+  // Merging every other short bridge leaves short edges where several come
+  // in a row (a concave bend of the border): the next layer would build
+  // slivers on them. Merge their ends as well, a few passes, each vertex
+  // once per pass, so edges double until they are long enough. The corner
+  // fans keep their vertices (their kites are already built).
+  {
+    std::vector<char> single(vertices_.size(), 0);
+    for (std::size_t i = 0; i < n; ++i) {
+      if (offspring[i].size() == 1 && offspring[i][0] >= firstVertex) single[std::size_t(offspring[i][0])] = 1;
+      if (midpoint[i] >= 0) single[std::size_t(midpoint[i])] = 1;
+    }
+    for (int pass = 0; pass < 4; ++pass) {
+      std::vector<int> ring;
+      for (std::size_t i = 0; i < n; ++i) {
+        for (int id : offspring[i])
+          if (ring.empty() || ring.back() != resolve(id)) ring.push_back(resolve(id));
+        if (midpoint[i] >= 0) ring.push_back(resolve(midpoint[i]));
+      }
+      while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
+      std::vector<char> touched(vertices_.size(), 0);
+      bool any = false;
+      for (std::size_t k = 0; k < ring.size() && ring.size() > 4; ++k) {
+        const int x = ring[k], y = ring[(k + 1) % ring.size()];
+        if (x == y || !single[std::size_t(x)] || !single[std::size_t(y)] || touched[std::size_t(x)] ||
+            touched[std::size_t(y)] || (frozen_[x] && frozen_[y]))
+          continue;
+        if ((vertices_[x] - vertices_[y]).norm() >= 0.4 * lNext) continue;
+        vertices_[x] = frozen_[y] ? vertices_[y] : frozen_[x] ? vertices_[x] : P(0.5 * (vertices_[x] + vertices_[y]));
+        frozen_[x] = frozen_[x] || frozen_[y];
+        alias[y] = x;
+        touched[std::size_t(x)] = touched[std::size_t(y)] = 1;
+        any = true;
+      }
+      if (!any) break;
+    }
+  }
+
   // Substage 2: a quadrilateral (v_i, v_i+1, new_i+1, new_i) per border edge,
   // counter-clockwise; repeated vertices (frozen or merged) make it a triangle.
   std::vector<int> newFront;
@@ -465,8 +504,9 @@ std::string Mesher::addLayer(double l, double lNext) {
     const int x = resolve(offspring[i].back()), y = resolve(offspring[i1].front());
     std::vector<std::vector<int>> pieces;
     if (midpoint[i] >= 0) {
-      pieces.push_back({a, b, midpoint[i], x});
-      pieces.push_back({b, y, midpoint[i]});
+      const int m = resolve(midpoint[i]);
+      pieces.push_back({a, b, m, x});
+      pieces.push_back({b, y, m});
     } else {
       pieces.push_back({a, b, y, x});
     }
@@ -481,9 +521,28 @@ std::string Mesher::addLayer(double l, double lNext) {
       id = resolve(id);
       if (newFront.empty() || newFront.back() != id) newFront.push_back(id);
     }
-    if (midpoint[i] >= 0) newFront.push_back(midpoint[i]);
+    if (midpoint[i] >= 0 && newFront.back() != resolve(midpoint[i])) newFront.push_back(resolve(midpoint[i]));
   }
   while (newFront.size() > 1 && newFront.front() == newFront.back()) newFront.pop_back();
+
+  // A quadrilateral bent out of shape where the border bends (a corner near
+  // 180°, or too long for its width) becomes two good triangles if one of its
+  // diagonals gives them; checkNewPolygons() judges the rest.
+  for (std::size_t k = firstPolygon, end = polygons_.size(); k < end; ++k) {
+    const std::vector<int> q = polygons_[k];
+    if (q.size() != 4 || shapeWithin(polygonShape(corners(vertices_, q)), o_.quality)) continue;
+    double best = -1;
+    std::array<std::vector<int>, 2> split;
+    for (const auto& pair : {std::array<std::vector<int>, 2>{{{q[0], q[1], q[2]}, {q[0], q[2], q[3]}}},
+                             std::array<std::vector<int>, 2>{{{q[0], q[1], q[3]}, {q[1], q[2], q[3]}}}}) {
+      const Shape s0 = polygonShape(corners(vertices_, pair[0])), s1 = polygonShape(corners(vertices_, pair[1]));
+      if (shapeWithin(s0, o_.quality) && shapeWithin(s1, o_.quality) && std::min(s0.minAngle, s1.minAngle) > best)
+        best = std::min(s0.minAngle, s1.minAngle), split = pair;
+    }
+    if (best < 0) continue;
+    polygons_[k] = split[0];
+    polygons_.push_back(split[1]);
+  }
 
   const std::string problem = checkNewPolygons(firstPolygon);
   if (!problem.empty()) return fail(problem);

@@ -351,3 +351,47 @@ TEST(SurfaceMesher, RandomCutPaths) {
   EXPECT_GT(meshed, 250);
   EXPECT_LT(stopped, meshed / 20);
 }
+
+// Interactive editing moves one point a little at a time; each new position
+// must mesh the whole region, not stop a few layers out (a region cut short
+// changes the prediction far more than the move does: on the sample's
+// cheek a Z-plasty's gain went from 61 % to 81 % for a 0.5 mm move before
+// short border edges were merged away). Z-plasties of 30–90° with every
+// cut point moved up to 1 mm at random, meshed out to 25 and 40 mm.
+TEST(SurfaceMesher, MovedZPlastyPointsStillMeshTheWholeRegion) {
+  std::mt19937 random(20261123);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int meshed = 0, stopped = 0, refused = 0;
+  double minAngle = kPi, maxAspect = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    const double angle = rad(30 + 60 * (trial % 5) / 4.0), limb = 20;
+    const ChartPoint a(0, 0), b(0, -limb);  // central limb along -v
+    std::vector<ChartPoint> path = {a + limb * ChartPoint(std::sin(angle), -std::cos(angle)) , a, b,
+                                    b + limb * ChartPoint(-std::sin(angle), std::cos(angle))};
+    for (auto& p : path) p += ChartPoint(unit(random), unit(random));
+    SurfaceMesherOptions options;
+    options.firstLayerThickness = 2.0;
+    options.regionRadius = trial % 2 ? 40 : 25;
+    options.minPointSpacing = 0.8;
+    SurfaceMesherResult r;
+    try {
+      r = meshAroundHole(holeLoopFromCutPath(refineCutPath(path, 2.0).points), options);
+    } catch (const std::invalid_argument& e) {
+      ++refused;  // a 30° corner pushed sharper: limbs closer than the point spacing
+      std::printf("trial %d (%.0f deg) refused: %s\n", trial, deg(angle), e.what());
+      continue;
+    }
+    ++meshed;
+    ASSERT_TRUE(r.quality.valid()) << "trial " << trial << ":\n" << problems(r.quality);
+    EXPECT_NEAR(r.quality.meshArea, r.quality.outerArea - r.quality.holeArea, 1e-6 * r.quality.outerArea);
+    if (r.stoppedEarly) ++stopped, std::printf("trial %d (%.0f deg): %s\n", trial, deg(angle), r.message.c_str());
+    minAngle = std::min(minAngle, r.quality.minAngle);
+    maxAspect = std::max(maxAspect, r.quality.maxAspectRatio);
+  }
+  std::printf("[moved Z] %d meshed, %d refused, %d stopped early; min angle %.1f deg, max aspect %.2f\n", meshed,
+              refused, stopped, deg(minAngle), maxAspect);
+  EXPECT_LT(refused, 6);
+  // Before short border edges were merged and bent quadrilaterals split, 5
+  // of these stopped early (and the sample's cheek Z at 0.5 mm); 1 still does.
+  EXPECT_LE(stopped, 2);
+}
