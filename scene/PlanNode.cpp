@@ -53,6 +53,21 @@ void PlanNode::setBorderOffsets(std::vector<Eigen::Vector2d> offsets) {
   modified();
 }
 
+void PlanNode::setOperations(nlohmann::json operations) {
+  operations_ = jsonfields::list(operations, "the plan's operations");
+  modified();
+}
+
+void PlanNode::setCtSha256(std::string hash) {
+  ctSha256_ = std::move(hash);
+  modified();
+}
+
+void PlanNode::setSoftwareVersion(std::string version) {
+  softwareVersion_ = std::move(version);
+  modified();
+}
+
 void PlanNode::setNotes(std::string notes) {
   notes_ = std::move(notes);
   modified();
@@ -73,6 +88,9 @@ void PlanNode::writeFields(nlohmann::json& j) const {
   j["centre"] = {centre_.x(), centre_.y()};
   auto& offsets = j["borderOffsets"] = nlohmann::json::array();
   for (const auto& d : borderOffsets_) offsets.push_back({d.x(), d.y()});
+  j["operations"] = operations_;
+  j["ctSha256"] = ctSha256_;
+  j["softwareVersion"] = softwareVersion_;
   j["notes"] = notes_;
   j["rangeMapId"] = rangeMapId_;
 }
@@ -108,6 +126,10 @@ void PlanNode::readFields(const nlohmann::json& j) {
     }
     sutures_ = std::move(sutures);
   }
+  if (const auto* operations = jsonfields::find(j, "operations"))
+    operations_ = jsonfields::list(*operations, "the plan's operations");
+  jsonfields::read(j, "ctSha256", ctSha256_);
+  jsonfields::read(j, "softwareVersion", softwareVersion_);
   jsonfields::read(j, "notes", notes_);
   jsonfields::read(j, "rangeMapId", rangeMapId_);
 }

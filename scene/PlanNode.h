@@ -50,6 +50,21 @@ class PlanNode : public Node {
   const std::vector<Eigen::Vector2d>& borderOffsets() const { return borderOffsets_; }
   void setBorderOffsets(std::vector<Eigen::Vector2d> offsets);
 
+  /// @name How the plan was made (issue 5 item 8)
+  /// The operations that made it, as plan.json writes them (the Incision
+  /// module's PlanRecipe reads and checks them; the scene keeps them as
+  /// given), the SHA-256 of the CT they were applied to and the CAPS
+  /// version. Empty in scenes saved before plans kept their recipe.
+  ///@{
+  const nlohmann::json& operations() const { return operations_; }
+  /// Throws SceneError when @a operations is not a list.
+  void setOperations(nlohmann::json operations);
+  const std::string& ctSha256() const { return ctSha256_; }
+  void setCtSha256(std::string hash);
+  const std::string& softwareVersion() const { return softwareVersion_; }
+  void setSoftwareVersion(std::string version);
+  ///@}
+
   const std::string& notes() const { return notes_; }
   void setNotes(std::string notes);
 
@@ -69,6 +84,9 @@ class PlanNode : public Node {
   std::string generator_;
   Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
   std::vector<Eigen::Vector2d> borderOffsets_;
+  nlohmann::json operations_ = nlohmann::json::array();
+  std::string ctSha256_;
+  std::string softwareVersion_;
   std::string notes_;
   NodeId rangeMapId_;
 };

@@ -23,15 +23,12 @@ incision::IncisionPlan IncisionLogic::placeProcedure(const std::string& id, cons
                                                      const incision::SkinPoint& at,
                                                      const std::map<std::string, double>& values)
 {
-  const incision::ProcedureTemplate* procedure = procedures().find(id);
-  if (!procedure)
-  {
-    std::string known;
-    for (const auto& p : procedures().procedures())
-      known += (known.empty() ? "" : ", ") + p.id();
-    throw std::invalid_argument("no procedure '" + id + "'; the procedures are: " + known);
-  }
-  return procedure->place(skin, at, values);
+  return incision::findProcedure(procedures(), id).place(skin, at, values);
+}
+
+incision::IncisionPlan IncisionLogic::applyRecipe(const incision::PlanRecipe& recipe, const seg::RangeMap& skin)
+{
+  return incision::applyRecipe(recipe, skin, procedures());
 }
 
 void IncisionLogic::writePlan(const incision::IncisionPlan& plan, PlanNode& node)
@@ -70,6 +67,35 @@ incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
     written.push_back({{s[0], s[1]}, {s[2], s[3]}});
   plan.setSutures(std::move(written));  // throws SutureError (an invalid_argument) naming the pair
   return plan;
+}
+
+void IncisionLogic::writeRecipe(const incision::PlanRecipe& recipe, PlanNode& node)
+{
+  nlohmann::json operations = nlohmann::json::array();
+  for (const auto& o : recipe.operations)
+    operations.push_back(incision::operationToJson(o));
+  node.setOperations(std::move(operations));
+  node.setCtSha256(recipe.ctSha256);
+  node.setSoftwareVersion(recipe.softwareVersion);
+}
+
+std::optional<incision::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& node)
+{
+  if (node.operations().empty())
+    return std::nullopt;
+  // Through the plan file's reader, so the scene and plan.json accept the same.
+  try
+  {
+    return incision::recipeFromJson({{"format", "caps-plan"},
+                                     {"formatVersion", incision::recipeFormatVersion},
+                                     {"softwareVersion", node.softwareVersion()},
+                                     {"ctSha256", node.ctSha256()},
+                                     {"operations", node.operations()}});
+  }
+  catch (const incision::RecipeError& e)
+  {
+    throw incision::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
+  }
 }
 
 } // namespace caps

@@ -10,6 +10,7 @@
 
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionPlan.h"
+#include "modules/incision/PlanRecipe.h"
 #include "modules/incision/ProcedureTemplate.h"
 #include "modules/incision/SkinMeasurements.h"
 
@@ -48,7 +49,18 @@ public:
   /// @throws std::invalid_argument when its offsets or sutures do not fit its
   /// cut path (a hand-edited scene), naming what is wrong.
   static incision::IncisionPlan readPlan(const PlanNode& node);
+  /// Writes the recipe that made the node's plan (operations, CT hash,
+  /// software version) beside what writePlan() wrote.
+  static void writeRecipe(const incision::PlanRecipe& recipe, PlanNode& node);
+  /// The recipe a node keeps; std::nullopt for a plan saved before plans
+  /// kept their recipe (the plan itself still reads with readPlan()).
+  /// @throws incision::RecipeError naming the plan and the operation at fault.
+  static std::optional<incision::PlanRecipe> readRecipe(const PlanNode& node);
   ///@}
+
+  /// The plan a recipe makes on @a skin with this logic's procedures
+  /// (incision::applyRecipe()).
+  incision::IncisionPlan applyRecipe(const incision::PlanRecipe& recipe, const seg::RangeMap& skin);
 
 private:
   std::optional<incision::ProcedureLibrary> library_;

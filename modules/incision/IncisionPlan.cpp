@@ -60,6 +60,15 @@ bool segmentsCross(const ChartPoint& p, const ChartPoint& q, const ChartPoint& r
          ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
 }
 
+/// A length for a message: "0.2", "100" (std::to_string gives "0.200000").
+std::string mmText(double mm)
+{
+  std::ostringstream o;
+  o.precision(3);
+  o << mm;
+  return o.str();
+}
+
 std::string whereText(const SkinPoint& s)
 {
   std::ostringstream o;
@@ -237,16 +246,16 @@ void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSp
     const SkinPoint s = skinPointFromNormalized(frame, plan.cutPath()[i]);
     if (std::abs(plan.cutPath()[i].y()) > 1.0)
       throw std::invalid_argument("cut point " + std::to_string(i) + " (" + whereText(s) +
-                                  ") is outside the scanned region (z from " + std::to_string(frame.zMin()) +
-                                  " to " + std::to_string(frame.zMax()) + " mm)");
+                                  ") is outside the scanned region (z from " + mmText(frame.zMin()) + " to " +
+                                  mmText(frame.zMax()) + " mm): move it, or the plan, inside the scan");
   }
   const SkinChart chart = plan.chart(skin);
   const auto path = plan.chartPath(chart);
   for (int i = 0; i + 1 < n; ++i)
     if ((path[i + 1] - path[i]).norm() < minSpacing)
       throw std::invalid_argument("cut points " + std::to_string(i) + " and " + std::to_string(i + 1) +
-                                  " are " + std::to_string((path[i + 1] - path[i]).norm()) +
-                                  " mm apart, closer than " + std::to_string(minSpacing) +
+                                  " are " + mmText((path[i + 1] - path[i]).norm()) +
+                                  " mm apart, closer than " + mmText(minSpacing) +
                                   " mm: move one of them or delete it");
   for (int i = 0; i + 1 < n; ++i)
     for (int j = i + 2; j + 1 < n; ++j)
@@ -274,7 +283,7 @@ void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSp
   if (twiceArea > 1e-9)
     throw std::invalid_argument("the excision's sides are swapped: border points 1.." + std::to_string(n - 2) +
                                 " open to the left of the cut (walking from its first point), their twins to "
-                                "the right");
+                                "the right: offset each border point away from its twin, to its own side");
   const double step = 0.5; // mm: finer than a range map cell on the sample CT
   for (int e = 0; e < loopSize; ++e)
   {

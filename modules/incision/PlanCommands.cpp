@@ -20,12 +20,15 @@
 #include "fem/ElementGeometry.h"
 #include "fem/VtuWriter.h"
 #include "modules/incision/IncisionLogic.h"
+#include "modules/incision/PlanDisplay.h"
+#include "modules/incision/PlanRecipe.h"
 #include "modules/incision/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
+#include "segmentation/SkinShade.h"
 
 namespace fs = std::filesystem;
 
@@ -36,7 +39,8 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 
 const char* kPlanUsage =
   "usage: caps plan CT --procedure ID --at THETA,Z --out DIR [--param NAME=VALUE ...]\n"
-  "                 [--element-size MM] [--series N|UID]\n"
+  "                 [--move I=THETA,Z ...] [--offset V=DU,DV ...] [--element-size MM] [--series N|UID]\n"
+  "       caps plan CT --replay PLAN.json --out DIR [--other-ct] [--move ...] [--offset ...] [...]\n"
   "\n"
   "Places a procedure on the patient's skin and predicts the result (thesis §4.4-4.6):\n"
   "segments the CT, unwraps skin and bone into range maps, places the procedure's cut\n"
@@ -44,14 +48,26 @@ const char* kPlanUsage =
   "(mm along the axis, as `caps rangemap` prints them), measures it on the skin, meshes\n"
   "the skin down to the bone, closes the sutures and writes into DIR:\n"
   "  measurements.csv     limb lengths and angles on the skin, excised area, Z-plasty gain\n"
-  "  skin-before.vtp      the meshed skin around the wound before the operation\n"
-  "  skin-after.vtp       the same surface after it (displacement in mm as point data)\n"
+  "  skin-before.vtp      the skin around the wound before the operation: element faces\n"
+  "                       subdivided 4 x 4 with the CT's skin detail (§4.7), shaded by the\n"
+  "                       tissue under the skin; displacement (mm), von Mises and mean\n"
+  "                       stress (kPa), strain and body coordinates as point data\n"
+  "  skin-after.vtp       the same surface after it\n"
   "  model.vtu            the finite element model with its displacements\n"
+  "  plan.json            the plan as the operations that made it, with the CT's SHA-256\n"
+  "                       and the CAPS version: --replay makes the same plan and prediction\n"
   "\n"
   "  --procedure ID       one of data/procedures/ (e.g. z-plasty, elliptical-excision)\n"
   "  --param NAME=VALUE   a parameter of the procedure in its file's units (mm, degrees,\n"
   "                       ratio); the others take their defaults\n"
-  "  --element-size MM    element size at the wound (default 2)\n"
+  "  --move I=THETA,Z     moves cut point I (from 0, in the scalpel's order) to THETA degrees,\n"
+  "                       Z mm; repeatable, applied in the order given after the placement\n"
+  "  --offset V=DU,DV     moves border point V of the hole away from its twin by DU, DV mm\n"
+  "                       (around the head, along the axis) to make an excision; repeatable\n"
+  "  --replay PLAN.json   instead of --procedure/--at/--param: rebuilds the plan of a plan.json\n"
+  "                       from its operations; refused when it was made on another CT\n"
+  "  --other-ct           replays a plan made on another CT (another scan or patient) anyway\n"
+  "  --element-size MM    element size at the wound (default 2, or the replayed plan's)\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
   "\n"
   "The tissue is linear elastic with assumed moduli (skin 0.15, fat 0.01, muscle\n"
@@ -59,13 +75,38 @@ const char* kPlanUsage =
   "Exit status: 0 when written, 1 when the CT or the plan cannot be used (the message\n"
   "says why), 2 on wrong usage.\n";
 
+/// A --move or --offset, in the order given.
+struct PlanEdit
+{
+  bool move = true; ///< else an offset
+  int index = 0;    ///< cut point or border point
+  double a = 0.0;   ///< degrees (move) or mm around the head (offset)
+  double b = 0.0;   ///< mm along the axis
+};
+
 struct PlanArgs : cli::CtCommandArgs
 {
   std::string procedure;
   std::optional<std::pair<double, double>> at; ///< degrees, mm
   std::map<std::string, double> params;        ///< file units
-  double elementSize = 2.0;
+  std::vector<PlanEdit> edits;
+  std::optional<fs::path> replay;
+  bool otherCt = false;
+  std::optional<double> elementSize; ///< mm; default 2, or the replayed plan's
 };
+
+/// "I=A,B" with I a whole number from 0 and A, B finite.
+bool parseEdit(const std::string& text, bool move, PlanEdit& edit)
+{
+  int index = -1;
+  char tail = 0;
+  edit.move = move;
+  if (std::sscanf(text.c_str(), "%d=%lf,%lf%c", &index, &edit.a, &edit.b, &tail) != 3 || index < 0 ||
+      !std::isfinite(edit.a) || !std::isfinite(edit.b))
+    return false;
+  edit.index = index;
+  return true;
+}
 
 std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs& parsed)
 {
@@ -98,11 +139,30 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
           return "--param needs NAME=VALUE, e.g. limb_angle=60";
         parsed.params[text.substr(0, eq)] = value;
       }
+      else if (a == "--move" || a == "--offset")
+      {
+        PlanEdit edit;
+        if (!hasValue || !parseEdit(args[++i], a == "--move", edit))
+          return a == "--move" ? "--move needs I=THETA,Z: the cut point (from 0) and where it goes in degrees "
+                                 "around the head axis and mm along it, e.g. 1=-92.5,3"
+                               : "--offset needs V=DU,DV: the border point (from 0) and its move in mm around "
+                                 "the head and along the axis, e.g. 2=0,1.5";
+        parsed.edits.push_back(edit);
+      }
+      else if (a == "--replay")
+      {
+        if (!hasValue)
+          return "--replay needs the plan.json that caps plan wrote";
+        parsed.replay = fs::path(args[++i]);
+      }
+      else if (a == "--other-ct")
+        parsed.otherCt = true;
       else if (a == "--element-size")
       {
-        if (!hasValue || !cli::parseNumber(args[++i], parsed.elementSize) || parsed.elementSize <= 0.2 ||
-            parsed.elementSize > 20.0)
+        double size = 0.0;
+        if (!hasValue || !cli::parseNumber(args[++i], size) || size <= 0.2 || size > 20.0)
           return "--element-size needs a length in mm between 0.2 and 20";
+        parsed.elementSize = size;
       }
       else
         return "unknown option " + a;
@@ -110,6 +170,15 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
     });
   if (problem || parsed.help)
     return problem;
+  if (parsed.replay)
+  {
+    if (!parsed.procedure.empty() || parsed.at || !parsed.params.empty())
+      return "--replay rebuilds the plan from its file: leave out --procedure, --at and --param (add --move "
+             "or --offset to change it)";
+    return std::nullopt;
+  }
+  if (parsed.otherCt)
+    return "--other-ct goes with --replay";
   if (parsed.procedure.empty())
     return "--procedure ID missing: which operation?";
   if (!parsed.at)
@@ -141,34 +210,6 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
     values[name] = p->unit == incision::ParameterUnit::Degree ? value * kDegree : value;
   }
   return values;
-}
-
-vtkSmartPointer<vtkPolyData> skinSurface(const incision::DisplacedSkin& skin, bool after)
-{
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToDouble();
-  auto displacement = vtkSmartPointer<vtkDoubleArray>::New();
-  displacement->SetName("displacement_mm");
-  displacement->SetNumberOfComponents(3);
-  for (std::size_t v = 0; v < skin.original.size(); ++v)
-  {
-    const Eigen::Vector3d& p = after ? skin.displaced[v] : skin.original[v];
-    points->InsertNextPoint(p.data());
-    const Eigen::Vector3d d = skin.displaced[v] - skin.original[v];
-    displacement->InsertNextTuple(d.data());
-  }
-  auto polys = vtkSmartPointer<vtkCellArray>::New();
-  for (const auto& polygon : skin.polygons)
-  {
-    polys->InsertNextCell(vtkIdType(polygon.size()));
-    for (int v : polygon)
-      polys->InsertCellPoint(v);
-  }
-  auto surface = vtkSmartPointer<vtkPolyData>::New();
-  surface->SetPoints(points);
-  surface->SetPolys(polys);
-  surface->GetPointData()->AddArray(displacement);
-  return surface;
 }
 
 void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m,
@@ -209,21 +250,50 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
   auto& logic = static_cast<IncisionLogic&>(moduleLogic);
   try
   {
-    // The procedure and its values first: a typo stops us before the long part.
-    const incision::ProcedureTemplate* procedure = logic.procedures().find(args.procedure);
-    if (!procedure)
+    // The procedure and its values (or the plan file) first: a typo stops us
+    // before the long part.
+    std::optional<incision::PlanRecipe> replay;
+    std::map<std::string, double> values;
+    if (args.replay)
     {
-      std::string known;
-      for (const auto& t : logic.procedures().procedures())
-        known += (known.empty() ? "" : ", ") + t.id();
-      throw std::invalid_argument("there is no procedure '" + args.procedure + "' (there are: " + known + ")");
+      replay = incision::readRecipe(*args.replay);
+      for (const auto& operation : replay->operations)
+        if (const auto* place = std::get_if<incision::PlaceProcedure>(&operation))
+          incision::findProcedure(logic.procedures(), place->procedure);
     }
-    const auto values = apiValues(*procedure, args.params);
-    procedure->resolveValues(values); // range errors now
+    else
+    {
+      const incision::ProcedureTemplate& procedure = incision::findProcedure(logic.procedures(), args.procedure);
+      // Every value recorded, defaults too: a default changed in the
+      // procedure file later does not change the replayed plan.
+      values = procedure.resolveValues(apiValues(procedure, args.params)); // range errors now
+    }
     cli::makeOutputFolder(args.out);
 
     args.read.progress = cli::consoleProgress(err);
     VolumeNode* volume = cli::loadCt(logic, args.ct, args.read, err);
+    const std::string ctHash = incision::ctContentHash(volume->image());
+    if (replay)
+    {
+      const std::string file = args.replay->string();
+      if (replay->ctSha256 != ctHash)
+      {
+        const std::string made = replay->ctSha256.empty() ? std::string("a CT it does not name")
+                                                           : "a CT of SHA-256 " + replay->ctSha256;
+        if (!args.otherCt)
+          throw std::invalid_argument(file + " was made on " + made + ", not on this CT (SHA-256 " + ctHash +
+                                      "): another scan or another patient. Replay it on the CT it was made on, "
+                                      "or give --other-ct to apply its operations to this CT anyway.");
+        err << "caps plan: warning: " << file << " was made on " << made
+            << "; its operations are applied to this CT (--other-ct), the prediction is a new one.\n";
+      }
+      if (replay->softwareVersion != incision::softwareVersion())
+        err << "caps plan: warning: " << file << " was made by CAPS "
+            << (replay->softwareVersion.empty() ? std::string("of an unknown version") : replay->softwareVersion)
+            << ", this is CAPS " << incision::softwareVersion()
+            << ": the plan is rebuilt from the same operations, but the prediction may differ from the one made "
+               "then.\n";
+    }
     // The range maps: those already in the scene when it holds this one CT
     // (`caps demo` made them a step earlier), else made now.
     RangeMapOutput maps;
@@ -250,17 +320,58 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
       }
     }
 
-    const incision::SkinPoint at{args.at->first * kDegree, args.at->second};
-    const incision::IncisionPlan plan = logic.placeProcedure(args.procedure, maps.skin, at, values);
+    // The plan as the operations that make it, each checked as it is applied.
+    incision::RecordedPlan recorded(ctHash);
+    if (replay)
+    {
+      try
+      {
+        for (const auto& operation : replay->operations)
+          recorded.apply(operation, maps.skin, logic.procedures());
+      }
+      catch (const incision::RecipeError& e)
+      {
+        throw incision::RecipeError(e.operation(), args.replay->string() + ": " + e.what());
+      }
+    }
+    else
+      recorded.apply(incision::PlaceProcedure{args.procedure, {args.at->first * kDegree, args.at->second}, values},
+                     maps.skin, logic.procedures());
+    for (const PlanEdit& e : args.edits)
+      if (e.move)
+        recorded.apply(incision::MoveCutPoint{e.index, incision::normalizedFromSkinPoint(
+                                                         maps.skin.frame(), {e.a * kDegree, e.b})},
+                       maps.skin, logic.procedures());
+      else
+        recorded.apply(incision::OffsetBorderPoint{e.index, {e.a, e.b}}, maps.skin, logic.procedures());
+    const incision::IncisionPlan& plan = recorded.plan();
+    // The prediction's element size is kept with the plan so a replay meshes the same.
+    const double elementSize =
+      args.elementSize.value_or(replay && replay->elementSize > 0.0 ? replay->elementSize : 2.0);
+    incision::PlanRecipe saved = recorded.recipe();
+    saved.elementSize = elementSize;
+    // Written before the long solve: the plan is kept even if the prediction fails.
+    incision::writeRecipe(saved, args.out / "plan.json");
+    const incision::ProcedureTemplate& procedure = incision::findProcedure(logic.procedures(), plan.procedure());
     const incision::PlanMeasurements measured = incision::measurePlan(plan, maps.skin);
     incision::SimulationOptions options;
-    options.elementSize = args.elementSize;
+    options.elementSize = elementSize;
     options.threads = 2;
     const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, plan, options);
+    // The meshed region cut short (a shape the mesher could not grow round,
+    // or the end of the scan) changes the prediction: say so.
+    if (!prediction.surface.message.empty())
+      err << "caps plan: note: " << prediction.surface.message
+          << (prediction.surface.stoppedEarly ? "; the skin beyond is left out of the model, which makes the closure "
+                                                "look easier than it is: move the plan points a little and run again"
+                                              : "")
+          << "\n";
 
     out << std::fixed << std::setprecision(1);
-    out << "Plan: " << procedure->title() << " at theta " << args.at->first << " deg, z " << args.at->second
-        << " mm\n";
+    if (replay)
+      out << "Replayed " << replay->operations.size() << " operations of " << args.replay->string() << "\n";
+    out << "Plan: " << procedure.title() << " at theta " << plan.centre().theta / kDegree << " deg, z "
+        << plan.centre().z << " mm, " << recorded.recipe().operations.size() << " operations\n";
     for (const auto& l : measured.limbs)
       out << "  limb p" << l.from << "-p" << l.to << ": " << l.skin << " mm on the skin\n";
     for (const auto& a : measured.limbAngles)
@@ -280,13 +391,16 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     out.unsetf(std::ios::floatfield);
 
     writeMeasurements(args.out / "measurements.csv", measured, prediction);
-    cli::writeVtp(skinSurface(prediction.skin, false), args.out / "skin-before.vtp");
-    cli::writeVtp(skinSurface(prediction.skin, true), args.out / "skin-after.vtp");
+    // The display surfaces (§4.7): subdivided skin faces with range detail,
+    // coloured by the tissue a little under the skin (the CT has no colour).
+    const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin);
+    incision::writePlanDisplay(incision::buildPlanDisplay(prediction, maps.skin, &shade),
+                               args.out / "skin-before.vtp", args.out / "skin-after.vtp");
     const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3,
                                                prediction.displacements.size() / 3);
     fem::writeVtu((args.out / "model.vtu").string(), prediction.continuum.mesh,
                   {{"displacement_mm", Eigen::MatrixXd(u)}});
-    for (const char* file : {"measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
+    for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
       out << "wrote " << (args.out / file).string() << "\n";
     return 0;
   }

@@ -1,0 +1,462 @@
+#include "modules/incision/PlanRecipe.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include <QByteArray>
+#include <QCryptographicHash>
+
+#include <vtkDataArray.h>
+#include <vtkImageData.h>
+#include <vtkMatrix3x3.h>
+#include <vtkPointData.h>
+
+#ifndef CAPS_VERSION
+#error "CAPS_VERSION must be defined (modules/incision/CMakeLists.txt)"
+#endif
+
+namespace fs = std::filesystem;
+
+namespace caps::incision {
+namespace {
+
+using json = nlohmann::json;
+
+const char* const formatName = "caps-plan";
+const char* const operationKinds = "place, move, offset, set-parameter";
+
+template <class... F>
+struct Overloaded : F...
+{
+  using F::operator()...;
+};
+
+std::string operationLabel(int number, const std::string& what)
+{
+  return "operation " + std::to_string(number) + " (" + what + ")";
+}
+
+/// @name Reading fields of one operation; RecipeError names the operation and field
+///@{
+struct OperationReader
+{
+  const json& j;
+  int number;
+  std::string kind;
+
+  [[noreturn]] void fail(const std::string& what) const
+  {
+    throw RecipeError(number, operationLabel(number, kind) + ": " + what);
+  }
+  const json& field(const char* key) const
+  {
+    const auto it = j.find(key);
+    if (it == j.end() || it->is_null())
+      fail(std::string("\"") + key + "\" is missing");
+    return *it;
+  }
+  double finite(const json& v, const std::string& what) const
+  {
+    if (!v.is_number() || !std::isfinite(v.get<double>()))
+      fail(what + " must be a finite number, not " + v.dump());
+    return v.get<double>();
+  }
+  double real(const char* key) const { return finite(field(key), std::string("\"") + key + "\""); }
+  int whole(const char* key) const
+  {
+    const json& v = field(key);
+    if (!v.is_number_integer() || v.get<long long>() < 0 || v.get<long long>() > 1000000)
+      fail(std::string("\"") + key + "\" must be a whole number from 0, not " + v.dump());
+    return int(v.get<long long>());
+  }
+  std::string text(const char* key) const
+  {
+    const json& v = field(key);
+    if (!v.is_string() || v.get<std::string>().empty())
+      fail(std::string("\"") + key + "\" must be a non-empty string, not " + v.dump());
+    return v.get<std::string>();
+  }
+  Eigen::Vector2d pair(const char* key) const
+  {
+    const json& v = field(key);
+    if (!v.is_array() || v.size() != 2)
+      fail(std::string("\"") + key + "\" must be two numbers [a, b], not " + v.dump());
+    const std::string what = std::string("\"") + key + "\"";
+    return {finite(v[0], what), finite(v[1], what)};
+  }
+};
+///@}
+
+/// Doubles as their IEEE-754 bits, integers as 64 bits, both little-endian,
+/// so the hash is the same on every machine.
+class HashInput
+{
+public:
+  HashInput() : sha_(QCryptographicHash::Sha256) {}
+  void bytes(const void* data, std::size_t size)
+  {
+    const char* p = static_cast<const char*>(data);
+    while (size > 0) // addData takes an int length
+    {
+      const std::size_t chunk = std::min<std::size_t>(size, std::size_t(1) << 30);
+      sha_.addData(p, int(chunk));
+      p += chunk;
+      size -= chunk;
+    }
+  }
+  void integer(std::int64_t v) { little(std::uint64_t(v)); }
+  void real(double v) { little(std::bit_cast<std::uint64_t>(v)); }
+  void text(const std::string& s)
+  {
+    integer(std::int64_t(s.size()));
+    bytes(s.data(), s.size());
+  }
+  std::string hex() const { return sha_.result().toHex().toStdString(); }
+
+private:
+  void little(std::uint64_t v)
+  {
+    unsigned char b[8];
+    for (int k = 0; k < 8; ++k)
+      b[k] = static_cast<unsigned char>(v >> (8 * k));
+    bytes(b, 8);
+  }
+  QCryptographicHash sha_;
+};
+
+bool isSha256Hex(const std::string& s)
+{
+  return s.size() == 64 && std::all_of(s.begin(), s.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
+IncisionPlan checked(IncisionPlan plan, const seg::RangeMap& skin)
+{
+  checkPlan(plan, skin);
+  return plan;
+}
+
+} // namespace
+
+std::string describe(const PlanOperation& operation)
+{
+  return std::visit(Overloaded{
+                      [](const PlaceProcedure& o) { return "place " + o.procedure; },
+                      [](const MoveCutPoint& o) { return "move cut point " + std::to_string(o.point); },
+                      [](const OffsetBorderPoint& o) { return "offset border point " + std::to_string(o.vertex); },
+                      [](const SetParameter& o) { return "set parameter " + o.name; },
+                    },
+                    operation);
+}
+
+const ProcedureTemplate& findProcedure(const ProcedureLibrary& library, const std::string& id)
+{
+  if (const ProcedureTemplate* t = library.find(id))
+    return *t;
+  std::string known;
+  for (const auto& t : library.procedures())
+    known += (known.empty() ? "" : ", ") + t.id();
+  std::string message = "there is no procedure '" + id + "' (" +
+                        (known.empty() ? std::string("the procedures folder has none that can be used")
+                                       : "there are: " + known) +
+                        ")";
+  if (!library.errors().empty())
+  {
+    // A file that fails validation is left out: say so, or the surgeon
+    // looks for a typo in a name that is right.
+    message += "; procedure files left out because they are wrong:";
+    for (const auto& e : library.errors())
+      message += "\n  " + e;
+    message += "\nfix the file or choose one of the procedures there are";
+  }
+  throw std::invalid_argument(message);
+}
+
+IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& operation, int number,
+                            const seg::RangeMap& skin, const ProcedureLibrary& library)
+{
+  const std::string label = operationLabel(number, describe(operation));
+  const auto needCut = [&]() {
+    if (plan.pointCount() == 0)
+      throw RecipeError(number, label + ": there is no cut yet; a plan starts by placing a procedure");
+  };
+  const auto needFinite = [&](const Eigen::Vector2d& v, const char* what) {
+    if (!v.allFinite())
+      throw RecipeError(number, label + ": the " + std::string(what) + " is not a number");
+  };
+  try
+  {
+    return std::visit(
+      Overloaded{
+        [&](const PlaceProcedure& o) {
+          if (!std::isfinite(o.at.theta) || !std::isfinite(o.at.z))
+            throw RecipeError(number, label + ": the centre is not a number");
+          return findProcedure(library, o.procedure).place(skin, o.at, o.values);
+        },
+        [&](const MoveCutPoint& o) {
+          needCut();
+          needFinite(o.thetaZN, "new position");
+          IncisionPlan next = plan;
+          next.moveCutPoint(o.point, o.thetaZN);
+          return checked(std::move(next), skin);
+        },
+        [&](const OffsetBorderPoint& o) {
+          needCut();
+          needFinite(o.offset, "offset");
+          IncisionPlan next = plan;
+          next.offsetBorderPoint(o.vertex, o.offset);
+          return checked(std::move(next), skin);
+        },
+        [&](const SetParameter& o) {
+          needCut();
+          if (plan.procedure().empty())
+            throw RecipeError(number, label + ": the cut was drawn by hand, not placed from a procedure; "
+                                              "it has no parameters to change");
+          if (!std::isfinite(o.value))
+            throw RecipeError(number, label + ": the value is not a number");
+          std::map<std::string, double> values = plan.parameters();
+          values[o.name] = o.value; // an unknown name: place() lists the parameters there are
+          return findProcedure(library, plan.procedure()).place(skin, plan.centre(), values);
+        },
+      },
+      operation);
+  }
+  catch (const RecipeError&)
+  {
+    throw;
+  }
+  catch (const std::exception& e)
+  {
+    throw RecipeError(number, label + ": " + e.what());
+  }
+}
+
+IncisionPlan applyRecipe(const PlanRecipe& recipe, const seg::RangeMap& skin, const ProcedureLibrary& library)
+{
+  if (recipe.operations.empty())
+    throw RecipeError(0, "the plan has no operations; it must start by placing a procedure");
+  IncisionPlan plan;
+  for (std::size_t k = 0; k < recipe.operations.size(); ++k)
+    plan = applyOperation(plan, recipe.operations[k], int(k + 1), skin, library);
+  return plan;
+}
+
+RecordedPlan::RecordedPlan(std::string ctSha256)
+{
+  recipe_.ctSha256 = std::move(ctSha256);
+  recipe_.softwareVersion = softwareVersion();
+}
+
+void RecordedPlan::apply(const PlanOperation& operation, const seg::RangeMap& skin, const ProcedureLibrary& library)
+{
+  IncisionPlan next = applyOperation(plan_, operation, int(recipe_.operations.size() + 1), skin, library);
+  recipe_.operations.push_back(operation); // may throw bad_alloc: nothing changed yet
+  plan_ = std::move(next);
+}
+
+json operationToJson(const PlanOperation& operation)
+{
+  return std::visit(Overloaded{
+                      [](const PlaceProcedure& o) {
+                        return json{{"operation", "place"}, {"procedure", o.procedure}, {"theta", o.at.theta},
+                                    {"z", o.at.z},          {"values", o.values}};
+                      },
+                      [](const MoveCutPoint& o) {
+                        return json{{"operation", "move"},
+                                    {"point", o.point},
+                                    {"thetaZN", {o.thetaZN.x(), o.thetaZN.y()}}};
+                      },
+                      [](const OffsetBorderPoint& o) {
+                        return json{{"operation", "offset"},
+                                    {"vertex", o.vertex},
+                                    {"offset", {o.offset.x(), o.offset.y()}}};
+                      },
+                      [](const SetParameter& o) {
+                        return json{{"operation", "set-parameter"}, {"name", o.name}, {"value", o.value}};
+                      },
+                    },
+                    operation);
+}
+
+PlanOperation operationFromJson(const json& j, int number)
+{
+  if (!j.is_object())
+    throw RecipeError(number, "operation " + std::to_string(number) +
+                                " must be an object like {\"operation\": \"move\", ...}, not " + j.dump());
+  const auto kindIt = j.find("operation");
+  if (kindIt == j.end() || !kindIt->is_string())
+    throw RecipeError(number, "operation " + std::to_string(number) +
+                                " does not say which operation it is: give \"operation\": one of " +
+                                operationKinds);
+  OperationReader r{j, number, kindIt->get<std::string>()};
+  if (r.kind == "place")
+  {
+    PlaceProcedure o;
+    o.procedure = r.text("procedure");
+    o.at = {r.real("theta"), r.real("z")};
+    const json& values = r.field("values");
+    if (!values.is_object())
+      r.fail("\"values\" must be an object of parameter names and numbers, not " + values.dump());
+    for (const auto& [name, value] : values.items())
+      o.values[name] = r.finite(value, "parameter \"" + name + "\"");
+    return o;
+  }
+  if (r.kind == "move")
+    return MoveCutPoint{r.whole("point"), r.pair("thetaZN")};
+  if (r.kind == "offset")
+    return OffsetBorderPoint{r.whole("vertex"), r.pair("offset")};
+  if (r.kind == "set-parameter")
+    return SetParameter{r.text("name"), r.real("value")};
+  throw RecipeError(number, "operation " + std::to_string(number) + " is '" + r.kind +
+                              "', which this CAPS does not know; the operations are " + operationKinds +
+                              " (a newer CAPS may have written the file)");
+}
+
+json recipeToJson(const PlanRecipe& recipe)
+{
+  json operations = json::array();
+  for (const auto& o : recipe.operations)
+    operations.push_back(operationToJson(o));
+  json j{{"format", formatName},
+         {"formatVersion", recipeFormatVersion},
+         {"softwareVersion", recipe.softwareVersion},
+         {"ctSha256", recipe.ctSha256},
+         {"operations", std::move(operations)}};
+  if (recipe.elementSize > 0.0)
+    j["simulation"] = {{"elementSize", recipe.elementSize}};
+  return j;
+}
+
+PlanRecipe recipeFromJson(const json& j)
+{
+  const auto bad = [](const std::string& what) { throw RecipeError(0, what); };
+  if (!j.is_object())
+    bad("a plan file is a JSON object with \"format\": \"caps-plan\" and \"operations\", not " +
+        j.dump().substr(0, 80));
+  if (!j.contains("format") || j["format"] != formatName)
+    bad("this is not a CAPS plan: \"format\" must be \"caps-plan\" (caps plan writes it as plan.json)");
+  const auto version = j.find("formatVersion");
+  if (version == j.end() || !version->is_number_integer() || version->get<long long>() < 1)
+    bad("\"formatVersion\" must be a whole number from 1");
+  if (version->get<long long>() > recipeFormatVersion)
+    bad("the plan was written in plan format " + version->dump() + " by a newer CAPS; this one reads format " +
+        std::to_string(recipeFormatVersion) + ": update CAPS to replay it");
+  PlanRecipe recipe;
+  for (const auto& [key, out] : {std::pair{"softwareVersion", &recipe.softwareVersion},
+                                 std::pair{"ctSha256", &recipe.ctSha256}})
+    if (const auto it = j.find(key); it != j.end() && !it->is_null())
+    {
+      if (!it->is_string())
+        bad(std::string("\"") + key + "\" must be a string, not " + it->dump());
+      *out = it->get<std::string>();
+    }
+  if (!recipe.ctSha256.empty() && !isSha256Hex(recipe.ctSha256))
+    bad("\"ctSha256\" must be 64 lowercase hex digits (the SHA-256 of the CT), not \"" + recipe.ctSha256 + "\"");
+  const auto operations = j.find("operations");
+  if (operations == j.end() || !operations->is_array())
+    bad("\"operations\" must be a list of operations");
+  for (std::size_t k = 0; k < operations->size(); ++k)
+    recipe.operations.push_back(operationFromJson((*operations)[k], int(k + 1)));
+  if (const auto simulation = j.find("simulation"); simulation != j.end() && !simulation->is_null())
+  {
+    const auto size = simulation->is_object() ? simulation->find("elementSize") : simulation->end();
+    if (size == simulation->end() || !size->is_number() || !(size->get<double>() > 0.0) ||
+        !std::isfinite(size->get<double>()))
+      bad("\"simulation\" must be {\"elementSize\": MM} with a positive size, not " + simulation->dump());
+    recipe.elementSize = size->get<double>();
+  }
+  return recipe;
+}
+
+void writeRecipe(const PlanRecipe& recipe, const fs::path& file)
+{
+  const fs::path beside = file.string() + ".writing";
+  {
+    std::ofstream out(beside, std::ios::binary | std::ios::trunc);
+    out << recipeToJson(recipe).dump(2) << "\n";
+    if (!out)
+      throw std::runtime_error("cannot write " + beside.string() + ": check the folder's permissions and space");
+  }
+  std::error_code ec;
+  fs::rename(beside, file, ec);
+  if (ec)
+    throw std::runtime_error("cannot write " + file.string() + ": " + ec.message());
+}
+
+PlanRecipe readRecipe(const fs::path& file)
+{
+  std::ifstream in(file, std::ios::binary);
+  if (!in)
+    throw RecipeError(0, "cannot read the plan file " + file.string() + ": check the path (caps plan writes "
+                         "DIR/plan.json)");
+  json j;
+  try
+  {
+    j = json::parse(in);
+  }
+  catch (const json::parse_error& e)
+  {
+    throw RecipeError(0, file.string() + " is not a plan file: it is not JSON (" + e.what() +
+                           "); give the plan.json that caps plan wrote");
+  }
+  try
+  {
+    return recipeFromJson(j);
+  }
+  catch (const RecipeError& e)
+  {
+    throw RecipeError(e.operation(), file.string() + ": " + e.what());
+  }
+}
+
+std::string ctContentHash(vtkImageData* image)
+{
+  vtkDataArray* scalars = image && image->GetPointData() ? image->GetPointData()->GetScalars() : nullptr;
+  if (!scalars || image->GetNumberOfPoints() == 0)
+    throw std::invalid_argument("the CT has no voxels to fingerprint: read it again");
+  HashInput h;
+  h.text("CAPS CT content 1"); // the layout of what follows; change it with the layout
+  int dims[3], extent[6];
+  image->GetDimensions(dims);
+  image->GetExtent(extent);
+  for (int k = 0; k < 3; ++k)
+    h.integer(dims[k]);
+  for (int k = 0; k < 3; ++k)
+    h.integer(extent[2 * k]);
+  for (const double* v : {image->GetSpacing(), image->GetOrigin()})
+    for (int k = 0; k < 3; ++k)
+      h.real(v[k]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      h.real(image->GetDirectionMatrix()->GetElement(r, c));
+  h.text(scalars->GetDataTypeAsString());
+  h.integer(scalars->GetNumberOfComponents());
+  const std::size_t size = std::size_t(scalars->GetDataTypeSize());
+  const std::size_t count = std::size_t(scalars->GetNumberOfTuples()) * std::size_t(scalars->GetNumberOfComponents());
+  h.integer(std::int64_t(count));
+  const auto* voxels = static_cast<const unsigned char*>(scalars->GetVoidPointer(0));
+  if constexpr (std::endian::native == std::endian::little)
+    h.bytes(voxels, size * count);
+  else
+  {
+    std::vector<unsigned char> swapped(size * std::min<std::size_t>(count, 1 << 20));
+    for (std::size_t first = 0; first < count; first += swapped.size() / size)
+    {
+      const std::size_t n = std::min(count - first, swapped.size() / size);
+      for (std::size_t i = 0; i < n; ++i)
+        std::reverse_copy(voxels + (first + i) * size, voxels + (first + i + 1) * size, swapped.data() + i * size);
+      h.bytes(swapped.data(), n * size);
+    }
+  }
+  return h.hex();
+}
+
+std::string softwareVersion() { return CAPS_VERSION; }
+
+} // namespace caps::incision

@@ -1,0 +1,189 @@
+#pragma once
+/// @file PlanRecipe.h
+/// @brief A plan as the list of operations that made it (issue 5 item 8):
+/// the procedure placed, its parameters, the points moved and offset, with
+/// the content hash of the CT it was made on and the software version, so
+/// rerunning it on the same CT gives the same prediction bit for bit.
+///
+/// An operation applied to a plan gives a new plan or throws RecipeError
+/// naming the operation; the plan it was applied to is not touched (the plan
+/// is a value). The format of plan.json is documented at recipeToJson().
+
+#include <filesystem>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "modules/incision/IncisionPlan.h"
+#include "modules/incision/ProcedureTemplate.h"
+
+class vtkImageData;
+
+namespace caps::incision {
+
+/// @name Operations a surgeon makes on a plan
+///@{
+/// Places a procedure centred at a skin point (θ radians, z mm) with
+/// parameter values in API units (mm, radians, ratios). It starts the plan
+/// afresh: whatever was drawn before is replaced.
+struct PlaceProcedure
+{
+  std::string procedure; ///< "z-plasty"
+  SkinPoint at;
+  std::map<std::string, double> values;
+};
+
+/// Moves cut point `point` (0-based, scalpel order) to (θn, zn).
+///
+/// Normalised cylindrical coordinates because that is what the plan stores:
+/// replaying sets the very same doubles, with no conversion through the
+/// chart or the frame that could round differently.
+struct MoveCutPoint
+{
+  int point = 0;
+  Eigen::Vector2d thetaZN = Eigen::Vector2d::Zero();
+};
+
+/// Moves border point `vertex` (hole-loop numbering, Fig. 4.11) away from
+/// its twin by `offset` in the plan's chart (mm) to make an excision (§4.4.4).
+struct OffsetBorderPoint
+{
+  int vertex = 0;
+  ChartPoint offset = ChartPoint::Zero();
+};
+
+/// Changes one parameter of the placed procedure: the procedure is placed
+/// again at the same centre with the other values as they were. The
+/// template draws the cut afresh, so moves and offsets made since the last
+/// placement are dropped, as they are when the panel's slider moves.
+struct SetParameter
+{
+  std::string name; ///< "limb_angle"
+  double value = 0.0; ///< API units
+};
+
+using PlanOperation = std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter>;
+
+/// What an operation does, for messages: "place z-plasty", "move cut point 2",
+/// "offset border point 4", "set parameter limb_angle".
+std::string describe(const PlanOperation& operation);
+///@}
+
+/// A plan file or an operation that cannot be used. operation() is the
+/// 1-based number of the operation at fault, 0 when the recipe as a whole is.
+class RecipeError : public std::invalid_argument
+{
+public:
+  RecipeError(int operation, const std::string& message) : std::invalid_argument(message), operation_(operation) {}
+  int operation() const { return operation_; }
+
+private:
+  int operation_;
+};
+
+/// The operations that made a plan, and what they were applied to.
+struct PlanRecipe
+{
+  /// ctContentHash() of the CT the plan was made on; empty when unknown.
+  std::string ctSha256;
+  /// softwareVersion() of the CAPS that recorded it.
+  std::string softwareVersion;
+  std::vector<PlanOperation> operations;
+  /// The element size at the wound (mm, SimulationOptions) the prediction
+  /// was made with, so a replay meshes the same; 0 when not recorded.
+  double elementSize = 0.0;
+};
+
+/// @brief Applies operation number `number` (1-based, for messages) to @a plan.
+///
+/// Every result is checked with checkPlan() on @a skin, so a move that makes
+/// limbs cross, a point off the scan or too close to its neighbour is refused.
+/// @throws RecipeError "operation N (move cut point 2): WHAT IS WRONG ..."
+/// naming the operation; @a plan is never changed.
+IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& operation, int number,
+                            const seg::RangeMap& skin, const ProcedureLibrary& library);
+
+/// The plan the recipe's operations make on @a skin, from nothing.
+/// @throws RecipeError for an empty recipe or the first operation refused.
+IncisionPlan applyRecipe(const PlanRecipe& recipe, const seg::RangeMap& skin, const ProcedureLibrary& library);
+
+/// @class RecordedPlan
+/// @brief A plan and the recipe that made it, edited together: an operation
+/// is recorded only when the plan accepts it.
+class RecordedPlan
+{
+public:
+  RecordedPlan() = default;
+  /// Starts an empty plan on a CT (ctContentHash()) with this software's version.
+  explicit RecordedPlan(std::string ctSha256);
+
+  const IncisionPlan& plan() const { return plan_; }
+  const PlanRecipe& recipe() const { return recipe_; }
+
+  /// Applies and records @a operation.
+  /// @throws RecipeError (see applyOperation()); plan and recipe stay as they were.
+  void apply(const PlanOperation& operation, const seg::RangeMap& skin, const ProcedureLibrary& library);
+
+private:
+  IncisionPlan plan_;
+  PlanRecipe recipe_;
+};
+
+/// The procedure of that id.
+/// @throws std::invalid_argument listing the procedures there are and the
+/// files left out of the library with their errors (a file with
+/// inconsistent sutures is left out, not loaded).
+const ProcedureTemplate& findProcedure(const ProcedureLibrary& library, const std::string& id);
+
+/// @name plan.json
+///@{
+/// The version of the plan file's layout; a file of a later one is refused.
+inline constexpr int recipeFormatVersion = 1;
+
+/// @brief The recipe as JSON:
+/// @code
+/// { "format": "caps-plan", "formatVersion": 1, "softwareVersion": "0.1.0",
+///   "ctSha256": "3f2a…(64 hex digits)",
+///   "operations": [
+///     { "operation": "place", "procedure": "z-plasty", "theta": -1.5707963267948966, "z": 0.0,
+///       "values": { "axis_angle": 0.0, "central_length": 20.0, "limb_angle": 1.0471975511965976 } },
+///     { "operation": "move", "point": 1, "thetaZN": [-0.49, 0.012] },
+///     { "operation": "offset", "vertex": 2, "offset": [0.0, 1.5] },
+///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 } ],
+///   "simulation": { "elementSize": 2.5 } }
+/// @endcode
+/// "simulation" is left out when elementSize is 0.
+/// Angles in radians, lengths in mm, as the API; doubles are written to the
+/// last bit (nlohmann-json writes the shortest text that reads back exactly).
+nlohmann::json recipeToJson(const PlanRecipe& recipe);
+/// @throws RecipeError naming the field or the operation that is wrong.
+PlanRecipe recipeFromJson(const nlohmann::json& json);
+nlohmann::json operationToJson(const PlanOperation& operation);
+/// @throws RecipeError naming operation `number` (1-based).
+PlanOperation operationFromJson(const nlohmann::json& json, int number);
+
+/// Writes plan.json atomically (beside, then renamed).
+/// @throws std::runtime_error when it cannot be written.
+void writeRecipe(const PlanRecipe& recipe, const std::filesystem::path& file);
+/// @throws RecipeError naming the file and what is wrong with it.
+PlanRecipe readRecipe(const std::filesystem::path& file);
+///@}
+
+/// @brief SHA-256 of a CT's content, as 64 lowercase hex digits.
+///
+/// Hashes the voxel values (scalar type, components, every voxel as stored,
+/// little-endian) and the geometry (dimensions, extent start, spacing,
+/// origin, direction matrix) and nothing else: not the file names, their
+/// order or the DICOM fields, so the same scan read twice or copied under
+/// other names hashes the same and a changed voxel or spacing does not.
+/// @throws std::invalid_argument for an image without voxels.
+std::string ctContentHash(vtkImageData* image);
+
+/// The CAPS version (CMake's project version, "0.1.0").
+std::string softwareVersion();
+
+} // namespace caps::incision
