@@ -252,8 +252,33 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   surfaceOptions.firstLayerThickness = options.elementSize;
   surfaceOptions.layerGrowth = options.layerGrowth;
   surfaceOptions.regionRadius = options.regionRadius;
-  surfaceOptions.vMin = frame.zMin() - chart.centreZ();
-  surfaceOptions.vMax = frame.zMax() - chart.centreZ();
+  // The chart bounds: where the scan ends across the plan's width. A CT
+  // often cuts the head (the top slice, the neck), leaving rows at the ends
+  // of the frame with no or only part of the skin; the region stops at the
+  // first fully measured row from each end. Holes further in are not an end
+  // of the scan: the checks below name them.
+  {
+    double extent = 0.0;
+    for (const auto& p : out.hole.points)
+      extent = std::max(extent, std::abs(p.x()));
+    const double halfWidth = std::min(pi, (extent + options.regionRadius + options.elementSize) / chart.radius());
+    const double ic = frame.thetaToIndex(chart.centreTheta()), di = halfWidth / (2 * pi) * frame.nTheta();
+    const int i0 = int(std::floor(ic - di)), i1 = int(std::ceil(ic + di));
+    auto rowMeasured = [&](int j) {
+      for (int i = i0; i <= i1; ++i)
+        if (!std::isfinite(skin.at(((i % frame.nTheta()) + frame.nTheta()) % frame.nTheta(), j)))
+          return false;
+      return true;
+    };
+    const double jc = frame.zToIndex(chart.centreZ());
+    int top = frame.nZ() - 1, bottom = 0;
+    while (top > jc && !rowMeasured(top))
+      --top;
+    while (bottom < jc && !rowMeasured(bottom))
+      ++bottom;
+    surfaceOptions.vMin = frame.indexToZ(bottom) - chart.centreZ();
+    surfaceOptions.vMax = frame.indexToZ(top) - chart.centreZ();
+  }
   surfaceOptions.minPointSpacing = std::min(1.0, 0.4 * options.elementSize);
   out.surface = fem::meshAroundHole(out.hole, surfaceOptions);
   if (!out.surface.quality.valid())
@@ -338,12 +363,14 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   fem::AssemblyOptions assembly;
   assembly.threads = options.threads;
   fem::LinearStaticAnalysis analysis(out.continuum.mesh, out.materials, out.continuum.constraints(), assembly);
+  const auto prepareStart = std::chrono::steady_clock::now();
   const fem::SolverStatus status = analysis.prepare();
+  const double prepareWall = secondsSince(prepareStart);
   if (status != fem::SolverStatus::Success)
     throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
   out.displacements = analysis.solve(fem::LoadCase{});
   out.times.assemble = analysis.times().assemble + analysis.times().constrain;
-  out.times.factor = analysis.times().analyse + analysis.times().factor;
+  out.times.factor = std::max(0.0, prepareWall - out.times.assemble);
   out.times.solve = analysis.times().solve;
   out.dofCount = out.continuum.mesh.dofCount();
   out.reducedDofCount = analysis.constraintMap().reducedCount();

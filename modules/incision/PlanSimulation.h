@@ -76,7 +76,9 @@ struct SimulationTimes
 {
   double mesh = 0.0;     ///< surface and continuum meshing
   double assemble = 0.0; ///< stiffness assembly and constraint reduction
-  double factor = 0.0;   ///< ordering, symbolic and numeric factorisation
+  /// Ordering, symbolic and numeric factorisation: the wall time they add
+  /// after the assembly (the ordering runs on its own thread beside it).
+  double factor = 0.0;
   double solve = 0.0;    ///< substitution and expansion
 };
 

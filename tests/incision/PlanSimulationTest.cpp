@@ -260,16 +260,32 @@ TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
   IncisionPlan off({{0.0, 0.0}, {0.05, 0.0}}, SkinPoint{0.0, 150.0});
   EXPECT_THROW(simulatePlan(ph.skin, ph.bone, off, testOptions()), std::invalid_argument);
 
-  // A hole in the skin map 12 mm from the wound, inside the meshed region.
+  // A hole in the skin map 12 mm from the wound, inside the meshed region
+  // (a patch: rows empty all round are an edge of the scan, see below).
   seg::RangeMap holed = ph.skin;
   for (int j = 0; j < holed.nZ(); ++j)
   {
     const double z = holed.frame().indexToZ(j);
     if (z > 10.0 && z < 14.0)
       for (int i = 0; i < holed.nTheta(); ++i)
-        holed.at(i, j) = seg::RangeMap::quietNaN();
+        if (std::abs(holed.frame().indexToTheta(i)) < 0.1)
+          holed.at(i, j) = seg::RangeMap::quietNaN();
   }
   const IncisionPlan plan = procedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
+  {
+    // Rows with no skin across the plan's width are where the scan ends: the
+    // region stops at the last measured row.
+    seg::RangeMap cut = ph.skin;
+    for (int j = 0; j < cut.nZ(); ++j)
+      if (cut.frame().indexToZ(j) > 10.0)
+        for (int i = 0; i < cut.nTheta(); ++i)
+          cut.at(i, j) = seg::RangeMap::quietNaN();
+    const PlanPrediction p = simulatePlan(cut, ph.bone, plan, testOptions());
+    EXPECT_TRUE(p.surface.reachedChartBound);
+    EXPECT_LT(p.maxSutureGap, 1e-9);
+    for (const auto& v : p.surface.mesh.vertices)
+      EXPECT_LE(v.y(), 10.0);
+  }
   try
   {
     simulatePlan(holed, ph.bone, plan, testOptions());
