@@ -1,6 +1,14 @@
 #include "modules/incision/IncisionLogic.h"
 
+#include "fem/VtuWriter.h"
+#include "scene/FeMeshNode.h"
 #include "scene/PlanNode.h"
+#include "scene/Scene.h"
+#include "scene/SolutionNode.h"
+#include "scene/SurfaceNode.h"
+
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 
 #include <stdexcept>
 
@@ -96,6 +104,73 @@ std::optional<incision::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& no
   {
     throw incision::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
   }
+}
+
+namespace {
+
+/// The FE mesh (and point arrays) as a VTK grid, through the VTU document
+/// the model files are written as, so scene and files hold the same thing.
+vtkSmartPointer<vtkUnstructuredGrid> gridOf(const fem::Mesh& mesh, const std::vector<fem::VtuArray>& pointData)
+{
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->ReadFromInputStringOn();
+  reader->SetInputString(fem::vtuDocument(mesh, pointData));
+  reader->Update();
+  vtkSmartPointer<vtkUnstructuredGrid> grid = reader->GetOutput();
+  if (!grid || grid->GetNumberOfPoints() != mesh.nodeCount())
+    throw std::runtime_error("the finite element model could not be put into the scene (VTU conversion failed)");
+  return grid;
+}
+
+} // namespace
+
+IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& name, const incision::IncisionPlan& plan,
+                                                            const incision::PlanRecipe& recipe,
+                                                            const incision::PlanPrediction& prediction,
+                                                            const incision::PlanDisplay& display,
+                                                            const NodeId& skinMapId)
+{
+  // Everything built first, so a failure leaves the scene as it was.
+  const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3,
+                                             prediction.displacements.size() / 3);
+  vtkSmartPointer<vtkUnstructuredGrid> meshGrid = gridOf(prediction.continuum.mesh, {});
+  vtkSmartPointer<vtkUnstructuredGrid> resultGrid =
+    gridOf(prediction.continuum.mesh, {{"displacement_mm", Eigen::MatrixXd(u)}});
+  vtkSmartPointer<vtkPolyData> before = incision::planDisplayPolyData(display, 0.0);
+  vtkSmartPointer<vtkPolyData> after = incision::planDisplayPolyData(display, 1.0);
+
+  PredictionNodes ids;
+  auto* planNode = scene().add<PlanNode>();
+  planNode->setName(name);
+  writePlan(plan, *planNode);
+  writeRecipe(recipe, *planNode);
+  planNode->setRangeMapId(skinMapId);
+  ids.plan = planNode->id();
+
+  auto* meshNode = scene().add<FeMeshNode>();
+  meshNode->setName(name + " model");
+  meshNode->setMesh(meshGrid);
+  meshNode->setPlanId(ids.plan);
+  ids.mesh = meshNode->id();
+
+  auto* solution = scene().add<SolutionNode>();
+  solution->setName(name + " closure");
+  solution->setMeshId(ids.mesh);
+  solution->setLoadCase("sutures closed");
+  solution->setResult(resultGrid);
+  ids.solution = solution->id();
+
+  const auto surface = [&](vtkSmartPointer<vtkPolyData> data, const std::string& when, bool visible) {
+    auto* node = scene().add<SurfaceNode>();
+    node->setName(name + " skin " + when);
+    node->setPolyData(data);
+    node->setColor({0.93, 0.78, 0.69});
+    node->setVisible(visible);
+    return node->id();
+  };
+  ids.skinBefore = surface(before, "before", false);
+  ids.skinAfter = surface(after, "after", true);
+  return ids;
 }
 
 } // namespace caps

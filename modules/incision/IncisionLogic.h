@@ -10,9 +10,12 @@
 
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionPlan.h"
+#include "modules/incision/PlanDisplay.h"
+#include "modules/incision/PlanSimulation.h"
 #include "modules/incision/PlanRecipe.h"
 #include "modules/incision/ProcedureTemplate.h"
 #include "modules/incision/SkinMeasurements.h"
+#include "scene/Node.h"
 
 namespace caps {
 
@@ -56,6 +59,19 @@ public:
   /// kept their recipe (the plan itself still reads with readPlan()).
   /// @throws incision::RecipeError naming the plan and the operation at fault.
   static std::optional<incision::PlanRecipe> readRecipe(const PlanNode& node);
+
+  /// The scene nodes of a predicted plan.
+  struct PredictionNodes
+  {
+    NodeId plan, mesh, solution, skinBefore, skinAfter;
+  };
+  /// Puts a predicted plan into the scene (issue 5 item 6): a Plan node
+  /// (plan and recipe, drawn on @a skinMapId), its FeMesh node, the Solution
+  /// node with the displacements, and the display surfaces before and after
+  /// the operation (Surface nodes, §4.7). @a name names them ("Z-plasty 1").
+  PredictionNodes addPrediction(const std::string& name, const incision::IncisionPlan& plan,
+                                const incision::PlanRecipe& recipe, const incision::PlanPrediction& prediction,
+                                const incision::PlanDisplay& display, const NodeId& skinMapId);
   ///@}
 
   /// The plan a recipe makes on @a skin with this logic's procedures

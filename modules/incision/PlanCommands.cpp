@@ -297,6 +297,7 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     // The range maps: those already in the scene when it holds this one CT
     // (`caps demo` made them a step earlier), else made now.
     RangeMapOutput maps;
+    NodeId skinMapId;
     {
       const RangeMapNode* skinNode = nullptr;
       const RangeMapNode* boneNode = nullptr;
@@ -312,11 +313,12 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
       {
         maps.skin = RangeMapLogic::toRangeMap(*skinNode);
         maps.bone = RangeMapLogic::toRangeMap(*boneNode);
+        skinMapId = skinNode->id();
       }
       else
       {
         RangeMapLogic rangeMaps(logic.scene());
-        rangeMaps.run(*volume, RangeMapLogic::Parameters{}, cli::consoleProgress(err), &maps);
+        skinMapId = rangeMaps.run(*volume, RangeMapLogic::Parameters{}, cli::consoleProgress(err), &maps).skinId;
       }
     }
 
@@ -394,8 +396,12 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     // The display surfaces (§4.7): subdivided skin faces with range detail,
     // coloured by the tissue a little under the skin (the CT has no colour).
     const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin);
-    incision::writePlanDisplay(incision::buildPlanDisplay(prediction, maps.skin, &shade),
-                               args.out / "skin-before.vtp", args.out / "skin-after.vtp");
+    const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, maps.skin, &shade);
+    incision::writePlanDisplay(display, args.out / "skin-before.vtp", args.out / "skin-after.vtp");
+    // And into the scene (`caps demo` saves it), numbered among the plans there.
+    const std::string name = procedure.title() + " " +
+                             std::to_string(logic.scene().nodesOfType(NodeType::Plan).size() + 1);
+    logic.addPrediction(name, plan, saved, prediction, display, skinMapId);
     const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3,
                                                prediction.displacements.size() / 3);
     fem::writeVtu((args.out / "model.vtu").string(), prediction.continuum.mesh,
