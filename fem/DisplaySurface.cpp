@@ -17,44 +17,6 @@ namespace caps::fem {
 
 namespace {
 
-/// A face as a linear map of the natural coordinates, rst = origin + a p + b q
-/// with a, b in [-1, 1], or for a triangle a, b >= 0, a + b <= 1; the faces
-/// of FacePressure (CalculiX numbering). sign = +1 if p × q points out of the
-/// reference element, so stepping a then b (Table 4.8's scan directions)
-/// winds the polygons outwards.
-struct FaceChart {
-  Eigen::Vector3d origin, p, q;
-  bool triangle = false;
-  double sign = 1.0;
-};
-
-FaceChart faceChart(ElementKind kind, int face) {
-  if (face < 1 || face > faceCount(kind))
-    throw std::invalid_argument("face " + std::to_string(face) + " does not exist: " +
-                                (kind == ElementKind::Wedge15 ? "a native wedge has faces 1..5"
-                                                              : "a hexahedron has faces 1..6"));
-  if (kind == ElementKind::Wedge15) {
-    switch (face) {
-      case 1: return {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}, true, -1.0};          // t = -1
-      case 2: return {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, true, 1.0};            // t = +1
-      case 3: return {{0.5, 0, 0}, {0.5, 0, 0}, {0, 0, 1}, false, 1.0};       // s = 0
-      case 4: return {{0.5, 0.5, 0}, {-0.5, 0.5, 0}, {0, 0, 1}, false, 1.0};  // r + s = 1
-      default: return {{0, 0.5, 0}, {0, 0.5, 0}, {0, 0, 1}, false, -1.0};     // r = 0
-    }
-  }
-  // C3D20 faces 1..6: t = -1, t = +1, s = -1, r = +1, s = +1, r = -1; with
-  // (axis, p, q) cyclic, p × q points to +axis.
-  static const int axis[6] = {2, 2, 1, 0, 1, 0};
-  static const double side[6] = {-1, 1, -1, 1, 1, -1};
-  const int a = axis[face - 1];
-  FaceChart c;
-  c.origin = side[face - 1] * Eigen::Vector3d::Unit(a);
-  c.p = Eigen::Vector3d::Unit((a + 1) % 3);
-  c.q = Eigen::Vector3d::Unit((a + 2) % 3);
-  c.sign = side[face - 1];
-  return c;
-}
-
 int cornerCount(ElementKind kind) { return kind == ElementKind::Wedge15 ? kWedge15CornerCount : kHex20CornerCount; }
 
 /// Corner slots of a face in the order of its chart's corners: (a, b) =

@@ -10,22 +10,14 @@ namespace caps::fem {
 
 namespace {
 
-/// A face as a linear map of the natural coordinates, xi = origin + a p + b q
-/// with a, b in [-1, 1], or for a triangle a, b >= 0, a + b <= 1.
-struct FaceMap {
-  Eigen::Vector3d origin, p, q;
-  bool triangle = false;
-  double sign = 1.0;  ///< +1 if p × q points out of the reference element
-};
-
 // CalculiX C3D20 faces 1..6 (ccx manual, *DLOAD: 1-2-3-4, 5-8-7-6, 1-5-6-2,
 // 2-6-7-3, 3-7-8-4, 4-8-5-1): t = -1, t = +1, s = -1, r = +1, s = +1, r = -1.
 // With (axis, p, q) cyclic, p × q points to +axis, so sign = side.
-FaceMap hexFaceMap(int face) {
+FaceChart hexFaceChart(int face) {
   static const int axis[6] = {2, 2, 1, 0, 1, 0};
   static const double side[6] = {-1, 1, -1, 1, 1, -1};
   const int a = axis[face - 1];
-  FaceMap m;
+  FaceChart m;
   m.origin = side[face - 1] * Eigen::Vector3d::Unit(a);
   m.p = Eigen::Vector3d::Unit((a + 1) % 3);
   m.q = Eigen::Vector3d::Unit((a + 2) % 3);
@@ -35,8 +27,8 @@ FaceMap hexFaceMap(int face) {
 
 // CalculiX C3D15 faces 1..5 (1-2-3, 4-5-6, 1-2-5-4, 2-3-6-5, 3-1-4-6) in the
 // wedge's natural coordinates (ElementNumbering.h).
-FaceMap wedgeFaceMap(int face) {
-  FaceMap m;
+FaceChart wedgeFaceChart(int face) {
+  FaceChart m;
   switch (face) {
     case 1: m = {{0, 0, -1}, {1, 0, 0}, {0, 1, 0}, true, -1.0}; break;       // t = -1
     case 2: m = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, true, 1.0}; break;         // t = +1
@@ -55,9 +47,9 @@ void checkFace(ElementKind kind, int face) {
                                      : "a hexahedron has faces 1..6 (CalculiX C3D20 P1..P6)"));
 }
 
-FaceMap faceMap(ElementKind kind, int face) {
+FaceChart faceChartOf(ElementKind kind, int face) {
   checkFace(kind, face);
-  return kind == ElementKind::Wedge15 ? wedgeFaceMap(face) : hexFaceMap(face);
+  return kind == ElementKind::Wedge15 ? wedgeFaceChart(face) : hexFaceChart(face);
 }
 
 /// Visits the integration points of a face: h there and the weighted
@@ -65,7 +57,7 @@ FaceMap faceMap(ElementKind kind, int face) {
 template <class Visit>
 void forEachFacePoint(const ElementShape& shape, const ElementCoordinates& x, int face, const LineRule& rule,
                       Visit&& visit) {
-  const FaceMap m = faceMap(shape.kind(), face);
+  const FaceChart m = faceChartOf(shape.kind(), face);
   ShapeVector h;
   ShapeDerivatives dh;
   for (std::size_t i = 0; i < rule.points.size(); ++i)
@@ -88,10 +80,12 @@ void forEachFacePoint(const ElementShape& shape, const ElementCoordinates& x, in
 
 }  // namespace
 
+FaceChart faceChart(ElementKind kind, int face) { return faceChartOf(kind, face); }
+
 int faceCount(ElementKind kind) { return kind == ElementKind::Wedge15 ? 5 : 6; }
 
 std::vector<int> faceNodes(ElementKind kind, int face) {
-  const FaceMap m = faceMap(kind, face);
+  const FaceChart m = faceChartOf(kind, face);
   const Eigen::Vector3d normal = m.p.cross(m.q);
   const bool wedge = kind == ElementKind::Wedge15;
   std::vector<int> slots;

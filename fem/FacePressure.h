@@ -48,6 +48,19 @@ int faceCount(ElementKind kind);
 /// wedge. Throws std::invalid_argument for a face outside 1..faceCount(kind).
 std::vector<int> faceNodes(ElementKind kind, int face);
 
+/// A face as a linear map of the natural coordinates, xi = origin + a p + b q
+/// with a, b in [-1, 1], or for a triangle a, b >= 0, a + b <= 1. sign = +1
+/// if p × q points out of the reference element, so stepping a then b (Table
+/// 4.8's scan directions) winds polygons outwards.
+struct FaceChart {
+  Eigen::Vector3d origin, p, q;
+  bool triangle = false;
+  double sign = 1.0;
+};
+/// The chart of face @a face (CalculiX numbering) of an element of @a kind.
+/// Throws std::invalid_argument for a face outside 1..faceCount(kind).
+FaceChart faceChart(ElementKind kind, int face);
+
 /**
  * @brief Consistent nodal forces of a uniform pressure on one face of one
  *        element: R_k = -p ∫ h_k n dA.
