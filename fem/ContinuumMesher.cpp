@@ -105,6 +105,40 @@ double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options
   return depth;
 }
 
+std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
+                                  double width) {
+  if (!std::isfinite(width) || width < 0.0)
+    fail("the undermining width must be 0 or a positive number of mm (got " + std::to_string(width) + ")");
+  const int vertexCount = int(surface.vertices.size());
+  std::vector<char> band(std::size_t(vertexCount), 0);
+  if (width == 0.0) return band;
+  std::vector<std::array<int, 2>> edges;
+  for (const SutureEdgePair& pair : sutures)
+    for (const auto& e : {pair.a, pair.b}) {
+      for (int v : e)
+        if (v < 0 || v >= vertexCount)
+          fail("a sutured edge refers to vertex " + std::to_string(v) + " of a mesh with " +
+               std::to_string(vertexCount) + " vertices");
+      edges.push_back(edgeKey(e[0], e[1]));
+    }
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+  for (int v = 0; v < vertexCount; ++v) {
+    const ChartPoint& p = surface.vertices[std::size_t(v)];
+    for (const auto& [a, b] : edges) {
+      const ChartPoint& pa = surface.vertices[std::size_t(a)];
+      const ChartPoint d = surface.vertices[std::size_t(b)] - pa;
+      const double length2 = d.squaredNorm();
+      const double t = length2 > 0.0 ? std::clamp((p - pa).dot(d) / length2, 0.0, 1.0) : 0.0;
+      if ((p - (pa + t * d)).norm() <= width) {
+        band[std::size_t(v)] = 1;
+        break;
+      }
+    }
+  }
+  return band;
+}
+
 Constraints ContinuumMesh::constraints() const {
   Constraints c;
   for (int n : fixedNodes) c.fixNode(n);
@@ -129,6 +163,10 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     fail("the hole loop has " + std::to_string(holeCount) + " vertices but the surface mesh only " +
          std::to_string(vertexCount));
   if (surface.polygons.empty()) fail("the surface mesh has no polygons");
+  const auto& undermined = options.underminedVertices;
+  if (!undermined.empty() && int(undermined.size()) != vertexCount)
+    fail(std::to_string(undermined.size()) + " undermining flags given for a surface mesh of " +
+         std::to_string(vertexCount) + " vertices");
 
   ContinuumMesh out;
   const int layers = options.layerCount;
@@ -328,11 +366,24 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     if (root != node) out.sutures.push_back({node, root});
   }
 
-  // 5. Supports: the bone layer (§4.5) and, if asked, the rim columns. The
-  //    rim is every border edge that is not an edge of the hole loop.
-  for (const auto& column : out.vertexColumns) out.boneNodes.push_back(column.back());
-  for (const auto& column : out.edgeColumns) out.boneNodes.push_back(column.back());
+  // 5. Supports: the bone layer (§4.5) less the undermined region (§3.2.4
+  //    item 2: the skin freed from what lies beneath slides over it) and, if
+  //    asked, the rim columns. The rim is every border edge that is not an
+  //    edge of the hole loop.
+  auto isUndermined = [&](int v) { return !undermined.empty() && undermined[std::size_t(v)] != 0; };
+  for (int v = 0; v < vertexCount; ++v) {
+    const int node = out.vertexColumns[std::size_t(v)].back();
+    out.boneNodes.push_back(node);
+    if (isUndermined(v)) out.underminedNodes.push_back(node);
+  }
+  for (int e = 0; e < edgeCount; ++e) {
+    const int node = out.edgeColumns[std::size_t(e)].back();
+    out.boneNodes.push_back(node);
+    if (isUndermined(out.edges[std::size_t(e)][0]) && isUndermined(out.edges[std::size_t(e)][1]))
+      out.underminedNodes.push_back(node);
+  }
   std::sort(out.boneNodes.begin(), out.boneNodes.end());
+  std::sort(out.underminedNodes.begin(), out.underminedNodes.end());
   std::vector<char> onRim(std::size_t(nodeTotal), 0);
   for (int e = 0; e < edgeCount; ++e) {
     if (edgeUses[std::size_t(e)].size() != 1) continue;
@@ -347,6 +398,7 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     if (onRim[std::size_t(node)]) out.rimNodes.push_back(node);
   std::vector<char> fixed(std::size_t(nodeTotal), 0);
   for (int node : out.boneNodes) fixed[std::size_t(node)] = 1;
+  for (int node : out.underminedNodes) fixed[std::size_t(node)] = 0;
   if (options.rim == RimCondition::Clamped)
     for (int node : out.rimNodes) fixed[std::size_t(node)] = 1;
   for (int node = 0; node < nodeTotal; ++node)

@@ -64,6 +64,14 @@ struct ContinuumMeshOptions {
   /// bone under a vertex is an error naming the chart point.
   std::optional<double> noBoneDepth;
   RimCondition rim = RimCondition::Free;
+  /// Undermining (thesis §3.2.2, §3.2.4 item 2): one flag per surface
+  /// vertex, non-zero where the skin is freed from what lies beneath. The
+  /// bone node of such a vertex's column is not fixed, nor the bone node of
+  /// an edge whose two vertices are both undermined (the bottom face of the
+  /// freed elements is then free as a whole). Empty: no undermining. A
+  /// clamped rim stays clamped: it holds the tissue beyond the mesh, not the
+  /// bone.
+  std::vector<char> underminedVertices;
 };
 
 /**
@@ -84,11 +92,15 @@ struct ContinuumMesh {
   /// corner rule applied. A node met by several suture edge pairs (three
   /// points closing together) is sutured once, onto one node of its group.
   std::vector<Suture> sutures;
-  /// Nodes fixed in x, y, z (ascending): the bone layer (§4.5), plus the rim
-  /// columns if RimCondition::Clamped, less every sutured node.
+  /// Nodes fixed in x, y, z (ascending): the bone layer (§4.5) less the
+  /// undermined nodes, plus the rim columns if RimCondition::Clamped, less
+  /// every sutured node.
   std::vector<int> fixedNodes;
   /// Every node of the bone layer (ascending), sutured or not.
   std::vector<int> boneNodes;
+  /// Bone-layer nodes the bone no longer holds because the skin above them
+  /// is undermined (ascending; ContinuumMeshOptions::underminedVertices).
+  std::vector<int> underminedNodes;
   /// Every node of the rim's vertex and edge columns (ascending).
   std::vector<int> rimNodes;
 
@@ -137,12 +149,27 @@ struct ContinuumMesh {
  * other than 3 or 4 vertices, a vertex index out of range or repeated, a
  * polygon that is not counter-clockwise in the chart, an edge used by more
  * than two polygons or twice in the same direction, a suture edge that is
- * not a border edge of the hole loop, a missing callback, a non-finite skin
+ * not a border edge of the hole loop, undermining flags not one per surface
+ * vertex, a missing callback, a non-finite skin
  * point or inward direction, no bone and no default depth, or a depth that
  * is not positive after clamping.
  */
 ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
                             const TissueGeometry& geometry, const ContinuumMeshOptions& options = {});
+
+/**
+ * @brief The default undermining of §3.2.4 item 2: the surface vertices
+ *        within @a width (mm, in the chart, i.e. measured on the skin) of a
+ *        sutured border edge (either edge of any of @a sutures).
+ *
+ * Returns one flag per vertex of @a surface, for
+ * ContinuumMeshOptions::underminedVertices; all zero for @a width = 0 (the
+ * vertices of the sutured edges themselves are at distance 0 and are
+ * flagged for any positive width). Throws std::invalid_argument for a
+ * negative or non-finite width or a suture vertex out of range.
+ */
+std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
+                                  double width);
 
 /**
  * @brief The depth the mesher uses for a raw depth @a rawDepth (mm) from

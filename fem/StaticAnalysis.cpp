@@ -7,6 +7,7 @@
 #include <chrono>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace caps::fem {
 
@@ -133,6 +134,15 @@ Eigen::VectorXd LinearStaticAnalysis::loadVector(const LoadCase& load) const {
   if (!load.facePressures.empty()) r += assembleFacePressureLoad(mesh_, load.facePressures);
   if (!load.muscles.empty()) r += assembleMuscleLoad(mesh_, load.muscles, options_).load;
   return r;
+}
+
+Eigen::VectorXd LinearStaticAnalysis::internalForces(const Eigen::VectorXd& u) const {
+  if (k_.rows() != mesh_.dofCount() || k_.nonZeros() == 0)
+    throw std::logic_error("LinearStaticAnalysis::internalForces: the stiffness was not assembled (call prepare())");
+  if (u.size() != mesh_.dofCount())
+    throw std::invalid_argument("LinearStaticAnalysis::internalForces: " + std::to_string(u.size()) +
+                                " displacements given for a model of " + std::to_string(mesh_.dofCount()) + " DOFs");
+  return k_.selfadjointView<Eigen::Upper>() * u;
 }
 
 Eigen::MatrixXd LinearStaticAnalysis::solve(const Eigen::MatrixXd& r) {

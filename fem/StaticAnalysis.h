@@ -62,6 +62,14 @@ public:
   /// Displacements (3N) of one load case.
   Eigen::VectorXd solve(const LoadCase& load);
 
+  /// Internal nodal forces K U (N, 3N) of displacements @a u (3N). Where no
+  /// load acts, they are the reactions of the constraints: at a fixed node
+  /// the force the support exerts, at a sutured node the force its suture
+  /// carries (thesis eq. 4.43: the suture is a constraint). Throws
+  /// std::logic_error unless prepare() assembled K, std::invalid_argument if
+  /// @a u has the wrong size.
+  Eigen::VectorXd internalForces(const Eigen::VectorXd& u) const;
+
   const PhaseTimes& times() const { return times_; }
   const Mesh& mesh() const { return mesh_; }
   const MaterialTable& materials() const { return materials_; }

@@ -4,6 +4,7 @@
 
 #include "modules/incision/PlanCommands.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -47,7 +48,8 @@ const char* kPlanUsage =
   "centred at THETA (degrees around the head axis, -90 = the front of the face) and Z\n"
   "(mm along the axis, as `caps rangemap` prints them), measures it on the skin, meshes\n"
   "the skin down to the bone, closes the sutures and writes into DIR:\n"
-  "  measurements.csv     limb lengths and angles on the skin, excised area, Z-plasty gain\n"
+  "  measurements.csv     limb lengths and angles on the skin, excised area and volume,\n"
+  "                       closure force, Z-plasty gain\n"
   "  skin-before.vtp      the skin around the wound before the operation: element faces\n"
   "                       subdivided 4 x 4 with the CT's skin detail (§4.7), shaded by the\n"
   "                       tissue under the skin; displacement (mm), von Mises and mean\n"
@@ -68,6 +70,9 @@ const char* kPlanUsage =
   "                       from its operations; refused when it was made on another CT\n"
   "  --other-ct           replays a plan made on another CT (another scan or patient) anyway\n"
   "  --element-size MM    element size at the wound (default 2, or the replayed plan's)\n"
+  "  --undermine W,W,...  also closes the plan with the skin undermined W mm around the\n"
+  "                       sutured edges (§3.2.4: freed from the bone), for each width, and\n"
+  "                       writes undermining.csv: closure force against undermining width\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
   "\n"
   "The tissue is linear elastic with assumed moduli (skin 0.15, fat 0.01, muscle\n"
@@ -93,7 +98,25 @@ struct PlanArgs : cli::CtCommandArgs
   std::optional<fs::path> replay;
   bool otherCt = false;
   std::optional<double> elementSize; ///< mm; default 2, or the replayed plan's
+  std::vector<double> undermineWidths; ///< mm, the --undermine study; empty: none
 };
+
+/// "W,W,..." of undermining widths in mm, each in [0, 100].
+bool parseWidths(const std::string& text, std::vector<double>& widths)
+{
+  widths.clear();
+  std::size_t start = 0;
+  while (start <= text.size())
+  {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    double w = 0.0;
+    if (!cli::parseNumber(text.substr(start, comma - start), w) || !(w >= 0.0) || w > 100.0)
+      return false;
+    widths.push_back(w);
+    start = comma + 1;
+  }
+  return !widths.empty();
+}
 
 /// "I=A,B" with I a whole number from 0 and A, B finite.
 bool parseEdit(const std::string& text, bool move, PlanEdit& edit)
@@ -164,6 +187,11 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
           return "--element-size needs a length in mm between 0.2 and 20";
         parsed.elementSize = size;
       }
+      else if (a == "--undermine")
+      {
+        if (!hasValue || !parseWidths(args[++i], parsed.undermineWidths))
+          return "--undermine needs undermining widths in mm from 0 to 100, e.g. 0,5,10,20";
+      }
       else
         return "unknown option " + a;
       return std::nullopt;
@@ -213,7 +241,7 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
 }
 
 void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m,
-                       const incision::PlanPrediction& p)
+                       const incision::PlanPrediction& p, double excisedVolume)
 {
   std::ofstream out(file);
   out << std::setprecision(10) << "quantity,where,chart,skin,unit\n";
@@ -222,8 +250,11 @@ void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m
   for (const auto& a : m.limbAngles)
     out << "limb angle,p" << a.point << "," << a.chart / kDegree << "," << a.skin / kDegree << ",deg\n";
   out << "excised area,hole,," << m.excisedArea << ",mm2\n";
+  out << "excised volume (skin to bone),hole,," << excisedVolume << ",mm3\n";
   out << "wound width before closure,sutures,," << p.maxSutureGapBefore << ",mm\n";
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
+  out << "closure force (sum over sutures),sutures,," << p.closure.magnitudeSum << ",N\n";
+  out << "largest suture force,sutures,," << p.closure.largest << ",N\n";
   if (p.zPlasty)
   {
     out << "z-plasty gain predicted,central limb,," << 100.0 * p.zPlasty->predicted.fraction << ",%\n";
@@ -360,6 +391,7 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     options.elementSize = elementSize;
     options.threads = 2;
     const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, plan, options);
+    const double excisedVolume = incision::excisedVolume(plan, maps.skin, maps.bone, options.noBoneDepth);
     // The meshed region cut short (a shape the mesher could not grow round,
     // or the end of the scan) changes the prediction: say so.
     if (!prediction.surface.message.empty())
@@ -379,7 +411,7 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     for (const auto& a : measured.limbAngles)
       out << "  angle at p" << a.point << ": " << a.skin / kDegree << " deg on the skin\n";
     if (measured.excisedArea > 0.0)
-      out << "  excised area: " << measured.excisedArea << " mm2\n";
+      out << "  excised area: " << measured.excisedArea << " mm2, volume to the bone " << excisedVolume << " mm3\n";
     out << "Model: " << prediction.continuum.mesh.nodeCount() << " nodes, "
         << prediction.continuum.mesh.elements.size() << " elements, " << prediction.dofCount << " DOF ("
         << prediction.reducedDofCount << " free); mesh " << std::setprecision(3) << prediction.times.mesh
@@ -387,12 +419,14 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
         << " s, solve " << prediction.times.solve << " s\n";
     out << std::setprecision(2) << "Wound " << prediction.maxSutureGapBefore << " mm wide before, sutures within "
         << std::scientific << prediction.maxSutureGap << std::fixed << " mm after closure\n";
+    out << std::setprecision(3) << "Closure force: " << prediction.closure.magnitudeSum
+        << " N over all sutures, largest suture " << prediction.closure.largest << " N\n";
     if (prediction.zPlasty)
       out << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * prediction.zPlasty->predicted.fraction
           << " %, theoretical " << 100.0 * prediction.zPlasty->theoretical << " % (Fig. 2.2)\n";
     out.unsetf(std::ios::floatfield);
 
-    writeMeasurements(args.out / "measurements.csv", measured, prediction);
+    writeMeasurements(args.out / "measurements.csv", measured, prediction, excisedVolume);
     // The display surfaces (§4.7): subdivided skin faces with range detail,
     // coloured by the tissue a little under the skin (the CT has no colour).
     const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin);
@@ -408,6 +442,31 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
                   {{"displacement_mm", Eigen::MatrixXd(u)}});
     for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
       out << "wrote " << (args.out / file).string() << "\n";
+
+    // The surgeon's question: how far must I undermine? The same plan and
+    // mesh, the bone released under a band around the sutured edges.
+    if (!args.undermineWidths.empty())
+    {
+      std::ofstream table(args.out / "undermining.csv");
+      table << std::setprecision(10)
+            << "undermining width (mm),released bone nodes,closure force (sum over sutures) (N),"
+               "largest suture force (N),suture gap after closure (mm)\n";
+      out << "Undermining study (closure force against width):\n";
+      for (const double width : args.undermineWidths)
+      {
+        options.underminingWidth = width;
+        const incision::PlanPrediction p = incision::simulatePlan(maps.skin, maps.bone, plan, options);
+        table << width << "," << p.continuum.underminedNodes.size() << "," << p.closure.magnitudeSum << ","
+              << p.closure.largest << "," << p.maxSutureGap << "\n";
+        out << std::fixed << std::setprecision(1) << "  " << width << " mm: " << std::setprecision(3)
+            << p.closure.magnitudeSum << " N, largest suture " << p.closure.largest << " N\n";
+        out.unsetf(std::ios::floatfield);
+      }
+      if (!table)
+        throw std::runtime_error("cannot write " + (args.out / "undermining.csv").string() +
+                                 ": check the folder's permissions and space");
+      out << "wrote " << (args.out / "undermining.csv").string() << "\n";
+    }
     return 0;
   }
   catch (const fem::ElementError& e)

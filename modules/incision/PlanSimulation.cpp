@@ -58,6 +58,8 @@ void checkOptions(const SimulationOptions& o)
     bad("the depth used where there is no bone must be positive");
   if (o.threads < 1)
     bad("at least one thread");
+  if (!(o.underminingWidth >= 0.0) || !std::isfinite(o.underminingWidth))
+    bad("the undermining width must be 0 (none) or a positive number of mm");
 }
 
 } // namespace
@@ -340,6 +342,8 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   continuumOptions.maxDepth = options.maxDepth;
   continuumOptions.noBoneDepth = options.noBoneDepth;
   continuumOptions.rim = options.rim;
+  out.underminedVertices = fem::underminingBand(surface, out.sutures, options.underminingWidth);
+  continuumOptions.underminedVertices = out.underminedVertices;
   out.continuum = fem::meshContinuum(surface, out.sutures, geometry, continuumOptions);
   out.times.mesh = secondsSince(meshStart);
 
@@ -376,8 +380,56 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   out.reducedDofCount = analysis.constraintMap().reducedCount();
   if (!out.displacements.allFinite())
     throw std::runtime_error("the solve of the plan gave non-finite displacements");
+  out.nodalForces = analysis.internalForces(out.displacements);
 
-  // 5. What the display and the report need.
+  // 5. Closure forces: no load acts on the model, so K U at a sutured node is
+  // what its suture pulls with, and at a fixed node what the bone holds.
+  ClosureForces& closure = out.closure;
+  for (const fem::Suture& s : out.continuum.sutures)
+  {
+    const Eigen::Vector3d f = out.nodalForces.segment<3>(3 * Eigen::Index(s.node));
+    closure.sutures.push_back({s.node, s.target, f});
+    closure.magnitudeSum += f.norm();
+    closure.largest = std::max(closure.largest, f.norm());
+  }
+  for (int node : out.continuum.fixedNodes)
+    closure.supportReaction += out.nodalForces.segment<3>(3 * Eigen::Index(node));
+  {
+    // The refined sub-pairs of each plan pair follow one another in
+    // out.sutures (refineHole()), as many as its segment's pieces.
+    const int n = plan.pointCount();
+    std::size_t first = 0;
+    for (const fem::SutureEdgePair& pair : plan.sutures())
+    {
+      const int pieces = refined.piecesPerSegment[segmentOfEdge(pair.a[0], pair.a[1], n)];
+      std::vector<char> alongPair(std::size_t(out.continuum.mesh.nodeCount()), 0);
+      for (std::size_t k = first; k < first + std::size_t(pieces) && k < out.sutures.size(); ++k)
+        for (const auto& e : {out.sutures[k].a, out.sutures[k].b})
+        {
+          for (int v : e)
+            for (int node : out.continuum.vertexColumns[v])
+              alongPair[node] = 1;
+          const int edge = out.continuum.edgeIndex(e[0], e[1]);
+          if (edge >= 0)
+            for (int node : out.continuum.edgeColumns[edge])
+              alongPair[node] = 1;
+        }
+      first += std::size_t(pieces);
+      SuturedEdgeForce edgeForce;
+      edgeForce.edges = pair;
+      for (const SutureForce& f : closure.sutures)
+        if (alongPair[f.node])
+        {
+          ++edgeForce.sutureCount;
+          edgeForce.resultant += f.force;
+          edgeForce.magnitudeSum += f.force.norm();
+        }
+      edgeForce.resultantMagnitude = edgeForce.resultant.norm();
+      closure.edges.push_back(edgeForce);
+    }
+  }
+
+  // 6. What the display and the report need.
   for (const auto& s : out.continuum.sutures)
   {
     const auto& x = out.continuum.mesh.nodes;
@@ -396,7 +448,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     top.displaced.push_back(out.displacedNode(node));
   }
 
-  // 6. Z-plasty (§2.1, Fig. 2.2). Each end of the central limb has two
+  // 7. Z-plasty (§2.1, Fig. 2.2). Each end of the central limb has two
   // copies on the border: one is a flap tip, carried by the sutures to a limb
   // tip, where it ends on the new central limb across the axis; the other is
   // the corner the other flap pivots about (a shared vertex of a suture pair,

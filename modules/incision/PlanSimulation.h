@@ -53,6 +53,11 @@ struct SimulationOptions
   /// deep elements; 0 uses the raw map.
   int boneSmoothingPasses = 8;
   fem::RimCondition rim = fem::RimCondition::Free;
+  /// Undermining (thesis §3.2.2, §3.2.4 item 2, default form): the skin
+  /// within this distance (mm, measured on the skin chart) of the sutured
+  /// hole border edges is freed from what lies beneath, so the bone nodes
+  /// under it are not fixed (fem::underminingBand()). 0: no undermining.
+  double underminingWidth = 0.0;
   /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
   fem::MaterialTable materials;
   /// Threads of the assembly.
@@ -93,6 +98,40 @@ struct ZPlastyPrediction
   double geometric = 0.0;   ///< zPlastyGeometricGain(limbAngle), fraction
 };
 
+/// The force one suture carries after the closure: the reaction of its
+/// constraint (thesis eq. 4.43), i.e. the internal force K U at the sutured
+/// node, where no load acts.
+struct SutureForce
+{
+  int node = -1;   ///< the sutured node (fem::Suture::node)
+  int target = -1; ///< the node it is sewn onto
+  /// On node (N); the target gets the opposite.
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+};
+
+/// The closure force along one sutured edge pair of the plan.
+struct SuturedEdgeForce
+{
+  fem::SutureEdgePair edges; ///< the plan's pair (the plan's own loop vertices)
+  /// Node sutures along it: every layer of the columns of its refined edges.
+  /// A suture at a cut point shared by two pairs counts in both.
+  int sutureCount = 0;
+  Eigen::Vector3d resultant = Eigen::Vector3d::Zero(); ///< sum of the forces on the sutured nodes (N)
+  double resultantMagnitude = 0.0; ///< |resultant| (N)
+  double magnitudeSum = 0.0;       ///< sum of the sutures' force magnitudes (N)
+};
+
+/// What holds the wound closed (issue: how far to undermine).
+struct ClosureForces
+{
+  std::vector<SutureForce> sutures;    ///< one per continuum suture, in the same order
+  std::vector<SuturedEdgeForce> edges; ///< one per suture pair of the plan, in the plan's order
+  double magnitudeSum = 0.0;           ///< sum of every suture's force magnitude (N)
+  double largest = 0.0;                ///< the largest force one suture carries (N)
+  /// Sum of the reactions of the fixed nodes (the bone, a clamped rim), N.
+  Eigen::Vector3d supportReaction = Eigen::Vector3d::Zero();
+};
+
 /// Everything simulatePlan() computed.
 struct PlanPrediction
 {
@@ -103,6 +142,14 @@ struct PlanPrediction
   std::vector<int> refinedVertexOf;
   fem::ContinuumMesh continuum;      ///< FE mesh, constraints, node columns
   Eigen::VectorXd displacements;     ///< 3N: (x, y, z) of node i at 3i..3i+2 (mm)
+  /// Internal nodal forces K U (N), 3N like displacements: zero to round-off
+  /// at free nodes, the reactions at fixed and sutured ones.
+  Eigen::VectorXd nodalForces;
+  /// Per surface-mesh vertex, non-zero where the skin is undermined
+  /// (SimulationOptions::underminingWidth); the bone nodes released are
+  /// continuum.underminedNodes.
+  std::vector<char> underminedVertices;
+  ClosureForces closure;
   DisplacedSkin skin;
   /// Largest distance between the two nodes of a suture after the solve (mm).
   double maxSutureGap = 0.0;
@@ -127,7 +174,8 @@ struct PlanPrediction
 /// range. The tissue under chart point c runs along the ray towards the
 /// axis from the skin point lift(c); its depth is skin r − bone r, clamped to
 /// [minDepth, maxDepth], noBoneDepth where the bone map has no bone. Bone
-/// nodes are fixed, the rim as options.rim says.
+/// nodes are fixed except under the undermined band, the rim as options.rim
+/// says. After the solve, the reaction of every suture is the closure force.
 ///
 /// @throws std::invalid_argument for a bad plan (checkPlan()), a plan off the
 /// skin, holes in the skin map under the meshed region, a bone map on another

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -124,6 +125,80 @@ double excisedArea(const IncisionPlan& plan, const seg::RangeMap& skin)
     return 0.0;
   const SkinChart chart = plan.chart(skin);
   return skinArea(chart, plan.holeLoop(chart).points);
+}
+
+double tissueVolume(const SkinChart& chart, const seg::RangeMap& bone, const std::vector<ChartPoint>& polygon,
+                    double noBoneDepth, double step)
+{
+  if (!(noBoneDepth > 0.0) || !std::isfinite(noBoneDepth))
+    throw std::invalid_argument("the depth used where there is no bone must be a positive number of mm");
+  const seg::RangeMap& skin = chart.skin();
+  const bool haveBone = !bone.empty();
+  if (haveBone && ((bone.frame().origin() - skin.frame().origin()).norm() > 1e-6 ||
+                   (bone.frame().direction() - skin.frame().direction()).norm() > 1e-9))
+    throw std::invalid_argument("the bone range map is on another cylinder axis than the skin map: "
+                                "build both on the same frame");
+  const int n = int(polygon.size());
+  if (n < 3)
+    return 0.0;
+  // (r_skin² − r_bone²) / (2 r0): volume per chart mm² under chart point c.
+  auto density = [&](const ChartPoint& c) {
+    const SkinPoint s = chart.fromChart(c);
+    auto refuse = [&](const char* why) {
+      std::ostringstream message;
+      message.precision(4);
+      message << "cannot measure the excised volume: " << why << " at θ = " << s.theta / degree << "°, z = " << s.z
+              << " mm";
+      throw std::invalid_argument(message.str());
+    };
+    const double rSkin = skin.sample(s.theta, s.z);
+    if (!std::isfinite(rSkin))
+      refuse("the skin map has no surface");
+    double rBone = haveBone ? bone.sample(s.theta, s.z) : std::nan("");
+    if (!std::isfinite(rBone))
+      rBone = rSkin - noBoneDepth;
+    if (rBone > rSkin)
+      refuse("the bone lies above the skin");
+    return (rSkin * rSkin - rBone * rBone) / (2.0 * chart.radius());
+  };
+  ChartPoint centre = ChartPoint::Zero();
+  for (const auto& p : polygon)
+    centre += p;
+  centre /= n;
+  // Signed fan as in skinArea(): points outside a non-star-shaped polygon
+  // are covered once each way and cancel.
+  double volume = 0.0;
+  for (int e = 0; e < n; ++e)
+  {
+    const ChartPoint a = polygon[e] - centre, b = polygon[(e + 1) % n] - centre;
+    const double twiceArea = cross2(a, b);
+    if (std::abs(twiceArea) < 1e-14)
+      continue;
+    const double longest = std::max({a.norm(), b.norm(), (b - a).norm()});
+    const int m = std::clamp(int(std::ceil(longest / step)), 1, 400);
+    // m² sub-triangles of equal area: the upright ones (i, j), (i+1, j),
+    // (i, j+1) and the inverted ones (i+1, j), (i+1, j+1), (i, j+1).
+    double sum = 0.0;
+    auto at = [&](double i, double j) { return ChartPoint(centre + a * (i / m) + b * (j / m)); };
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; i + j < m; ++j)
+      {
+        sum += density(at(i + 1.0 / 3.0, j + 1.0 / 3.0));
+        if (i + j + 1 < m)
+          sum += density(at(i + 2.0 / 3.0, j + 2.0 / 3.0));
+      }
+    volume += 0.5 * twiceArea * sum / (double(m) * m);
+  }
+  return std::abs(volume);
+}
+
+double excisedVolume(const IncisionPlan& plan, const seg::RangeMap& skin, const seg::RangeMap& bone,
+                     double noBoneDepth)
+{
+  if (!plan.isExcision())
+    return 0.0;
+  const SkinChart chart = plan.chart(skin);
+  return tissueVolume(chart, bone, plan.holeLoop(chart).points, noBoneDepth);
 }
 
 PlanMeasurements measurePlan(const IncisionPlan& plan, const seg::RangeMap& skin)

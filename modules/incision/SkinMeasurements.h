@@ -32,6 +32,30 @@ double skinAngle(const SkinChart& chart, const ChartPoint& corner, const ChartPo
 double skinArea(const SkinChart& chart, const std::vector<ChartPoint>& polygon, double step = 0.25);
 ///@}
 
+/// @name Excised tissue (thesis §3.2.2: removing tissue is one of the
+/// primitives of an operation; §3.1.3: volumetric elements let us estimate
+/// the volume removed)
+///@{
+/// Volume (mm³) of the tissue under a simple chart polygon (either
+/// orientation), from the skin down to the bone:
+/// ∫∫ (r_skin² − r_bone²) / 2 dθ dz over the polygon, which is exact between
+/// two surfaces given by their radius in the cylindrical frame; the chart has
+/// θ = θc + u / r0 and z = zc + v, so dθ dz = du dv / r0. Integrated over a
+/// signed fan of sub-triangles no wider than `step` mm, one sample at each
+/// centroid. Where the bone map has no bone (or is empty) the bone lies
+/// `noBoneDepth` mm under the skin (SimulationOptions::noBoneDepth).
+/// @throws std::invalid_argument where the skin map has no surface, where
+/// the bone lies above the skin, for a bone map on another axis or a
+/// non-positive noBoneDepth.
+double tissueVolume(const SkinChart& chart, const seg::RangeMap& bone, const std::vector<ChartPoint>& polygon,
+                    double noBoneDepth = 10.0, double step = 0.25);
+/// The volume of tissue a plan removes (mm³): tissueVolume() of its hole,
+/// full thickness down to the bone as the simulation's mesh cuts it; 0
+/// without excision.
+double excisedVolume(const IncisionPlan& plan, const seg::RangeMap& skin, const seg::RangeMap& bone,
+                     double noBoneDepth = 10.0);
+///@}
+
 /// One limb of the cut: cut points i → i + 1.
 struct LimbLength
 {

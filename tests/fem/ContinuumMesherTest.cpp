@@ -374,6 +374,60 @@ TEST(ContinuumMesherTest, FixedNodesAreTheBoneLessTheSutured) {
   }
 }
 
+TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
+  // The slit (-10, 0)-(10, 0): at 10 mm lie the ends of the cut line (4, 5)
+  // and the rows v = ±10 over it (7, 8, 9 and 12, 13, 14); the corners
+  // (6, 10, 11, 15) are √200 mm away.
+  const SurfaceMesh surface = slitMesh();
+  auto flagged = [](const std::vector<char>& band) {
+    std::vector<int> v;
+    for (std::size_t i = 0; i < band.size(); ++i)
+      if (band[i]) v.push_back(int(i));
+    return v;
+  };
+  EXPECT_EQ(flagged(underminingBand(surface, slitSutures(), 0.0)), std::vector<int>{});
+  EXPECT_EQ(flagged(underminingBand(surface, slitSutures(), 9.9)), (std::vector<int>{0, 1, 2, 3}));
+  const std::vector<char> band = underminingBand(surface, slitSutures(), 10.0);
+  EXPECT_EQ(flagged(band), (std::vector<int>{0, 1, 2, 3, 4, 5, 7, 8, 9, 12, 13, 14}));
+  expectThrowsWith([&] { underminingBand(surface, slitSutures(), -1.0); }, "undermining width");
+
+  for (int layers : {1, 2}) {
+    ContinuumMeshOptions options;
+    options.layerCount = layers;
+    const ContinuumMesh held = meshContinuum(surface, slitSutures(), cylinderGeometry(constantDepth), options);
+    options.underminedVertices = band;
+    const ContinuumMesh freed = meshContinuum(surface, slitSutures(), cylinderGeometry(constantDepth), options);
+    EXPECT_TRUE(held.underminedNodes.empty());
+    EXPECT_EQ(freed.mesh.nodes, held.mesh.nodes);
+    EXPECT_EQ(freed.boneNodes, held.boneNodes);
+    ASSERT_EQ(freed.sutures.size(), held.sutures.size());
+    // 12 vertices and the 18 of the 26 edges that touch none of the corners.
+    ASSERT_EQ(freed.underminedNodes.size(), 30u);
+    for (int v : flagged(band))
+      EXPECT_TRUE(std::binary_search(freed.underminedNodes.begin(), freed.underminedNodes.end(),
+                                     freed.vertexColumns[std::size_t(v)].back()));
+    // 42 bone nodes: the 6 sutured (vertices 1, 3 and the 4 slit edges) are
+    // in the band; the 12 of the corners and their 8 edges stay fixed.
+    EXPECT_EQ(held.fixedNodes.size(), 36u);
+    ASSERT_EQ(freed.fixedNodes.size(), 12u);
+    for (int node : freed.fixedNodes) {
+      EXPECT_TRUE(std::binary_search(held.fixedNodes.begin(), held.fixedNodes.end(), node));
+      EXPECT_FALSE(std::binary_search(freed.underminedNodes.begin(), freed.underminedNodes.end(), node));
+    }
+    EXPECT_EQ(freed.constraints().prescribed.size(), 3 * freed.fixedNodes.size());
+
+    // A clamped rim holds the tissue beyond the mesh, undermined or not.
+    options.rim = RimCondition::Clamped;
+    const ContinuumMesh clamped = meshContinuum(surface, slitSutures(), cylinderGeometry(constantDepth), options);
+    for (int node : clamped.rimNodes)
+      EXPECT_TRUE(std::binary_search(clamped.fixedNodes.begin(), clamped.fixedNodes.end(), node));
+  }
+  ContinuumMeshOptions wrong;
+  wrong.underminedVertices = {1, 1};
+  expectThrowsWith([&] { meshContinuum(surface, slitSutures(), cylinderGeometry(constantDepth), wrong); },
+                   "undermining flags");
+}
+
 TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
   // Skin 2 mm, fat 5 mm, the rest muscle; depth varies in u and v^2 so the
   // cylinder's mirror z -> -z is the only symmetry.

@@ -3,8 +3,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <map>
+#include <set>
 #include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -253,6 +256,206 @@ TEST(PlanSimulation, LayersFollowTheBoneAndTheStatedFractions)
   EXPECT_EQ(p.materials.size(), 3u);
 }
 
+/// Distance (mm) in the chart from c to the segment a-b: the nearer end, or
+/// the perpendicular when its foot falls between the ends.
+double distanceToSegment(const ChartPoint& c, const ChartPoint& a, const ChartPoint& b)
+{
+  double d = std::min((c - a).norm(), (c - b).norm());
+  const ChartPoint along = b - a;
+  const double length = along.norm();
+  if (length == 0.0)
+    return d;
+  const ChartPoint unit = along / length;
+  const double foot = (c - a).dot(unit);
+  if (foot > 0.0 && foot < length)
+    d = std::min(d, std::abs(unit.x() * (c - a).y() - unit.y() * (c - a).x()));
+  return d;
+}
+
+PlanPrediction ellipseClosure(double underminingWidth, double length, double regionRadius)
+{
+  const IncisionPlan plan = procedure("elliptical-excision")
+                              .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  SimulationOptions o = testOptions();
+  o.regionRadius = regionRadius;
+  o.underminingWidth = underminingWidth;
+  return simulatePlan(phantom().skin, phantom().bone, plan, o);
+}
+
+TEST(PlanSimulation, UnderminingReleasesExactlyTheBoneNodesOfTheBand)
+{
+  const double width = 5.0;
+  const PlanPrediction none = ellipseClosure(0.0, 24.0, 20.0);
+  const PlanPrediction band = ellipseClosure(width, 24.0, 20.0);
+  EXPECT_TRUE(none.continuum.underminedNodes.empty());
+  EXPECT_EQ(std::count(none.underminedVertices.begin(), none.underminedVertices.end(), 1), 0);
+
+  // The same mesh and the same sutures: only supports change.
+  ASSERT_EQ(band.continuum.mesh.nodeCount(), none.continuum.mesh.nodeCount());
+  ASSERT_EQ(band.continuum.mesh.elements.size(), none.continuum.mesh.elements.size());
+  EXPECT_EQ(band.continuum.mesh.nodes, none.continuum.mesh.nodes);
+  ASSERT_EQ(band.continuum.sutures.size(), none.continuum.sutures.size());
+  for (std::size_t i = 0; i < band.continuum.sutures.size(); ++i)
+  {
+    EXPECT_EQ(band.continuum.sutures[i].node, none.continuum.sutures[i].node);
+    EXPECT_EQ(band.continuum.sutures[i].target, none.continuum.sutures[i].target);
+  }
+  EXPECT_EQ(band.continuum.boneNodes, none.continuum.boneNodes);
+
+  // The band counted from the surface mesh: vertices within the width of a
+  // sutured border edge; their bone nodes, and those of edges between two of them.
+  const auto& vertices = band.surface.mesh.vertices;
+  std::set<std::pair<int, int>> suturedEdges;
+  for (const auto& pair : band.sutures)
+    for (const auto& e : {pair.a, pair.b})
+      suturedEdges.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  std::vector<bool> inside(vertices.size(), false);
+  double closestToTheEdgeOfTheBand = 1e300;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+  {
+    double d = 1e300;
+    for (const auto& [a, b] : suturedEdges)
+      d = std::min(d, distanceToSegment(vertices[v], vertices[a], vertices[b]));
+    inside[v] = d <= width;
+    closestToTheEdgeOfTheBand = std::min(closestToTheEdgeOfTheBand, std::abs(d - width));
+  }
+  std::vector<int> expected;
+  int vertexCount = 0;
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    if (inside[v])
+    {
+      expected.push_back(band.continuum.vertexColumns[v].back());
+      ++vertexCount;
+    }
+  for (std::size_t e = 0; e < band.continuum.edges.size(); ++e)
+    if (inside[band.continuum.edges[e][0]] && inside[band.continuum.edges[e][1]])
+      expected.push_back(band.continuum.edgeColumns[e].back());
+  std::sort(expected.begin(), expected.end());
+  std::printf("[undermining %.0f mm] %d of %zu surface vertices in the band (%zu hole vertices), %zu bone nodes "
+              "released of %zu; nearest vertex to the band's edge %.3g mm from it\n",
+              width, vertexCount, vertices.size(), band.hole.points.size(), expected.size(),
+              band.continuum.boneNodes.size(), closestToTheEdgeOfTheBand);
+  EXPECT_GT(vertexCount, int(band.hole.points.size())); // the band reaches beyond the wound
+  EXPECT_LT(expected.size(), band.continuum.boneNodes.size());
+  EXPECT_EQ(band.continuum.underminedNodes, expected);
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    EXPECT_EQ(band.underminedVertices[v] != 0, inside[v]) << "vertex " << v;
+
+  // Every other fixed node is still fixed; the released ones are not.
+  std::vector<int> stillFixed;
+  std::set_difference(none.continuum.fixedNodes.begin(), none.continuum.fixedNodes.end(), expected.begin(),
+                      expected.end(), std::back_inserter(stillFixed));
+  EXPECT_EQ(band.continuum.fixedNodes, stillFixed);
+  EXPECT_LT(band.continuum.fixedNodes.size(), none.continuum.fixedNodes.size());
+  EXPECT_LT(band.maxSutureGap, 1e-9);
+
+  // The freed skin slides over the bone: released bone nodes away from the
+  // sutures move, fixed ones do not.
+  std::set<int> sutured;
+  for (const auto& s : band.continuum.sutures)
+    sutured.insert({s.node, s.target});
+  double slide = 0.0;
+  for (int node : band.continuum.underminedNodes)
+    if (!sutured.count(node))
+      slide = std::max(slide, band.displacements.segment<3>(3 * node).norm());
+  for (int node : band.continuum.fixedNodes)
+    EXPECT_EQ(band.displacements.segment<3>(3 * node).norm(), 0.0);
+  std::printf("[undermining %.0f mm] largest slide of a released bone node %.3g mm\n", width, slide);
+  EXPECT_GT(slide, 1e-3);
+}
+
+TEST(PlanSimulation, SutureForcesBalanceTheBoneReactions)
+{
+  for (const double width : {0.0, 10.0})
+  {
+    SCOPED_TRACE("undermining " + std::to_string(width) + " mm");
+    const PlanPrediction p = ellipseClosure(width, 24.0, 20.0);
+    const ClosureForces& c = p.closure;
+    ASSERT_EQ(c.sutures.size(), p.continuum.sutures.size());
+    ASSERT_GT(c.magnitudeSum, 0.0);
+    auto force = [&](int node) { return Eigen::Vector3d(p.nodalForces.segment<3>(3 * node)); };
+
+    // Each suture pulls its node and its target equally and oppositely: at
+    // a target, its own K U cancels the sum over the nodes sewn onto it.
+    std::map<int, Eigen::Vector3d> onTargets;
+    for (const SutureForce& s : c.sutures)
+    {
+      EXPECT_EQ((s.force - force(s.node)).norm(), 0.0);
+      auto [it, added] = onTargets.emplace(s.target, Eigen::Vector3d::Zero());
+      it->second += s.force;
+    }
+    double pairImbalance = 0.0;
+    for (const auto& [target, sum] : onTargets)
+      pairImbalance = std::max(pairImbalance, (force(target) + sum).norm() / c.largest);
+
+    // Global equilibrium without load: suture reactions (both ends) plus the
+    // bone's add up to zero; every other node carries no force.
+    Eigen::Vector3d total = c.supportReaction;
+    std::set<int> constrained(p.continuum.fixedNodes.begin(), p.continuum.fixedNodes.end());
+    for (const SutureForce& s : c.sutures)
+      constrained.insert({s.node, s.target});
+    for (const auto& [target, sum] : onTargets)
+      total += force(target);
+    for (const SutureForce& s : c.sutures)
+      total += s.force;
+    double freeForce = 0.0, supportMagnitude = 0.0;
+    for (int node = 0; node < int(p.continuum.mesh.nodeCount()); ++node)
+      if (!constrained.count(node))
+        freeForce = std::max(freeForce, force(node).norm());
+    for (int node : p.continuum.fixedNodes)
+      supportMagnitude += force(node).norm();
+    const double globalImbalance = total.norm() / c.magnitudeSum;
+    std::printf("[closure force, undermining %.0f mm] %zu sutures: sum of magnitudes %.6g N, largest %.4g N; "
+                "bone: sum of magnitudes %.6g N; relative imbalance per target %.2g, global %.2g; largest force "
+                "at a free node %.2g N\n",
+                width, c.sutures.size(), c.magnitudeSum, c.largest, supportMagnitude, pairImbalance, globalImbalance,
+                freeForce);
+    EXPECT_LT(pairImbalance, 1e-8);
+    EXPECT_LT(globalImbalance, 1e-8);
+    EXPECT_LT(freeForce, 1e-8 * c.magnitudeSum);
+
+    // Per plan pair: each pair's totals, and together they cover every suture.
+    ASSERT_EQ(c.edges.size(), 8u); // the ellipse's 9 cut points zip into 8 pairs
+    int counted = 0;
+    double sumOfPairs = 0.0;
+    for (const SuturedEdgeForce& e : c.edges)
+    {
+      std::printf("  pair (%d,%d)-(%d,%d): %d sutures, resultant %.4g N, sum of magnitudes %.4g N\n", e.edges.a[0],
+                  e.edges.a[1], e.edges.b[0], e.edges.b[1], e.sutureCount, e.resultantMagnitude, e.magnitudeSum);
+      EXPECT_GT(e.sutureCount, 0);
+      EXPECT_LE(e.resultantMagnitude, e.magnitudeSum * (1 + 1e-12));
+      counted += e.sutureCount;
+      sumOfPairs += e.magnitudeSum;
+    }
+    EXPECT_GE(counted, int(c.sutures.size())); // shared cut points count twice
+    EXPECT_GE(sumOfPairs, c.magnitudeSum * (1 - 1e-12));
+  }
+}
+
+TEST(PlanSimulation, UnderminingReducesTheClosureForce)
+{
+  // A 30 × 10 mm ellipse in a 50 mm region, undermined ever wider.
+  const double widths[] = {0.0, 5.0, 10.0, 20.0, 40.0};
+  std::vector<double> force;
+  for (const double width : widths)
+  {
+    const PlanPrediction p = ellipseClosure(width, 30.0, 50.0);
+    EXPECT_LT(p.maxSutureGap, 1e-9);
+    force.push_back(p.closure.magnitudeSum);
+    std::printf("[undermining curve] width %4.0f mm: %zu bone nodes released, total closure force %.5g N "
+                "(%.1f %% of none), largest suture %.4g N\n",
+                width, p.continuum.underminedNodes.size(), p.closure.magnitudeSum, 100 * force.back() / force.front(),
+                p.closure.largest);
+  }
+  std::printf("[undermining curve] published porcine data: undermining cut the closing force of a 9 × 9 cm defect "
+              "by about 14 %%; here 20 mm cut it by %.1f %%, 40 mm by %.1f %%\n",
+              100 * (1 - force[3] / force[0]), 100 * (1 - force[4] / force[0]));
+  for (std::size_t i = 1; i < force.size(); ++i)
+    EXPECT_LT(force[i], force[i - 1]) << "width " << widths[i];
+  // It flattens: the last 20 mm gain less per mm than the first 10.
+  EXPECT_LT((force[3] - force[4]) / 20.0, (force[0] - force[2]) / 10.0);
+}
+
 TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
 {
   const Phantom& ph = phantom();
@@ -301,6 +504,9 @@ TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
   EXPECT_THROW(simulatePlan(ph.skin, ph.bone, plan, bad), std::invalid_argument);
   bad = testOptions();
   bad.layerCount = 0;
+  EXPECT_THROW(simulatePlan(ph.skin, ph.bone, plan, bad), std::invalid_argument);
+  bad = testOptions();
+  bad.underminingWidth = -1.0;
   EXPECT_THROW(simulatePlan(ph.skin, ph.bone, plan, bad), std::invalid_argument);
 
   // No bone anywhere: the stated default depth.

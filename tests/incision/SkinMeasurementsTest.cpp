@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "AnalyticSkins.h"
 #include "modules/incision/SkinMeasurements.h"
@@ -249,4 +251,55 @@ TEST(MeasurePlan, EveryProcedureWithItsDefaults)
     }
     std::printf("\n  excised area (cylinder / sphere) mm²: %.3f / %.3f\n", c.excisedArea, s.excisedArea);
   }
+}
+
+TEST(ExcisedVolume, BoxOnACylinderIsItsAnnularSector)
+{
+  // Skin r = 80 mm over bone r = 70 mm; a box 20 mm around the head (20/80
+  // rad) by 10 mm along the axis: (80² − 70²) / 2 · 0.25 · 10 = 1875 mm³.
+  const auto skin = test::cylinderSkin(80.0);
+  const auto bone = test::cylinderSkin(70.0);
+  const SkinChart chart(skin, 0.3, 5.0);
+  const std::vector<ChartPoint> box = {{-10, -5}, {10, -5}, {10, 5}, {-10, 5}};
+  const double sector = 0.5 * (80.0 * 80.0 - 70.0 * 70.0) * (20.0 / 80.0) * 10.0;
+  EXPECT_NEAR(tissueVolume(chart, bone, box), sector, 1e-9 * sector);
+  // Either orientation; an L (not star-shaped about its centroid) adds up.
+  const std::vector<ChartPoint> reversed(box.rbegin(), box.rend());
+  EXPECT_NEAR(tissueVolume(chart, bone, reversed), sector, 1e-9 * sector);
+  const std::vector<ChartPoint> l = {{0, 0}, {20, 0}, {20, 10}, {10, 10}, {10, 20}, {0, 20}};
+  const double perChartArea = (80.0 * 80.0 - 70.0 * 70.0) / (2.0 * 80.0);
+  EXPECT_NEAR(tissueVolume(chart, bone, l), 300.0 * perChartArea, 1e-9 * 300.0 * perChartArea);
+
+  // Bone sloping along the axis, r = 70 + 0.1 z: the depth shrinks upwards.
+  seg::RangeMap cone = bone;
+  for (int j = 0; j < cone.nZ(); ++j)
+    for (int i = 0; i < cone.nTheta(); ++i)
+      cone.at(i, j) = float(70.0 + 0.1 * cone.frame().indexToZ(j));
+  auto cube = [](double z) { return std::pow(70.0 + 0.1 * z, 3) / 0.3; };
+  const double sloped = 0.5 * (20.0 / 80.0) * (80.0 * 80.0 * 10.0 - (cube(10.0) - cube(0.0)));
+  const double measured = tissueVolume(chart, cone, box);
+  std::printf("[excised volume] box 20 x 10 mm: flat bone %.6g mm³ (analytic %.6g), sloping bone %.6g mm³ "
+              "(analytic %.6g)\n",
+              tissueVolume(chart, bone, box), sector, measured, sloped);
+  EXPECT_NEAR(measured, sloped, 1e-6 * sloped);
+
+  // Bone above the skin is refused; no bone: the stated default depth.
+  EXPECT_THROW(tissueVolume(chart, test::cylinderSkin(90.0), box), std::invalid_argument);
+  const seg::RangeMap noBone(skin.frame());
+  const double defaulted = 0.5 * (80.0 * 80.0 - 72.0 * 72.0) * (20.0 / 80.0) * 10.0;
+  EXPECT_NEAR(tissueVolume(chart, noBone, box, 8.0), defaulted, 1e-9 * defaulted);
+  EXPECT_THROW(tissueVolume(chart, noBone, box, 0.0), std::invalid_argument);
+}
+
+TEST(ExcisedVolume, PlansRemoveTheirHoleDownToTheBone)
+{
+  const auto skin = test::cylinderSkin(80.0);
+  const auto bone = test::cylinderSkin(70.0);
+  const double perChartArea = (80.0 * 80.0 - 70.0 * 70.0) / (2.0 * 80.0);
+  const IncisionPlan rhombus =
+    test::shippedProcedures().find("rhomboid-flap")->place(skin, {0.0, 0.0}, {{"side_length", 15.0}});
+  const double area = 15.0 * 15.0 * std::sin(60.0 * degree);
+  EXPECT_NEAR(excisedVolume(rhombus, skin, bone), perChartArea * area, 1e-6 * perChartArea * area);
+  const IncisionPlan z = test::shippedProcedures().find("z-plasty")->place(skin, {0.0, 0.0});
+  EXPECT_EQ(excisedVolume(z, skin, bone), 0.0);
 }

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <regex>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -238,6 +240,39 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   std::ifstream csv(out / "measurements.csv");
   const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("excised area,hole,,"), std::string::npos) << text;
+  EXPECT_NE(text.find("excised volume (skin to bone),hole,,"), std::string::npos) << text;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("Closure force: ([0-9.]+) N over all sutures"))) << r.output;
+  EXPECT_GT(std::stod(m[1]), 0.0) << r.output;
+
+  // The undermining study: one row per width, the force falls as the band widens.
+  const fs::path study = folder / "undermined";
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
+              "--element-size 2.5 --undermine 0,10 --out " + quoted(study.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  std::ifstream rows(study / "undermining.csv");
+  std::string header, line;
+  std::getline(rows, header);
+  std::vector<std::vector<double>> table;
+  while (std::getline(rows, line))
+  {
+    std::vector<double> row;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');)
+      row.push_back(std::stod(cell));
+    table.push_back(row);
+  }
+  ASSERT_EQ(table.size(), 2u) << header;
+  ASSERT_EQ(table[0].size(), 5u);
+  ASSERT_EQ(table[1].size(), 5u);
+  EXPECT_EQ(table[0][0], 0.0);
+  EXPECT_EQ(table[0][1], 0.0); // no bone node released without undermining
+  EXPECT_GT(table[1][1], 0.0);
+  EXPECT_GT(table[0][2], table[1][2]) << r.output;
+  EXPECT_LT(table[1][4], 1e-9);
+  EXPECT_EQ(runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --undermine 5,-1 " +
+                    "--out " + quoted(study.string()))
+              .exitCode,
+            2);
 
   r = runCaps("plan " + quoted(ct.string()) + " --procedure face-lift --at -90,0 --out " + quoted(out.string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
