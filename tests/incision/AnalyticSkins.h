@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "modules/incision/PlanSimulation.h"
 #include "modules/incision/ProcedureTemplate.h"
 #include "segmentation/RangeMap.h"
 
@@ -32,6 +33,30 @@ inline seg::RangeMap sphereSkin(double rho)
       map.at(i, j) = float(std::sqrt(rho * rho - z * z));
   }
   return map;
+}
+
+/// The simulation phantom: skin r = 80 mm over bone r = 70 mm (10 mm of soft tissue).
+struct CylinderPhantom
+{
+  seg::RangeMap skin = cylinderSkin(80.0);
+  seg::RangeMap bone = cylinderSkin(70.0);
+};
+
+inline const CylinderPhantom& cylinderPhantom()
+{
+  static const CylinderPhantom p;
+  return p;
+}
+
+/// The phantom tests' simulation: 2 mm elements, a 20 mm region, 3 layers, one thread.
+inline incision::SimulationOptions phantomSimulationOptions()
+{
+  incision::SimulationOptions o;
+  o.elementSize = 2.0;
+  o.regionRadius = 20.0;
+  o.layerCount = 3;
+  o.threads = 1;
+  return o;
 }
 
 inline std::filesystem::path proceduresFolder()

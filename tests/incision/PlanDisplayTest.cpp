@@ -30,27 +30,10 @@
 namespace caps::incision {
 namespace {
 
-struct Phantom
-{
-  seg::RangeMap skin = test::cylinderSkin(80.0);
-  seg::RangeMap bone = test::cylinderSkin(70.0);
-};
+using Phantom = test::CylinderPhantom;
+const Phantom& phantom() { return test::cylinderPhantom(); }
 
-const Phantom& phantom()
-{
-  static const Phantom p;
-  return p;
-}
-
-SimulationOptions testOptions()
-{
-  SimulationOptions o;
-  o.elementSize = 2.0;
-  o.regionRadius = 20.0;
-  o.layerCount = 3;
-  o.threads = 1;
-  return o;
-}
+SimulationOptions testOptions() { return test::phantomSimulationOptions(); }
 
 /// The symmetric ellipse of PlanSimulationTest: 24 mm, 3:1, along θ at (0, 0).
 const PlanPrediction& ellipse()

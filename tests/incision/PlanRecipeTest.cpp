@@ -34,17 +34,8 @@ namespace {
 
 using test::degree;
 
-struct Phantom
-{
-  seg::RangeMap skin = test::cylinderSkin(80.0);
-  seg::RangeMap bone = test::cylinderSkin(70.0);
-};
-
-const Phantom& phantom()
-{
-  static const Phantom p;
-  return p;
-}
+using Phantom = test::CylinderPhantom;
+const Phantom& phantom() { return test::cylinderPhantom(); }
 
 const ProcedureLibrary& library() { return test::shippedProcedures(); }
 

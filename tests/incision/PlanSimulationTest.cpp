@@ -19,17 +19,8 @@ namespace {
 
 using test::degree;
 
-struct Phantom
-{
-  seg::RangeMap skin = test::cylinderSkin(80.0);
-  seg::RangeMap bone = test::cylinderSkin(70.0);
-};
-
-const Phantom& phantom()
-{
-  static const Phantom p;
-  return p;
-}
+using Phantom = test::CylinderPhantom;
+const Phantom& phantom() { return test::cylinderPhantom(); }
 
 const ProcedureTemplate& procedure(const std::string& id)
 {
@@ -39,15 +30,7 @@ const ProcedureTemplate& procedure(const std::string& id)
   return *t;
 }
 
-SimulationOptions testOptions()
-{
-  SimulationOptions o;
-  o.elementSize = 2.0;
-  o.regionRadius = 20.0;
-  o.layerCount = 3;
-  o.threads = 1;
-  return o;
-}
+SimulationOptions testOptions() { return test::phantomSimulationOptions(); }
 
 /// §4.5.2: N_l(2N_v + N_e) + N_v + N_e nodes, N_l N_p elements.
 void expectThesisCounts(const PlanPrediction& p, int layers)
