@@ -1,5 +1,10 @@
 #include "fem/ContinuumMesher.h"
 
+#include "fem/ElasticityIntegrator.h"
+#include "fem/ElementShape.h"
+#include "fem/HoleFloor.h"
+#include "fem/Quadrature.h"
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -49,6 +54,9 @@ void validateOptions(const ContinuumMeshOptions& o) {
          std::to_string(o.minDepth) + " mm)");
   if (o.noBoneDepth && (!std::isfinite(*o.noBoneDepth) || *o.noBoneDepth <= 0.0))
     fail("the depth used where there is no bone must be positive (got " + std::to_string(*o.noBoneDepth) + " mm)");
+  if (o.cutLayers < 0 || o.cutLayers > o.layerCount)
+    fail("the cut goes through " + std::to_string(o.cutLayers) + " layers of a mesh with " +
+         std::to_string(o.layerCount) + "; give 1.." + std::to_string(o.layerCount) + " (0: full thickness)");
 }
 
 /// Cumulative fractions of the depth at the N_l + 1 layer boundaries; the
@@ -220,6 +228,27 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
       polygonEdges[p].push_back(it->second);
     }
   }
+  // A cut of partial depth: the hole's floor is meshed below the cut, its
+  // new edges (diagonals, edges between merged twins) after the surface's.
+  const int cut = options.cutLayers == 0 ? layers : options.cutLayers;
+  const bool partial = cut < layers;
+  HoleFloor floor;
+  std::vector<std::array<int, 3>> floorEdges;
+  if (partial) {
+    floor = holeFloor(surface);
+    for (const auto& triangle : floor.triangles) {
+      std::array<int, 3> edgesOfTriangle{};
+      for (std::size_t i = 0; i < 3; ++i) {
+        auto [it, added] = edgeOf.emplace(edgeKey(triangle[i], triangle[(i + 1) % 3]), int(out.edges.size()));
+        if (added) {
+          out.edges.push_back(it->first);
+          edgeUses.emplace_back();  // no surface polygon uses it: neither hole border nor rim
+        }
+        edgesOfTriangle[i] = it->second;
+      }
+      floorEdges.push_back(edgesOfTriangle);
+    }
+  }
   const int edgeCount = int(out.edges.size());
 
   // 2. Node positions, layer by layer as in the thesis: the skin level, then
@@ -293,6 +322,25 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
   if (next != nodeTotal)
     throw std::logic_error("continuum mesher: node count differs from N_l(2N_v + N_e) + N_v + N_e");
 
+  // Below a cut of partial depth the two sides are one tissue: twins that
+  // touch, and the edges between them, share the nodes from the cut's root
+  // down (the copies are dropped below).
+  auto representativeOf = [&](int v) { return partial && v < holeCount ? floor.representative[std::size_t(v)] : v; };
+  if (partial) {
+    for (int v = 0; v < holeCount; ++v) {
+      const int r = representativeOf(v);
+      for (int i = 2 * cut; r != v && i <= 2 * layers; ++i)
+        out.vertexColumns[std::size_t(v)][std::size_t(i)] = out.vertexColumns[std::size_t(r)][std::size_t(i)];
+    }
+    std::map<std::array<int, 2>, int> edgeOfRepresentatives;
+    for (int e = 0; e < edgeCount; ++e) {
+      const auto& [a, b] = out.edges[std::size_t(e)];
+      const auto [it, added] = edgeOfRepresentatives.emplace(edgeKey(representativeOf(a), representativeOf(b)), e);
+      for (int level = cut; !added && level <= layers; ++level)
+        out.edgeColumns[std::size_t(e)][std::size_t(level)] = out.edgeColumns[std::size_t(it->second)][std::size_t(level)];
+    }
+  }
+
   // 3. Elements: one per polygon per layer, node slots read from the columns.
   out.mesh.elements.reserve(surface.polygons.size() * std::size_t(layers));
   for (int k = 0; k < layers; ++k) {
@@ -319,7 +367,51 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
       out.elementPolygon.push_back(int(p));
       out.elementLayer.push_back(k);
     }
+    // The floor of the hole under a cut of partial depth: wedges, top
+    // triangle counter-clockwise like the skin's.
+    for (std::size_t t = 0; k >= cut && t < floor.triangles.size(); ++t) {
+      Element el;
+      el.nodes.fill(-1);
+      el.region = region;
+      el.kind = ElementKind::Wedge15;
+      for (std::size_t i = 0; i < 3; ++i) {
+        const auto& column = out.vertexColumns[std::size_t(floor.triangles[t][i])];
+        const auto& edgeColumn = out.edgeColumns[std::size_t(floorEdges[t][i])];
+        el.nodes[i] = column[std::size_t(2 * k)];
+        el.nodes[3 + i] = column[std::size_t(2 * k + 2)];
+        el.nodes[6 + i] = edgeColumn[std::size_t(k)];
+        el.nodes[9 + i] = edgeColumn[std::size_t(k + 1)];
+        el.nodes[12 + i] = column[std::size_t(2 * k + 1)];
+      }
+      out.mesh.elements.push_back(el);
+      out.elementPolygon.push_back(int(surface.polygons.size() + t));
+      out.elementLayer.push_back(k);
+    }
   }
+
+  // Nodes no element uses (merged twins' copies, floor edges above the cut)
+  // are dropped; the rest keep their order.
+  if (partial) {
+    std::vector<int> renumbered(std::size_t(nodeTotal), -1);
+    for (const Element& el : out.mesh.elements)
+      for (int node : el.nodes)
+        if (node >= 0) renumbered[std::size_t(node)] = 0;
+    int kept = 0;
+    for (int& index : renumbered)
+      if (index == 0) index = kept++;
+    Eigen::Matrix3Xd nodes(3, kept);
+    for (int node = 0; node < nodeTotal; ++node)
+      if (renumbered[std::size_t(node)] >= 0) nodes.col(renumbered[std::size_t(node)]) = out.mesh.nodes.col(node);
+    out.mesh.nodes = std::move(nodes);
+    for (Element& el : out.mesh.elements)
+      for (int& node : el.nodes)
+        if (node >= 0) node = renumbered[std::size_t(node)];
+    for (auto* columns : {&out.vertexColumns, &out.edgeColumns})
+      for (auto& column : *columns)
+        for (int& node : column)
+          if (node >= 0) node = renumbered[std::size_t(node)];
+  }
+  const int nodeCount = int(out.mesh.nodes.cols());
 
   // 4. Sutures (§4.4.5): edge a onto edge b through every layer, vertex
   //    columns a0 -> b0, a1 -> b1 (not at a corner being closed) and the
@@ -332,8 +424,10 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
   };
   NodeGroups groups;
   std::vector<int> joinOrder;  // nodes in order of first suture, for a stable output
-  auto sew = [&](const std::vector<int>& from, const std::vector<int>& onto) {
-    for (std::size_t i = 0; i < from.size(); ++i) {
+  // Only the layers the cut goes through: the nodes at its root and below
+  // are held by the tissue under it.
+  auto sew = [&](const std::vector<int>& from, const std::vector<int>& onto, std::size_t sewn) {
+    for (std::size_t i = 0; i < sewn; ++i) {
       for (int node : {from[i], onto[i]})
         if (groups.parent.find(node) == groups.parent.end()) joinOrder.push_back(node);
       groups.join(from[i], onto[i]);
@@ -356,10 +450,10 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     for (int i = 0; i < 2; ++i)
       if (edgePair.a[std::size_t(i)] != edgePair.b[std::size_t(i)])  // corner rule
         sew(out.vertexColumns[std::size_t(edgePair.a[std::size_t(i)])],
-            out.vertexColumns[std::size_t(edgePair.b[std::size_t(i)])]);
-    sew(out.edgeColumns[std::size_t(ea)], out.edgeColumns[std::size_t(eb)]);
+            out.vertexColumns[std::size_t(edgePair.b[std::size_t(i)])], std::size_t(partial ? 2 * cut : 2 * layers + 1));
+    sew(out.edgeColumns[std::size_t(ea)], out.edgeColumns[std::size_t(eb)], std::size_t(partial ? cut : layers + 1));
   }
-  std::vector<char> sutured(std::size_t(nodeTotal), 0);
+  std::vector<char> sutured(std::size_t(nodeCount), 0);
   for (int node : joinOrder) {
     sutured[std::size_t(node)] = 1;
     const int root = groups.find(node);
@@ -382,9 +476,12 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     if (isUndermined(out.edges[std::size_t(e)][0]) && isUndermined(out.edges[std::size_t(e)][1]))
       out.underminedNodes.push_back(node);
   }
-  std::sort(out.boneNodes.begin(), out.boneNodes.end());
-  std::sort(out.underminedNodes.begin(), out.underminedNodes.end());
-  std::vector<char> onRim(std::size_t(nodeTotal), 0);
+  // Merged twins share a bone node: keep each once.
+  for (auto* nodes : {&out.boneNodes, &out.underminedNodes}) {
+    std::sort(nodes->begin(), nodes->end());
+    nodes->erase(std::unique(nodes->begin(), nodes->end()), nodes->end());
+  }
+  std::vector<char> onRim(std::size_t(nodeCount), 0);
   for (int e = 0; e < edgeCount; ++e) {
     if (edgeUses[std::size_t(e)].size() != 1) continue;
     const auto& [a, b] = out.edges[std::size_t(e)];
@@ -394,16 +491,59 @@ ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<Suture
     for (int v : {a, b})
       for (int node : out.vertexColumns[std::size_t(v)]) onRim[std::size_t(node)] = 1;
   }
-  for (int node = 0; node < nodeTotal; ++node)
+  for (int node = 0; node < nodeCount; ++node)
     if (onRim[std::size_t(node)]) out.rimNodes.push_back(node);
-  std::vector<char> fixed(std::size_t(nodeTotal), 0);
+  std::vector<char> fixed(std::size_t(nodeCount), 0);
   for (int node : out.boneNodes) fixed[std::size_t(node)] = 1;
   for (int node : out.underminedNodes) fixed[std::size_t(node)] = 0;
   if (options.rim == RimCondition::Clamped)
     for (int node : out.rimNodes) fixed[std::size_t(node)] = 1;
-  for (int node = 0; node < nodeTotal; ++node)
+  for (int node = 0; node < nodeCount; ++node)
     if (fixed[std::size_t(node)] && !sutured[std::size_t(node)]) out.fixedNodes.push_back(node);
   return out;
+}
+
+ContinuumMesh meshExcisedTissue(const SurfaceMesh& surface, const TissueGeometry& geometry,
+                                const ContinuumMeshOptions& options) {
+  validateOptions(options);
+  if (!geometry.skinPoint || !geometry.tissueDepth || !geometry.inwardDirection)
+    fail("the tissue geometry needs all three callbacks (skin point, tissue depth, inward direction)");
+  const HoleFloor floor = holeFloor(surface);
+  if (floor.triangles.empty()) return {};
+  // The floor as a surface of its own, meshed down to the cut's root: the
+  // layers above the cut with their fractions, over the depth they span.
+  SurfaceMesh floorSurface;
+  floorSurface.vertices.assign(surface.vertices.begin(), surface.vertices.begin() + surface.holeVertexCount);
+  for (const auto& t : floor.triangles) floorSurface.polygons.push_back({t[0], t[1], t[2]});
+  const int cut = options.cutLayers == 0 ? options.layerCount : options.cutLayers;
+  const std::vector<double> levels = levelFractionsOf(options);
+  const double rootFraction = levels[std::size_t(cut)];
+  ContinuumMeshOptions removed;
+  removed.layerCount = cut;
+  for (int k = 0; k < cut; ++k) {
+    removed.layerFractions.push_back((levels[std::size_t(k) + 1] - levels[std::size_t(k)]) / rootFraction);
+    removed.layerRegions.push_back(options.layerRegions.empty() ? k : options.layerRegions[std::size_t(k)]);
+  }
+  double sum = 0.0;
+  for (double f : removed.layerFractions) sum += f;
+  removed.layerFractions.back() += 1.0 - sum;  // exactly 1 for the check
+  TissueGeometry toRoot = geometry;
+  toRoot.tissueDepth = [&](const ChartPoint& c) {
+    return rootFraction * effectiveTissueDepth(geometry.tissueDepth(c), options, "a point of the excised tissue");
+  };
+  ContinuumMesh out = meshContinuum(floorSurface, {}, toRoot, removed);
+  out.fixedNodes.clear();  // nothing holds what is cut out
+  return out;
+}
+
+double meshVolume(const Mesh& mesh) {
+  double volume = 0.0;
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    const Element& el = mesh.elements[e];
+    volume += elementVolume(ElementShape::fromConnectivity(el.kind, el.nodes), mesh.elementCoordinates(e),
+                            integrationRule(el.kind, 3), int(e));
+  }
+  return volume;
 }
 
 }  // namespace caps::fem

@@ -72,6 +72,15 @@ struct ContinuumMeshOptions {
   /// clamped rim stays clamped: it holds the tissue beyond the mesh, not the
   /// bone.
   std::vector<char> underminedVertices;
+  /// Incision depth (thesis §3.2.2: cutting to a depth): the number of
+  /// layers, from the skin, the cut goes through; 0 (or N_l) is full
+  /// thickness, the thesis's model. Below a cut of partial depth the tissue
+  /// is whole: the two sides of the cut share their nodes where they touch
+  /// (twins not offset apart), the floor of an excision (holeFloor()) is
+  /// meshed through the layers below the cut, and sutures sew only the
+  /// layers the cut goes through (not the nodes at its root, which the
+  /// tissue below holds).
+  int cutLayers = 0;
 };
 
 /**
@@ -105,11 +114,15 @@ struct ContinuumMesh {
   std::vector<int> rimNodes;
 
   /// Surface edges (smaller vertex index first), in order of first use by
-  /// the polygons; indices into edgeColumns.
+  /// the polygons, then the new edges of the hole's floor (cut of partial
+  /// depth); indices into edgeColumns.
   std::vector<std::array<int, 2>> edges;
   /// Node column of each surface vertex (2 N_l + 1 nodes, skin to bone).
+  /// Under a cut of partial depth, twins share the nodes below the cut.
   std::vector<std::vector<int>> vertexColumns;
-  /// Node column of each surface edge (N_l + 1 nodes, skin to bone).
+  /// Node column of each surface edge (N_l + 1 nodes, skin to bone); under
+  /// a cut of partial depth the edges of the hole's floor follow, with -1
+  /// above the cut where they have no node.
   std::vector<std::vector<int>> edgeColumns;
   /// Depth used at each vertex and at each edge's chart midpoint (mm,
   /// after clamping and the no-bone default).
@@ -120,6 +133,8 @@ struct ContinuumMesh {
   std::vector<double> levelFractions;
 
   /// For each element, its surface polygon and its layer (0 at the skin).
+  /// Elements of the hole's floor under a cut of partial depth have
+  /// polygon index surface.polygons.size() + their floor triangle.
   std::vector<int> elementPolygon;
   std::vector<int> elementLayer;
 
@@ -150,12 +165,29 @@ struct ContinuumMesh {
  * polygon that is not counter-clockwise in the chart, an edge used by more
  * than two polygons or twice in the same direction, a suture edge that is
  * not a border edge of the hole loop, undermining flags not one per surface
- * vertex, a missing callback, a non-finite skin
+ * vertex, a cut depth outside 0..N_l, a hole floor that cannot be
+ * triangulated, a missing callback, a non-finite skin
  * point or inward direction, no bone and no default depth, or a depth that
  * is not positive after clamping.
  */
 ContinuumMesh meshContinuum(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
                             const TissueGeometry& geometry, const ContinuumMeshOptions& options = {});
+
+/**
+ * @brief The tissue an excision removes (thesis §3.1.3: volumetric elements
+ *        give the volume removed; §3.2.2): the hole's floor (holeFloor() of
+ *        @a surface) extruded like the rest of the mesh through the layers
+ *        the cut goes through (@a options.cutLayers), down to the same
+ *        depths. Its elements are wedges over the floor triangles; the
+ *        surface polygons are not meshed. An empty mesh for a cut with no
+ *        excision. Undermining and the rim do not apply.
+ */
+ContinuumMesh meshExcisedTissue(const SurfaceMesh& surface, const TissueGeometry& geometry,
+                                const ContinuumMeshOptions& options = {});
+
+/// Volume (mm^3) of a mesh: the sum of its elements' volumes by the full
+/// integration rule (3 x 3 x 3 Gauss points, 18-point wedge rule).
+double meshVolume(const Mesh& mesh);
 
 /**
  * @brief The default undermining of §3.2.4 item 2: the surface vertices

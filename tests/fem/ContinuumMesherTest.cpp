@@ -478,6 +478,168 @@ TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
             << " mm, largest relative asymmetry " << asymmetry << "\n";
 }
 
+/// Flat skin z = 0 over the chart, the bone `depth` mm under it: every
+/// element is straight-sided, so volumes are exact.
+TissueGeometry flatGeometry(double depth) {
+  TissueGeometry g;
+  g.skinPoint = [](const ChartPoint& c) { return Eigen::Vector3d(c.x(), c.y(), 0.0); };
+  g.tissueDepth = [depth](const ChartPoint&) { return depth; };
+  g.inwardDirection = [](const ChartPoint&) { return Eigen::Vector3d(0.0, 0.0, -1.0); };
+  return g;
+}
+
+double shoelaceArea(const std::vector<ChartPoint>& points, int count) {
+  double sum = 0.0;
+  for (int i = 0; i < count; ++i) {
+    const ChartPoint& a = points[std::size_t(i)];
+    const ChartPoint& b = points[std::size_t((i + 1) % count)];
+    sum += a.x() * b.y() - a.y() * b.x();
+  }
+  return std::abs(0.5 * sum);
+}
+
+TEST(ContinuumMesherTest, APartialCutSharesTheTwinsBelowIt) {
+  // The slit cut through the top layer of three: twin 3 of vertex 1 shares
+  // its column from the cut's root (index 2) down, and so do the edges
+  // (0, 1) / (0, 3) and (1, 2) / (3, 2) from level 1 down.
+  const SurfaceMesh m = slitMesh();
+  ContinuumMeshOptions options;
+  options.layerCount = 3;
+  options.cutLayers = 1;
+  const ContinuumMesh cm = meshContinuum(m, slitSutures(), cylinderGeometry(constantDepth), options);
+  ContinuumMeshOptions fullOptions;
+  fullOptions.layerCount = 3;
+  const ContinuumMesh full = meshContinuum(m, slitSutures(), cylinderGeometry(constantDepth), fullOptions);
+  const int merged = 5 + 3 + 3;  // vertex column indices 2..6, two edges' levels 1..3
+  EXPECT_EQ(cm.mesh.nodeCount(), full.mesh.nodeCount() - merged);
+  EXPECT_EQ(cm.mesh.elements.size(), full.mesh.elements.size());  // a slit has no floor
+  for (int i = 0; i <= 6; ++i) {
+    if (i < 2)
+      EXPECT_NE(cm.vertexColumns[1][std::size_t(i)], cm.vertexColumns[3][std::size_t(i)]) << i;
+    else
+      EXPECT_EQ(cm.vertexColumns[1][std::size_t(i)], cm.vertexColumns[3][std::size_t(i)]) << i;
+  }
+  const int e01 = cm.edgeIndex(0, 1), e03 = cm.edgeIndex(0, 3);
+  ASSERT_GE(e01, 0);
+  ASSERT_GE(e03, 0);
+  EXPECT_NE(cm.edgeColumns[std::size_t(e01)][0], cm.edgeColumns[std::size_t(e03)][0]);
+  for (int level = 1; level <= 3; ++level)
+    EXPECT_EQ(cm.edgeColumns[std::size_t(e01)][std::size_t(level)], cm.edgeColumns[std::size_t(e03)][std::size_t(level)]);
+  // Sutures only in the layer cut: vertex 3 onto 1 at column indices 0, 1
+  // and the two edges' skin level; nothing at the root or below.
+  EXPECT_EQ(cm.sutures.size(), 4u);
+  std::set<int> below;
+  for (int v : {1, 3})
+    for (int i = 2; i <= 6; ++i) below.insert(cm.vertexColumns[std::size_t(v)][std::size_t(i)]);
+  for (const Suture& s : cm.sutures) EXPECT_EQ(below.count(s.node) + below.count(s.target), 0u);
+  // Every node in some element; the bone nodes listed once each.
+  std::vector<int> uses(std::size_t(cm.mesh.nodeCount()), 0);
+  for (const auto& el : cm.mesh.elements)
+    for (int node : el.nodes)
+      if (node >= 0) ++uses[std::size_t(node)];
+  EXPECT_EQ(std::count(uses.begin(), uses.end(), 0), 0);
+  EXPECT_EQ(std::set<int>(cm.boneNodes.begin(), cm.boneNodes.end()).size(), cm.boneNodes.size());
+  EXPECT_EQ(int(cm.boneNodes.size()), int(m.vertices.size()) - 1 + int(cm.edges.size()) - 2);
+  checkJacobians(cm.mesh);
+}
+
+TEST(ContinuumMesherTest, APartialExcisionKeepsTheFloorAndTheVolumesAreExact) {
+  // The lens excision on flat skin, 12 mm deep, cut through the skin layer
+  // (15 % of the depth) of three: the tissue kept is the region less the
+  // lens over the top layer; the excised tissue is the lens over that layer.
+  const SurfaceMesh m = lensMesh();
+  const double depth = 12.0;
+  ContinuumMeshOptions options;
+  options.layerCount = 3;
+  options.layerFractions = {0.15, 0.35, 0.5};
+  options.cutLayers = 1;
+  const ContinuumMesh cm = meshContinuum(m, lensSutures(), flatGeometry(depth), options);
+  const double lens = shoelaceArea(m.vertices, m.holeVertexCount);
+  const double region = 50.0 * 30.0;
+  const std::size_t floorTriangles = std::size_t(m.holeVertexCount - 2);
+  EXPECT_EQ(cm.mesh.elements.size(), 3 * m.polygons.size() + 2 * floorTriangles);
+  const auto [minDet, volume] = checkJacobians(cm.mesh);
+  EXPECT_GT(minDet, 0.0);
+  const double kept = (region - lens) * depth + lens * depth * 0.85;
+  EXPECT_NEAR(volume, kept, 1e-10 * kept);
+  EXPECT_NEAR(meshVolume(cm.mesh), kept, 1e-10 * kept);
+
+  const ContinuumMesh excised = meshExcisedTissue(m, flatGeometry(depth), options);
+  EXPECT_EQ(excised.mesh.elements.size(), floorTriangles);
+  EXPECT_NEAR(meshVolume(excised.mesh), lens * depth * 0.15, 1e-12 * lens * depth);
+  // Full thickness: the whole lens down to the bone, in all three layers.
+  options.cutLayers = 0;
+  const ContinuumMesh whole = meshExcisedTissue(m, flatGeometry(depth), options);
+  EXPECT_EQ(whole.mesh.elements.size(), 3 * floorTriangles);
+  EXPECT_NEAR(meshVolume(whole.mesh), lens * depth, 1e-12 * lens * depth);
+  // A slit removes nothing.
+  EXPECT_TRUE(meshExcisedTissue(slitMesh(), flatGeometry(depth), options).mesh.elements.empty());
+}
+
+TEST(ContinuumMesherTest, TheExcisedBoxHasItsAnalyticVolume) {
+  // A 16 x 8 mm box excision on flat skin over a bone 9 mm down, its sides
+  // refined every 2 mm, inside a 40 x 20 mm region of quadrilaterals whose
+  // inner corners are the box's points: the excised volume is 16 * 8 * 9 mm³.
+  SurfaceMesh m;
+  std::vector<ChartPoint>& v = m.vertices;
+  for (int i = 0; i < 8; ++i) v.push_back({-8.0 + 2 * i, -4.0});  // clockwise seen from the skin: along the bottom
+  for (int i = 0; i < 4; ++i) v.push_back({8.0, -4.0 + 2 * i});
+  for (int i = 0; i < 8; ++i) v.push_back({8.0 - 2 * i, 4.0});
+  for (int i = 0; i < 4; ++i) v.push_back({-8.0, 4.0 - 2 * i});
+  std::reverse(v.begin(), v.end());  // the hole loop runs clockwise
+  m.holeVertexCount = int(v.size());
+  // A ring of quads from each loop vertex to its point scaled out 2.5 times.
+  const int n = m.holeVertexCount;
+  for (int i = 0; i < n; ++i) v.push_back(2.5 * v[std::size_t(i)]);
+  for (int i = 0; i < n; ++i) {
+    const int j = (i + 1) % n;
+    m.polygons.push_back({i, j, n + j, n + i});
+  }
+  ContinuumMeshOptions options;
+  options.layerCount = 2;
+  const ContinuumMesh excised = meshExcisedTissue(m, flatGeometry(9.0), options);
+  EXPECT_NEAR(meshVolume(excised.mesh), 16.0 * 8.0 * 9.0, 1e-10);
+  // And the mesh around it with the box's floor kept under a half-depth cut.
+  options.cutLayers = 1;
+  const ContinuumMesh cm = meshContinuum(m, {}, flatGeometry(9.0), options);
+  const double ring = (2.5 * 2.5 - 1.0) * 16.0 * 8.0;
+  EXPECT_NEAR(meshVolume(cm.mesh), ring * 9.0 + 16.0 * 8.0 * 4.5, 1e-9);
+}
+
+TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne) {
+  // The lens closed with its cut through one layer of three and through all
+  // three: the sutured nodes meet either way, no rigid-body freedom is left,
+  // and the tissue left under a partial cut holds the cut layer's base in
+  // place, so the skin's sutures pull harder (sum of |K U| at the sutured
+  // nodes on the skin).
+  auto depth = [](const ChartPoint&) { return 12.0; };
+  const MaterialTable materials = {{0, {0.15, 0.45, 1e-9}}, {1, {0.01, 0.45, 1e-9}}, {2, {0.05, 0.45, 1e-9}}};
+  double pull[2] = {0.0, 0.0};
+  for (int cutLayers : {0, 1}) {
+    ContinuumMeshOptions options;
+    options.layerCount = 3;
+    options.cutLayers = cutLayers;
+    const ContinuumMesh cm = meshContinuum(lensMesh(), lensSutures(), cylinderGeometry(depth), options);
+    LinearStaticAnalysis analysis(cm.mesh, materials, cm.constraints());
+    ASSERT_EQ(analysis.prepare(), SolverStatus::Success) << analysis.message();
+    const Eigen::VectorXd u = analysis.solve(LoadCase{});
+    const Eigen::VectorXd f = analysis.internalForces(u);
+    double gap = 0.0;
+    for (const Suture& s : cm.sutures) {
+      gap = std::max(gap, (cm.mesh.nodes.col(s.node) + u.segment<3>(3 * s.node) - cm.mesh.nodes.col(s.target) -
+                           u.segment<3>(3 * s.target)).norm());
+      bool onSkin = false;
+      for (const auto* columns : {&cm.vertexColumns, &cm.edgeColumns})
+        for (const auto& column : *columns) onSkin = onSkin || column.front() == s.node;
+      if (onSkin) pull[cutLayers] += f.segment<3>(3 * s.node).norm();
+    }
+    EXPECT_LT(gap, 1e-9);
+  }
+  EXPECT_GT(pull[1], 1.2 * pull[0]);
+  std::cout << "lens closure force on the skin's sutures, cut through 3 of 3 layers: " << pull[0]
+            << " N, through 1 of 3: " << pull[1] << " N\n";
+}
+
 TEST(ContinuumMesherTest, BadInputIsRejectedWithAClearMessage) {
   const TissueGeometry geometry = cylinderGeometry(constantDepth);
   {
