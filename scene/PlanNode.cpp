@@ -68,6 +68,13 @@ void PlanNode::setSoftwareVersion(std::string version) {
   modified();
 }
 
+void PlanNode::setSimulation(nlohmann::json simulation) {
+  if (!simulation.is_null() && !simulation.is_object())
+    throw SceneError("a plan's simulation settings must be an object, not " + simulation.dump());
+  simulation_ = std::move(simulation);
+  modified();
+}
+
 void PlanNode::setNotes(std::string notes) {
   notes_ = std::move(notes);
   modified();
@@ -91,6 +98,7 @@ void PlanNode::writeFields(nlohmann::json& j) const {
   j["operations"] = operations_;
   j["ctSha256"] = ctSha256_;
   j["softwareVersion"] = softwareVersion_;
+  if (!simulation_.is_null()) j["simulation"] = simulation_;
   j["notes"] = notes_;
   j["rangeMapId"] = rangeMapId_;
 }
@@ -130,6 +138,11 @@ void PlanNode::readFields(const nlohmann::json& j) {
     operations_ = jsonfields::list(*operations, "the plan's operations");
   jsonfields::read(j, "ctSha256", ctSha256_);
   jsonfields::read(j, "softwareVersion", softwareVersion_);
+  if (const auto* simulation = jsonfields::find(j, "simulation")) {
+    if (!simulation->is_null() && !simulation->is_object())
+      throw SceneError("a plan's \"simulation\" must be an object, not " + simulation->dump());
+    simulation_ = *simulation;
+  }
   jsonfields::read(j, "notes", notes_);
   jsonfields::read(j, "rangeMapId", rangeMapId_);
 }

@@ -63,6 +63,12 @@ class PlanNode : public Node {
   void setCtSha256(std::string hash);
   const std::string& softwareVersion() const { return softwareVersion_; }
   void setSoftwareVersion(std::string version);
+  /// How its prediction was made, as plan.json's "simulation" object
+  /// (element size, cut depth; the Incision module checks it); null when
+  /// not recorded.
+  const nlohmann::json& simulation() const { return simulation_; }
+  /// Throws SceneError when @a simulation is neither null nor an object.
+  void setSimulation(nlohmann::json simulation);
   ///@}
 
   const std::string& notes() const { return notes_; }
@@ -87,6 +93,7 @@ class PlanNode : public Node {
   nlohmann::json operations_ = nlohmann::json::array();
   std::string ctSha256_;
   std::string softwareVersion_;
+  nlohmann::json simulation_;
   std::string notes_;
   NodeId rangeMapId_;
 };

@@ -74,6 +74,28 @@ incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
   for (const auto& s : node.sutures())
     written.push_back({{s[0], s[1]}, {s[2], s[3]}});
   plan.setSutures(std::move(written));  // throws SutureError (an invalid_argument) naming the pair
+  // The undermined regions as the node's recipe leaves them (placing a
+  // procedure starts afresh, "clear-undermining" empties them).
+  const nlohmann::json& operations = node.operations();
+  for (std::size_t k = 0; operations.is_array() && k < operations.size(); ++k)
+  {
+    const nlohmann::json& o = operations[k];
+    const auto kind = o.is_object() ? o.find("operation") : o.end();
+    if (!o.is_object() || kind == o.end() || !kind->is_string())
+      continue; // readRecipe() names it
+    if (*kind == "place" || *kind == "clear-undermining")
+      plan.clearUnderminedRegions();
+    else if (*kind == "undermine")
+      try
+      {
+        const auto operation = incision::operationFromJson(o, int(k + 1));
+        plan.addUnderminedRegion(std::get<incision::UndermineRegion>(operation).region);
+      }
+      catch (const incision::RecipeError& e)
+      {
+        throw incision::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
+      }
+  }
   return plan;
 }
 
@@ -85,6 +107,8 @@ void IncisionLogic::writeRecipe(const incision::PlanRecipe& recipe, PlanNode& no
   node.setOperations(std::move(operations));
   node.setCtSha256(recipe.ctSha256);
   node.setSoftwareVersion(recipe.softwareVersion);
+  const nlohmann::json written = incision::recipeToJson(recipe);
+  node.setSimulation(written.contains("simulation") ? written["simulation"] : nlohmann::json());
 }
 
 std::optional<incision::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& node)
@@ -98,7 +122,8 @@ std::optional<incision::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& no
                                      {"formatVersion", incision::recipeFormatVersion},
                                      {"softwareVersion", node.softwareVersion()},
                                      {"ctSha256", node.ctSha256()},
-                                     {"operations", node.operations()}});
+                                     {"operations", node.operations()},
+                                     {"simulation", node.simulation()}});
   }
   catch (const incision::RecipeError& e)
   {

@@ -48,9 +48,11 @@ public:
   /// Writes @a plan into @a node (procedure, generator, parameters, cut path,
   /// chart centre, excision offsets, sutures as written).
   static void writePlan(const incision::IncisionPlan& plan, PlanNode& node);
-  /// The plan a node holds.
+  /// The plan a node holds. Its undermined regions come from the node's
+  /// recipe (the operations writeRecipe() wrote; PlanNode has no field of its own for them).
   /// @throws std::invalid_argument when its offsets or sutures do not fit its
-  /// cut path (a hand-edited scene), naming what is wrong.
+  /// cut path (a hand-edited scene), or an "undermine" operation cannot be
+  /// read, naming what is wrong.
   static incision::IncisionPlan readPlan(const PlanNode& node);
   /// Writes the recipe that made the node's plan (operations, CT hash,
   /// software version) beside what writePlan() wrote.

@@ -77,6 +77,10 @@ std::vector<fem::SutureEdgePair> resolveSutures(int loopSize, const std::vector<
 /// resolved sutures: the points that coincide after closure.
 std::vector<std::vector<int>> sutureClasses(int loopSize, const std::vector<fem::SutureEdgePair>& sutures);
 
+/// A closed polygon on the skin, points (θn, zn) in normalised cylindrical
+/// coordinates (§4.2.2); the last point joins the first.
+using UnderminedRegion = std::vector<Eigen::Vector2d>;
+
 /// @class IncisionPlan
 /// @brief A surgical plan on one skin range map: the cut path in normalised
 /// cylindrical coordinates (§4.2.2), excision offsets and sutures.
@@ -129,6 +133,19 @@ public:
   /// @throws SutureError (see resolveSutures); the plan keeps its old sutures then.
   void setSutures(std::vector<SutureEdges> written);
 
+  /// @name Undermined regions (thesis §3.2.2, §3.2.4 item 2)
+  /// Regions of skin the surgeon frees from what lies beneath, besides the
+  /// default band along the sutured edges (SimulationOptions::underminingWidth):
+  /// closed polygons of points (θn, zn) in normalised cylindrical
+  /// coordinates like the cut path, the last point joined to the first. The
+  /// undermined skin is their union. Undermining.h checks them and finds the
+  /// mesh vertices inside; the plan only keeps them.
+  ///@{
+  const std::vector<UnderminedRegion>& underminedRegions() const { return underminedRegions_; }
+  void addUnderminedRegion(UnderminedRegion region) { underminedRegions_.push_back(std::move(region)); }
+  void clearUnderminedRegions() { underminedRegions_.clear(); }
+  ///@}
+
   /// The cut path in the chart (mm).
   std::vector<ChartPoint> chartPath(const SkinChart& chart) const;
   /// The hole loop (Fig. 4.11) in the chart, offsets applied.
@@ -143,6 +160,7 @@ private:
   std::map<int, ChartPoint> offsets_;
   std::vector<SutureEdges> written_;
   std::vector<fem::SutureEdgePair> sutures_;
+  std::vector<UnderminedRegion> underminedRegions_;
 };
 
 /// Checks a plan can be cut on this skin: at least two cut points, no two

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <numbers>
+#include <sstream>
 
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
@@ -24,6 +25,8 @@
 #include "modules/incision/PlanDisplay.h"
 #include "modules/incision/PlanRecipe.h"
 #include "modules/incision/PlanSimulation.h"
+#include "modules/incision/StudyPlot.h"
+#include "modules/incision/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/RangeMapNode.h"
@@ -49,7 +52,8 @@ const char* kPlanUsage =
   "(mm along the axis, as `caps rangemap` prints them), measures it on the skin, meshes\n"
   "the skin down to the bone, closes the sutures and writes into DIR:\n"
   "  measurements.csv     limb lengths and angles on the skin, excised area and volume,\n"
-  "                       closure force, Z-plasty gain\n"
+  "                       closure force, peak skin stress within 10 mm of the wound,\n"
+  "                       Z-plasty gain\n"
   "  skin-before.vtp      the skin around the wound before the operation: element faces\n"
   "                       subdivided 4 x 4 with the CT's skin detail (§4.7), shaded by the\n"
   "                       tissue under the skin; displacement (mm), von Mises and mean\n"
@@ -66,13 +70,23 @@ const char* kPlanUsage =
   "                       Z mm; repeatable, applied in the order given after the placement\n"
   "  --offset V=DU,DV     moves border point V of the hole away from its twin by DU, DV mm\n"
   "                       (around the head, along the axis) to make an excision; repeatable\n"
+  "  --undermine-region \"THETA,Z;THETA,Z;...\"\n"
+  "                       undermines the skin inside the closed polygon of these points\n"
+  "                       (degrees, mm; at least 3, the last joined to the first): its bone\n"
+  "                       nodes are released (§3.2.4); repeatable, the regions add up; kept\n"
+  "                       in plan.json, tinted blue and hatched in skin_colour of the VTP\n"
   "  --replay PLAN.json   instead of --procedure/--at/--param: rebuilds the plan of a plan.json\n"
   "                       from its operations; refused when it was made on another CT\n"
   "  --other-ct           replays a plan made on another CT (another scan or patient) anyway\n"
   "  --element-size MM    element size at the wound (default 2, or the replayed plan's)\n"
+  "  --cut-depth N        the cut goes through the top N of the model's 3 tissue layers\n"
+  "                       (1: the skin, 2: skin and fat, 3: down to the bone, the default;\n"
+  "                       or the replayed plan's); below it the tissue stays whole and only\n"
+  "                       the layers cut are sutured (§3.2.2)\n"
   "  --undermine W,W,...  also closes the plan with the skin undermined W mm around the\n"
   "                       sutured edges (§3.2.4: freed from the bone), for each width, and\n"
-  "                       writes undermining.csv: closure force against undermining width\n"
+  "                       writes undermining.csv: closure force and peak skin stress near\n"
+  "                       the wound against undermining width, plotted in undermining.png\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
   "\n"
   "The tissue is linear elastic with assumed moduli (skin 0.15, fat 0.01, muscle\n"
@@ -95,9 +109,11 @@ struct PlanArgs : cli::CtCommandArgs
   std::optional<std::pair<double, double>> at; ///< degrees, mm
   std::map<std::string, double> params;        ///< file units
   std::vector<PlanEdit> edits;
+  std::vector<std::vector<std::pair<double, double>>> undermineRegions; ///< degrees, mm
   std::optional<fs::path> replay;
   bool otherCt = false;
   std::optional<double> elementSize; ///< mm; default 2, or the replayed plan's
+  std::optional<int> cutLayers;      ///< --cut-depth; default all layers, or the replayed plan's
   std::vector<double> undermineWidths; ///< mm, the --undermine study; empty: none
 };
 
@@ -116,6 +132,27 @@ bool parseWidths(const std::string& text, std::vector<double>& widths)
     start = comma + 1;
   }
   return !widths.empty();
+}
+
+/// "THETA,Z;THETA,Z;..." (degrees, mm), each finite; at least one point
+/// (fewer than 3 are refused with the plan's message).
+bool parseRegion(const std::string& text, std::vector<std::pair<double, double>>& points)
+{
+  points.clear();
+  std::size_t start = 0;
+  while (start <= text.size())
+  {
+    const std::size_t semicolon = std::min(text.find(';', start), text.size());
+    const std::string point = text.substr(start, semicolon - start);
+    const std::size_t comma = point.find(',');
+    double theta = 0.0, z = 0.0;
+    if (comma == std::string::npos || !cli::parseNumber(point.substr(0, comma), theta) ||
+        !cli::parseNumber(point.substr(comma + 1), z) || !std::isfinite(theta) || !std::isfinite(z))
+      return false;
+    points.emplace_back(theta, z);
+    start = semicolon + 1;
+  }
+  return !points.empty();
 }
 
 /// "I=A,B" with I a whole number from 0 and A, B finite.
@@ -172,6 +209,14 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
                                  "the head and along the axis, e.g. 2=0,1.5";
         parsed.edits.push_back(edit);
       }
+      else if (a == "--undermine-region")
+      {
+        std::vector<std::pair<double, double>> points;
+        if (!hasValue || !parseRegion(args[++i], points))
+          return "--undermine-region needs \"THETA,Z;THETA,Z;...\": the corners of the region in degrees around "
+                 "the head axis and mm along it, e.g. \"-95,-5;-85,-5;-85,5;-95,5\"";
+        parsed.undermineRegions.push_back(std::move(points));
+      }
       else if (a == "--replay")
       {
         if (!hasValue)
@@ -186,6 +231,14 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
         if (!hasValue || !cli::parseNumber(args[++i], size) || size <= 0.2 || size > 20.0)
           return "--element-size needs a length in mm between 0.2 and 20";
         parsed.elementSize = size;
+      }
+      else if (a == "--cut-depth")
+      {
+        double layers = 0.0;
+        if (!hasValue || !cli::parseNumber(args[++i], layers) || (layers != 1.0 && layers != 2.0 && layers != 3.0))
+          return "--cut-depth needs the number of tissue layers the cut goes through: 1 (skin), 2 (skin and fat) "
+                 "or 3 (down to the bone)";
+        parsed.cutLayers = int(layers);
       }
       else if (a == "--undermine")
       {
@@ -240,8 +293,12 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
   return values;
 }
 
+/// Radius (mm on the skin) of the band around the wound where the peak skin stress is taken.
+constexpr double kWoundStressRadius = 10.0;
+
 void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m,
-                       const incision::PlanPrediction& p, double excisedVolume)
+                       const incision::PlanPrediction& p, double excisedVolumeToBone,
+                       const incision::WoundStress& stress, const seg::CylindricalPoint& peakAt)
 {
   std::ofstream out(file);
   out << std::setprecision(10) << "quantity,where,chart,skin,unit\n";
@@ -250,11 +307,23 @@ void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m
   for (const auto& a : m.limbAngles)
     out << "limb angle,p" << a.point << "," << a.chart / kDegree << "," << a.skin / kDegree << ",deg\n";
   out << "excised area,hole,," << m.excisedArea << ",mm2\n";
-  out << "excised volume (skin to bone),hole,," << excisedVolume << ",mm3\n";
+  // From the elements of the excised tissue, to the cut's depth, and as a
+  // second method the range maps' integral down to the bone.
+  out << "excised volume (elements; cut through " << p.cutLayers << " of "
+      << p.layerCount << " layers),hole,," << p.excisedVolume << ",mm3\n";
+  out << "excised volume to the bone (range maps),hole,," << excisedVolumeToBone << ",mm3\n";
   out << "wound width before closure,sutures,," << p.maxSutureGapBefore << ",mm\n";
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
   out << "closure force (sum over sutures),sutures,," << p.closure.magnitudeSum << ",N\n";
   out << "largest suture force,sutures,," << p.closure.largest << ",N\n";
+  // §4.7: the skin's nodal stress within stress.radius mm of the hole border.
+  const std::string band = "skin within " + std::to_string(int(std::lround(stress.radius))) + " mm of the wound";
+  out << "peak skin von Mises near wound," << band << ",," << 1e3 * stress.peakVonMises << ",kPa\n";
+  out << "peak skin von Mises theta,skin vertex " << stress.vertex << ",," << peakAt.theta / kDegree << ",deg\n";
+  out << "peak skin von Mises z,skin vertex " << stress.vertex << ",," << peakAt.z << ",mm\n";
+  out << "peak skin von Mises distance from wound,skin vertex " << stress.vertex << "," << stress.distance << ",,mm\n";
+  out << "peak skin max principal stress near wound," << band << ",," << 1e3 * stress.peakMaxPrincipal << ",kPa\n";
+  out << "mean skin von Mises near wound," << band << ",," << 1e3 * stress.meanVonMises << ",kPa\n";
   if (p.zPlasty)
   {
     out << "z-plasty gain predicted,central limb,," << 100.0 * p.zPlasty->predicted.fraction << ",%\n";
@@ -377,18 +446,28 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
                        maps.skin, logic.procedures());
       else
         recorded.apply(incision::OffsetBorderPoint{e.index, {e.a, e.b}}, maps.skin, logic.procedures());
+    for (const auto& points : args.undermineRegions)
+    {
+      incision::UndermineRegion region;
+      for (const auto& [theta, z] : points)
+        region.region.push_back(incision::normalizedFromSkinPoint(maps.skin.frame(), {theta * kDegree, z}));
+      recorded.apply(region, maps.skin, logic.procedures());
+    }
     const incision::IncisionPlan& plan = recorded.plan();
     // The prediction's element size is kept with the plan so a replay meshes the same.
     const double elementSize =
       args.elementSize.value_or(replay && replay->elementSize > 0.0 ? replay->elementSize : 2.0);
+    const int cutLayers = args.cutLayers.value_or(replay ? replay->cutLayers : 0);
     incision::PlanRecipe saved = recorded.recipe();
     saved.elementSize = elementSize;
+    saved.cutLayers = cutLayers;
     // Written before the long solve: the plan is kept even if the prediction fails.
     incision::writeRecipe(saved, args.out / "plan.json");
     const incision::ProcedureTemplate& procedure = incision::findProcedure(logic.procedures(), plan.procedure());
     const incision::PlanMeasurements measured = incision::measurePlan(plan, maps.skin);
     incision::SimulationOptions options;
     options.elementSize = elementSize;
+    options.cutLayers = cutLayers;
     options.threads = 2;
     const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, plan, options);
     const double excisedVolume = incision::excisedVolume(plan, maps.skin, maps.bone, options.noBoneDepth);
@@ -411,22 +490,35 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     for (const auto& a : measured.limbAngles)
       out << "  angle at p" << a.point << ": " << a.skin / kDegree << " deg on the skin\n";
     if (measured.excisedArea > 0.0)
-      out << "  excised area: " << measured.excisedArea << " mm2, volume to the bone " << excisedVolume << " mm3\n";
+      out << "  excised area: " << measured.excisedArea << " mm2, volume " << prediction.excisedVolume
+          << " mm3 (elements; " << excisedVolume << " mm3 to the bone by the range maps)\n";
+    if (options.cutLayers != 0 && options.cutLayers != options.layerCount)
+      out << "  cut through " << options.cutLayers << " of " << options.layerCount
+          << " tissue layers: the tissue below stays whole\n";
     out << "Model: " << prediction.continuum.mesh.nodeCount() << " nodes, "
         << prediction.continuum.mesh.elements.size() << " elements, " << prediction.dofCount << " DOF ("
         << prediction.reducedDofCount << " free); mesh " << std::setprecision(3) << prediction.times.mesh
         << " s, assemble " << prediction.times.assemble << " s, factor " << prediction.times.factor
         << " s, solve " << prediction.times.solve << " s\n";
+    if (!plan.underminedRegions().empty())
+      out << "Undermined: " << plan.underminedRegions().size() << " region(s), "
+          << prediction.continuum.underminedNodes.size() << " bone nodes released\n";
     out << std::setprecision(2) << "Wound " << prediction.maxSutureGapBefore << " mm wide before, sutures within "
         << std::scientific << prediction.maxSutureGap << std::fixed << " mm after closure\n";
     out << std::setprecision(3) << "Closure force: " << prediction.closure.magnitudeSum
         << " N over all sutures, largest suture " << prediction.closure.largest << " N\n";
+    const incision::WoundStress woundStress = incision::woundSkinStress(prediction, kWoundStressRadius);
+    const seg::CylindricalPoint peakAt = maps.skin.frame().toCylindrical(woundStress.original);
+    out << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
+        << 1e3 * woundStress.peakVonMises << " kPa at theta " << peakAt.theta / kDegree << " deg, z " << peakAt.z
+        << " mm (" << woundStress.distance << " mm from the wound edge), largest principal "
+        << 1e3 * woundStress.peakMaxPrincipal << " kPa, mean von Mises " << 1e3 * woundStress.meanVonMises << " kPa\n";
     if (prediction.zPlasty)
       out << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * prediction.zPlasty->predicted.fraction
           << " %, theoretical " << 100.0 * prediction.zPlasty->theoretical << " % (Fig. 2.2)\n";
     out.unsetf(std::ios::floatfield);
 
-    writeMeasurements(args.out / "measurements.csv", measured, prediction, excisedVolume);
+    writeMeasurements(args.out / "measurements.csv", measured, prediction, excisedVolume, woundStress, peakAt);
     // The display surfaces (§4.7): subdivided skin faces with range detail,
     // coloured by the tissue a little under the skin (the CT has no colour).
     const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin);
@@ -450,22 +542,51 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
       std::ofstream table(args.out / "undermining.csv");
       table << std::setprecision(10)
             << "undermining width (mm),released bone nodes,closure force (sum over sutures) (N),"
-               "largest suture force (N),suture gap after closure (mm)\n";
-      out << "Undermining study (closure force against width):\n";
+               "largest suture force (N),suture gap after closure (mm),peak skin von Mises near wound (kPa),"
+               "mean skin von Mises near wound (kPa)\n";
+      out << "Undermining study (closure force and peak skin stress within " << std::lround(kWoundStressRadius)
+          << " mm of the wound against width):\n";
+      incision::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
+      incision::PlotSeries stress{"peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) +
+                                    " mm of the wound (kPa)",
+                                  {}, {}, 0xc0392b};
+      // One meshed region for every width, reaching 15 mm beyond the widest
+      // band: a band as wide as the region would free every bone node and
+      // leave the skin nothing to hold it.
+      const double widest = *std::max_element(args.undermineWidths.begin(), args.undermineWidths.end());
+      options.regionRadius = std::max(options.regionRadius, widest + 15.0);
+      if (options.regionRadius > incision::SimulationOptions{}.regionRadius)
+        out << "  (meshed region " << options.regionRadius << " mm around the wound, for the widest band)\n";
       for (const double width : args.undermineWidths)
       {
         options.underminingWidth = width;
         const incision::PlanPrediction p = incision::simulatePlan(maps.skin, maps.bone, plan, options);
+        const incision::WoundStress near = incision::woundSkinStress(p, kWoundStressRadius);
+        const double peak = 1e3 * near.peakVonMises;
         table << width << "," << p.continuum.underminedNodes.size() << "," << p.closure.magnitudeSum << ","
-              << p.closure.largest << "," << p.maxSutureGap << "\n";
+              << p.closure.largest << "," << p.maxSutureGap << "," << peak << "," << 1e3 * near.meanVonMises << "\n";
+        force.x.push_back(width);
+        force.y.push_back(p.closure.magnitudeSum);
+        stress.x.push_back(width);
+        stress.y.push_back(peak);
         out << std::fixed << std::setprecision(1) << "  " << width << " mm: " << std::setprecision(3)
-            << p.closure.magnitudeSum << " N, largest suture " << p.closure.largest << " N\n";
+            << p.closure.magnitudeSum << " N, largest suture " << p.closure.largest << " N, peak skin stress "
+            << std::setprecision(1) << peak << " kPa (mean " << 1e3 * near.meanVonMises << " kPa)\n";
         out.unsetf(std::ios::floatfield);
       }
       if (!table)
         throw std::runtime_error("cannot write " + (args.out / "undermining.csv").string() +
                                  ": check the folder's permissions and space");
       out << "wrote " << (args.out / "undermining.csv").string() << "\n";
+      std::ostringstream title;
+      title << std::fixed << std::setprecision(1) << "Undermining: " << procedure.title() << " at theta "
+            << plan.centre().theta / kDegree << " deg, z " << plan.centre().z << " mm";
+      incision::XyPlot plot;
+      plot.title = title.str();
+      plot.xLabel = "undermining width (mm)";
+      plot.series = {force, stress};
+      incision::writeXyPlotPng(plot, args.out / "undermining.png");
+      out << "wrote " << (args.out / "undermining.png").string() << "\n";
     }
     return 0;
   }

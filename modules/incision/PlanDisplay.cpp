@@ -1,5 +1,6 @@
 #include "modules/incision/PlanDisplay.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,42 @@ vtkSmartPointer<vtkDoubleArray> pointArray(const char* name, const Eigen::Matrix
   return a;
 }
 
+/// Per display vertex, the undermined flags of the surface-mesh vertices
+/// interpolated with its shape functions (PlanDisplay::undermined).
+std::vector<double> underminedAtVertices(const PlanPrediction& prediction, const fem::DisplaySurface& surface)
+{
+  const fem::ContinuumMesh& continuum = prediction.continuum;
+  const std::vector<char>& flags = prediction.underminedVertices;
+  std::vector<double> out(std::size_t(surface.vertexCount()), 0.0);
+  if (flags.empty())
+    return out;
+  if (flags.size() != continuum.vertexColumns.size())
+    throw std::invalid_argument("the prediction has " + std::to_string(flags.size()) +
+                                " undermining flags for a surface mesh of " +
+                                std::to_string(continuum.vertexColumns.size()) + " vertices");
+  std::vector<double> atNode(std::size_t(continuum.mesh.nodeCount()), 0.0);
+  for (std::size_t v = 0; v < flags.size(); ++v)
+    for (int node : continuum.vertexColumns[v])
+      atNode[std::size_t(node)] = flags[v] ? 1.0 : 0.0;
+  for (std::size_t e = 0; e < continuum.edges.size(); ++e)
+  {
+    const auto& [a, b] = continuum.edges[e];
+    const double mean = 0.5 * ((flags[std::size_t(a)] ? 1.0 : 0.0) + (flags[std::size_t(b)] ? 1.0 : 0.0));
+    for (int node : continuum.edgeColumns[e])
+      if (node >= 0) // the floor's edges under a cut of partial depth have no node above it
+        atNode[std::size_t(node)] = mean;
+  }
+  const Eigen::SparseMatrix<double>& w = surface.interpolation();
+  for (Eigen::Index v = 0; v < w.outerSize(); ++v)
+  {
+    double sum = 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(w, v); it; ++it)
+      sum += it.value() * atNode[std::size_t(surface.displayNodes()[std::size_t(it.row())])];
+    out[std::size_t(v)] = std::clamp(sum, 0.0, 1.0); // round-off of the weights' sum
+  }
+  return out;
+}
+
 vtkSmartPointer<vtkDoubleArray> fieldValue(const char* name, double value)
 {
   auto a = namedArray<vtkDoubleArray>(name, 1, 1);
@@ -55,6 +92,8 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
 {
   if (skin.empty())
     throw std::invalid_argument("the display of the plan needs the skin range map it was simulated on");
+  if (!(options.underminingHatch >= 0.0) || !std::isfinite(options.underminingHatch))
+    throw std::invalid_argument("the undermining hatch must be 0 (a plain tint) or a positive number of mm");
   const fem::ContinuumMesh& continuum = prediction.continuum;
   PlanDisplay out;
   out.rangeDetail = options.rangeDetail;
@@ -67,6 +106,8 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
   const Eigen::Matrix3Xd& x = out.surface.undeformedPositions();
   Eigen::Matrix3Xd detail = Eigen::Matrix3Xd::Zero(3, x.cols());
   out.skinShade.assign(std::size_t(x.cols()), seg::kNoSourceColour);
+  out.undermined = underminedAtVertices(prediction, out.surface);
+  out.underminingTint.assign(std::size_t(x.cols()), 0.0);
   for (Eigen::Index v = 0; v < x.cols(); ++v)
   {
     const seg::CylindricalPoint c = frame.toCylindrical(x.col(v));
@@ -79,6 +120,14 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
       ++out.verticesBeyondDetailLimit;
     if (colour)
       out.skinShade[std::size_t(v)] = seg::sampleColour(*colour, c.theta, c.z);
+    // The hatch: stripes at 45° on the skin (u = r θ around the head, z along it).
+    double strength = 0.65;
+    if (options.underminingHatch > 0.0)
+    {
+      const double phase = (c.r * c.theta + c.z) / (std::sqrt(2.0) * options.underminingHatch);
+      strength = phase - std::floor(phase) < 0.5 ? 0.85 : 0.45;
+    }
+    out.underminingTint[std::size_t(v)] = strength * out.undermined[std::size_t(v)];
   }
   out.largestRangeDetail = x.cols() > 0 ? detail.colwise().norm().maxCoeff() : 0.0;
   out.surface.setRangeDetail(detail);
@@ -118,13 +167,21 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
   pd->AddArray(pointArray("volumetric_strain", s.volumetricStrain().transpose()));
   pd->AddArray(pointArray("range_detail_mm", s.rangeDetail()));
   auto shade = namedArray<vtkUnsignedCharArray>("skin_shade", 3, n);
+  auto colour = namedArray<vtkUnsignedCharArray>("skin_colour", 3, n);
+  auto undermined = namedArray<vtkDoubleArray>("undermined", 1, n);
   auto element = namedArray<vtkIntArray>("element", 1, n);
   auto rst = namedArray<vtkDoubleArray>("rst", 3, n);
   for (vtkIdType v = 0; v < n; ++v)
   {
     const seg::Rgb8& c = display.skinShade[std::size_t(v)];
+    const double tint = display.underminingTint.empty() ? 0.0 : display.underminingTint[std::size_t(v)];
     for (int k = 0; k < 3; ++k)
+    {
       shade->SetTypedComponent(v, k, c[k]);
+      colour->SetTypedComponent(
+        v, k, static_cast<unsigned char>(std::lround((1.0 - tint) * c[k] + tint * kUnderminedTint[std::size_t(k)])));
+    }
+    undermined->SetValue(v, display.undermined.empty() ? 0.0 : display.undermined[std::size_t(v)]);
     const fem::BodyPoint& p = s.bodyPoints()[std::size_t(v)];
     element->SetValue(v, p.element);
     for (int k = 0; k < 3; ++k)
@@ -132,7 +189,9 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
   }
   pd->AddArray(element);
   pd->AddArray(rst);
-  pd->SetScalars(shade); // what a viewer shows first: the skin
+  pd->AddArray(shade);
+  pd->AddArray(undermined);
+  pd->SetScalars(colour); // what a viewer shows first: the skin, the undermined part hatched
 
   vtkFieldData* fd = surface->GetFieldData();
   fd->AddArray(fieldValue("displacement_scale", scale));

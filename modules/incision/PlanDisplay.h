@@ -35,7 +35,15 @@ struct PlanDisplayOptions
   /// meets the skin centimetres from the smooth element face; following it
   /// would draw spikes, so there the vertex stays on the face.
   double maxRangeDetail = 3.0;
+  /// The undermined skin (thesis §3.2.4 item 2) is tinted (kUnderminedTint)
+  /// with diagonal stripes this far apart (mm on the skin), denser on every
+  /// other stripe like a hatch; 0: a plain tint.
+  double underminingHatch = 4.0;
 };
+
+/// The colour the undermined skin is blended towards in skin_colour: a blue
+/// no skin shade is near.
+inline constexpr seg::Rgb8 kUnderminedTint = {40, 110, 255};
 
 /// The skin of a simulated plan, ready to show.
 struct PlanDisplay
@@ -46,6 +54,16 @@ struct PlanDisplay
   /// Source colour of each vertex (Table 4.9), read at its undeformed (θ, z)
   /// from the colour map given; seg::kNoSourceColour (grey) without one.
   std::vector<seg::Rgb8> skinShade;
+  /// How undermined each vertex is, 0..1: the prediction's undermined
+  /// surface-mesh vertices (PlanPrediction::underminedVertices: the band and
+  /// the plan's regions) as 1 on their node columns, a mid-edge column the
+  /// mean of its two ends, interpolated with the vertex's shape functions.
+  /// So 1 over undermined skin, 0 where no undermined vertex is near, a ramp
+  /// across the elements on the region's border.
+  std::vector<double> undermined;
+  /// How strongly skin_colour blends an undermined vertex towards
+  /// kUnderminedTint (0..1): the hatch's stripes, times undermined.
+  std::vector<double> underminingTint;
   /// Whether positions include the range detail (PlanDisplayOptions).
   bool rangeDetail = true;
   /// Vertices where the skin map has no surface (NaN): no range detail there.
@@ -93,8 +111,10 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
 /// opposite sign), stress_kPa (6, Voigt xx yy zz xy yz zx), strain (6,
 /// engineering shear), equivalent_strain (von Mises), volumetric_strain
 /// (the thesis's pressure strain), range_detail_mm (3), skin_shade (RGB,
-/// unsigned char; the active scalars), element and rst (the body
-/// coordinates). Field data: displacement_scale, resolution, range_detail.
+/// unsigned char: the source colour), undermined (0..1, PlanDisplay::undermined),
+/// skin_colour (RGB, unsigned char: skin_shade blended towards
+/// kUnderminedTint by PlanDisplay::underminingTint, the undermined skin
+/// hatched; the active scalars), element and rst (the body coordinates). Field data: displacement_scale, resolution, range_detail.
 /// Displacement, strain and stress are those of the full solution whatever
 /// the scale.
 vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, double scale);

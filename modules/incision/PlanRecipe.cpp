@@ -16,6 +16,8 @@
 #include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
 
+#include "modules/incision/Undermining.h"
+
 #ifndef CAPS_VERSION
 #error "CAPS_VERSION must be defined (modules/incision/CMakeLists.txt)"
 #endif
@@ -28,7 +30,7 @@ namespace {
 using json = nlohmann::json;
 
 const char* const formatName = "caps-plan";
-const char* const operationKinds = "place, move, offset, set-parameter";
+const char* const operationKinds = "place, move, offset, set-parameter, undermine, clear-undermining";
 
 template <class... F>
 struct Overloaded : F...
@@ -88,6 +90,23 @@ struct OperationReader
       fail(std::string("\"") + key + "\" must be two numbers [a, b], not " + v.dump());
     const std::string what = std::string("\"") + key + "\"";
     return {finite(v[0], what), finite(v[1], what)};
+  }
+  std::vector<Eigen::Vector2d> pairs(const char* key) const
+  {
+    const json& v = field(key);
+    const std::string what = std::string("\"") + key + "\"";
+    if (!v.is_array())
+      fail(what + " must be a list of points [[a, b], ...], not " + v.dump());
+    std::vector<Eigen::Vector2d> points;
+    for (std::size_t k = 0; k < v.size(); ++k)
+    {
+      const json& p = v[k];
+      const std::string which = "point " + std::to_string(k) + " of " + what;
+      if (!p.is_array() || p.size() != 2)
+        fail(which + " must be two numbers [a, b], not " + p.dump());
+      points.emplace_back(finite(p[0], which), finite(p[1], which));
+    }
+    return points;
   }
 };
 ///@}
@@ -151,6 +170,10 @@ std::string describe(const PlanOperation& operation)
                       [](const MoveCutPoint& o) { return "move cut point " + std::to_string(o.point); },
                       [](const OffsetBorderPoint& o) { return "offset border point " + std::to_string(o.vertex); },
                       [](const SetParameter& o) { return "set parameter " + o.name; },
+                      [](const UndermineRegion& o) {
+                        return "undermine a region of " + std::to_string(o.region.size()) + " points";
+                      },
+                      [](const ClearUndermining&) { return std::string("clear undermining"); },
                     },
                     operation);
 }
@@ -222,7 +245,24 @@ IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& opera
             throw RecipeError(number, label + ": the value is not a number");
           std::map<std::string, double> values = plan.parameters();
           values[o.name] = o.value; // an unknown name: place() lists the parameters there are
-          return findProcedure(library, plan.procedure()).place(skin, plan.centre(), values);
+          IncisionPlan next = findProcedure(library, plan.procedure()).place(skin, plan.centre(), values);
+          // The skin the surgeon freed is not part of the cut the template draws: it stays.
+          for (const UnderminedRegion& region : plan.underminedRegions())
+            next.addUnderminedRegion(region);
+          return next;
+        },
+        [&](const UndermineRegion& o) {
+          needCut();
+          checkUnderminedRegion(o.region, plan.chart(skin));
+          IncisionPlan next = plan;
+          next.addUnderminedRegion(o.region);
+          return next;
+        },
+        [&](const ClearUndermining&) {
+          needCut();
+          IncisionPlan next = plan;
+          next.clearUnderminedRegions();
+          return next;
         },
       },
       operation);
@@ -280,6 +320,13 @@ json operationToJson(const PlanOperation& operation)
                       [](const SetParameter& o) {
                         return json{{"operation", "set-parameter"}, {"name", o.name}, {"value", o.value}};
                       },
+                      [](const UndermineRegion& o) {
+                        json points = json::array();
+                        for (const auto& p : o.region)
+                          points.push_back({p.x(), p.y()});
+                        return json{{"operation", "undermine"}, {"region", std::move(points)}};
+                      },
+                      [](const ClearUndermining&) { return json{{"operation", "clear-undermining"}}; },
                     },
                     operation);
 }
@@ -313,6 +360,10 @@ PlanOperation operationFromJson(const json& j, int number)
     return OffsetBorderPoint{r.whole("vertex"), r.pair("offset")};
   if (r.kind == "set-parameter")
     return SetParameter{r.text("name"), r.real("value")};
+  if (r.kind == "undermine")
+    return UndermineRegion{r.pairs("region")};
+  if (r.kind == "clear-undermining")
+    return ClearUndermining{};
   throw RecipeError(number, "operation " + std::to_string(number) + " is '" + r.kind +
                               "', which this CAPS does not know; the operations are " + operationKinds +
                               " (a newer CAPS may have written the file)");
@@ -330,6 +381,8 @@ json recipeToJson(const PlanRecipe& recipe)
          {"operations", std::move(operations)}};
   if (recipe.elementSize > 0.0)
     j["simulation"] = {{"elementSize", recipe.elementSize}};
+  if (recipe.cutLayers > 0)
+    j["simulation"]["cutLayers"] = recipe.cutLayers;
   return j;
 }
 
@@ -370,6 +423,13 @@ PlanRecipe recipeFromJson(const json& j)
         !std::isfinite(size->get<double>()))
       bad("\"simulation\" must be {\"elementSize\": MM} with a positive size, not " + simulation->dump());
     recipe.elementSize = size->get<double>();
+    if (const auto cut = simulation->find("cutLayers"); cut != simulation->end())
+    {
+      if (!cut->is_number_integer() || cut->get<long long>() < 0 || cut->get<long long>() > 16)
+        bad("\"cutLayers\" in \"simulation\" must be the number of tissue layers cut (0 for full thickness), not " +
+            cut->dump());
+      recipe.cutLayers = int(cut->get<long long>());
+    }
   }
   return recipe;
 }

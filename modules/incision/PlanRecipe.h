@@ -66,10 +66,31 @@ struct SetParameter
   double value = 0.0; ///< API units
 };
 
-using PlanOperation = std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter>;
+/// Undermines a region of skin (thesis §3.2.4 item 2: the skin freed from
+/// what lies beneath): a closed polygon of at least 3 points (θn, zn), the
+/// last joined to the first, added to the plan's undermined regions (the
+/// skin undermined is their union, with the band of
+/// SimulationOptions::underminingWidth). Normalised coordinates as in
+/// MoveCutPoint, for the same reason. Checked by checkUnderminedRegion().
+/// The regions stay when a parameter is set (SetParameter) and go when a
+/// procedure is placed afresh.
+struct UndermineRegion
+{
+  UnderminedRegion region;
+};
+
+/// Removes every undermined region of the plan (the band along the sutured
+/// edges is a simulation option and stays).
+struct ClearUndermining
+{
+};
+
+using PlanOperation =
+  std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter, UndermineRegion, ClearUndermining>;
 
 /// What an operation does, for messages: "place z-plasty", "move cut point 2",
-/// "offset border point 4", "set parameter limb_angle".
+/// "offset border point 4", "set parameter limb_angle", "undermine a region
+/// of 4 points", "clear undermining".
 std::string describe(const PlanOperation& operation);
 ///@}
 
@@ -96,6 +117,9 @@ struct PlanRecipe
   /// The element size at the wound (mm, SimulationOptions) the prediction
   /// was made with, so a replay meshes the same; 0 when not recorded.
   double elementSize = 0.0;
+  /// The incision depth the prediction was made with: tissue layers cut
+  /// from the skin (SimulationOptions::cutLayers); 0 = full thickness.
+  int cutLayers = 0;
 };
 
 /// @brief Applies operation number `number` (1-based, for messages) to @a plan.
@@ -153,10 +177,16 @@ inline constexpr int recipeFormatVersion = 1;
 ///       "values": { "axis_angle": 0.0, "central_length": 20.0, "limb_angle": 1.0471975511965976 } },
 ///     { "operation": "move", "point": 1, "thetaZN": [-0.49, 0.012] },
 ///     { "operation": "offset", "vertex": 2, "offset": [0.0, 1.5] },
-///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 } ],
-///   "simulation": { "elementSize": 2.5 } }
+///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 },
+///     { "operation": "undermine", "region": [[-0.52, 0.01], [-0.46, 0.01], [-0.46, 0.06], [-0.52, 0.06]] },
+///     { "operation": "clear-undermining" } ],
+///   "simulation": { "elementSize": 2.5, "cutLayers": 1 } }
 /// @endcode
-/// "simulation" is left out when elementSize is 0.
+/// "simulation" is left out when elementSize is 0; "cutLayers" when the cut
+/// is full thickness (0). "undermine" and
+/// "clear-undermining" came later within format 1: files without them read
+/// as before; a CAPS older than them refuses a file that has them, naming
+/// the operation it does not know.
 /// Angles in radians, lengths in mm, as the API; doubles are written to the
 /// last bit (nlohmann-json writes the shortest text that reads back exactly).
 nlohmann::json recipeToJson(const PlanRecipe& recipe);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "fem/StaticAnalysis.h"
+#include "modules/incision/Undermining.h"
 
 namespace caps::incision {
 namespace {
@@ -60,6 +61,9 @@ void checkOptions(const SimulationOptions& o)
     bad("at least one thread");
   if (!(o.underminingWidth >= 0.0) || !std::isfinite(o.underminingWidth))
     bad("the undermining width must be 0 (none) or a positive number of mm");
+  if (o.cutLayers < 0 || o.cutLayers > o.layerCount)
+    bad("the cut goes through " + std::to_string(o.cutLayers) + " layers of " + std::to_string(o.layerCount) +
+        ": give 1.." + std::to_string(o.layerCount) + ", or 0 for full thickness");
 }
 
 } // namespace
@@ -342,12 +346,20 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   continuumOptions.maxDepth = options.maxDepth;
   continuumOptions.noBoneDepth = options.noBoneDepth;
   continuumOptions.rim = options.rim;
+  continuumOptions.cutLayers = options.cutLayers;
   out.underminedVertices = fem::underminingBand(surface, out.sutures, options.underminingWidth);
+  addUnderminedRegions(surface, plan, chart, out.underminedVertices); // and the plan's regions (Undermining.h)
   continuumOptions.underminedVertices = out.underminedVertices;
   out.continuum = fem::meshContinuum(surface, out.sutures, geometry, continuumOptions);
+  out.excisedTissue = fem::meshExcisedTissue(surface, geometry, continuumOptions);
+  out.excisedVolume = fem::meshVolume(out.excisedTissue.mesh);
+  out.layerCount = options.layerCount;
+  out.cutLayers = options.cutLayers == 0 ? options.layerCount : options.cutLayers;
   out.times.mesh = secondsSince(meshStart);
 
-  // The thesis's counts (§4.5.2).
+  // The thesis's counts (§4.5.2), for a cut through every layer (a partial
+  // one shares nodes and adds the hole's floor).
+  if (options.cutLayers == 0 || options.cutLayers == options.layerCount)
   {
     const Eigen::Index nv = Eigen::Index(surface.vertices.size());
     const Eigen::Index ne = Eigen::Index(out.continuum.edges.size());

@@ -58,6 +58,13 @@ struct SimulationOptions
   /// hole border edges is freed from what lies beneath, so the bone nodes
   /// under it are not fixed (fem::underminingBand()). 0: no undermining.
   double underminingWidth = 0.0;
+  /// Incision depth (thesis §3.2.2: cutting to a depth): the layers, from
+  /// the skin, the cut goes through; 0 = all (full thickness down to the
+  /// deep layer, the default). Below a cut of partial depth the tissue stays
+  /// whole and the sutures sew only the layers cut
+  /// (fem::ContinuumMeshOptions::cutLayers). With the default three layers:
+  /// 1 = through the skin, 2 = through the fat as well.
+  int cutLayers = 0;
   /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
   fem::MaterialTable materials;
   /// Threads of the assembly.
@@ -145,11 +152,20 @@ struct PlanPrediction
   /// Internal nodal forces K U (N), 3N like displacements: zero to round-off
   /// at free nodes, the reactions at fixed and sutured ones.
   Eigen::VectorXd nodalForces;
-  /// Per surface-mesh vertex, non-zero where the skin is undermined
-  /// (SimulationOptions::underminingWidth); the bone nodes released are
+  /// Per surface-mesh vertex, non-zero where the skin is undermined: the
+  /// band of SimulationOptions::underminingWidth and the plan's own regions
+  /// (IncisionPlan::underminedRegions()); the bone nodes released are
   /// continuum.underminedNodes.
   std::vector<char> underminedVertices;
   ClosureForces closure;
+  /// The tissue the excision removes (§3.1.3): wedges over the hole's floor
+  /// through the layers cut (fem::meshExcisedTissue()), with the depths of
+  /// the model; empty without excision.
+  fem::ContinuumMesh excisedTissue;
+  /// Its volume (mm³), from the elements (fem::meshVolume()).
+  double excisedVolume = 0.0;
+  int layerCount = 0; ///< tissue layers of the model
+  int cutLayers = 0;  ///< of which the cut goes through (layerCount for full thickness)
   DisplacedSkin skin;
   /// Largest distance between the two nodes of a suture after the solve (mm).
   double maxSutureGap = 0.0;
@@ -174,7 +190,8 @@ struct PlanPrediction
 /// range. The tissue under chart point c runs along the ray towards the
 /// axis from the skin point lift(c); its depth is skin r − bone r, clamped to
 /// [minDepth, maxDepth], noBoneDepth where the bone map has no bone. Bone
-/// nodes are fixed except under the undermined band, the rim as options.rim
+/// nodes are fixed except under the undermined band and the plan's
+/// undermined regions, the rim as options.rim
 /// says. After the solve, the reaction of every suture is the closure force.
 ///
 /// @throws std::invalid_argument for a bad plan (checkPlan()), a plan off the

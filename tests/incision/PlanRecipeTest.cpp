@@ -88,6 +88,7 @@ void expectSamePlan(const IncisionPlan& a, const IncisionPlan& b)
   EXPECT_EQ(a.centre().z, b.centre().z);
   EXPECT_EQ(a.borderOffsets(), b.borderOffsets());
   EXPECT_EQ(a.writtenSutures(), b.writtenSutures());
+  EXPECT_EQ(a.underminedRegions(), b.underminedRegions()); // exact
 }
 
 /// The message of the RecipeError an operation throws, or a test failure.
@@ -441,6 +442,23 @@ TEST(PlanRecipe, ThePlanNodeKeepsItsRecipeAndOldScenesStillLoad)
   EXPECT_EQ(read->ctSha256, recipe.ctSha256);
   EXPECT_EQ(read->softwareVersion, softwareVersion());
   expectSamePlan(applyRecipe(*read, phantom().skin, library()), IncisionLogic::readPlan(back));
+  EXPECT_EQ(read->elementSize, 0.0); // not recorded: no "simulation" in the node
+  EXPECT_TRUE(back.simulation().is_null());
+
+  // How the prediction was made (element size, cut depth) goes with it, so
+  // a report predicts the same.
+  PlanRecipe withSimulation = recorded.recipe();
+  withSimulation.elementSize = 2.5;
+  withSimulation.cutLayers = 2;
+  IncisionLogic::writeRecipe(withSimulation, node);
+  PlanNode again;
+  again.fromJson(nlohmann::json::parse(node.toJson().dump()));
+  const auto readAgain = IncisionLogic::readRecipe(again);
+  ASSERT_TRUE(readAgain.has_value());
+  EXPECT_EQ(readAgain->elementSize, 2.5);
+  EXPECT_EQ(readAgain->cutLayers, 2);
+  EXPECT_THROW(node.setSimulation(nlohmann::json::array()), SceneError);
+  IncisionLogic::writeRecipe(recorded.recipe(), node);
 
   // A plan saved before plans kept their recipe: no recipe, the plan reads.
   nlohmann::json old = node.toJson();
@@ -467,6 +485,86 @@ TEST(PlanRecipe, ThePlanNodeKeepsItsRecipeAndOldScenesStillLoad)
     EXPECT_TRUE(contains(e.what(), "plan 'left cheek': operation 2 is 'twist'")) << e.what();
   }
   EXPECT_THROW(node.setOperations(nlohmann::json::object()), SceneError);
+}
+
+TEST(PlanRecipe, UnderminedRegionsGoThroughPlanJsonTheSceneAndAReplayBitForBit)
+{
+  // The Z recipe, a region drawn, cleared, two drawn again, a parameter set.
+  PlanRecipe recipe = zRecipe();
+  const IncisionPlan z = applyRecipe(recipe, phantom().skin, library());
+  auto region = [&](double u, double v) {
+    UnderminedRegion r;
+    for (const ChartPoint& p : {ChartPoint(u - 4.1, v - 2.3), ChartPoint(u + 3.7, v - 2.9), ChartPoint(u + 0.3, v + 3.3)})
+      r.push_back(normalised(z, p));
+    return r;
+  };
+  recipe.operations.push_back(UndermineRegion{region(0.0, 12.0)});
+  recipe.operations.push_back(ClearUndermining{});
+  recipe.operations.push_back(UndermineRegion{region(-6.0, 11.0)});
+  recipe.operations.push_back(UndermineRegion{region(7.0, -10.0)});
+  recipe.operations.push_back(SetParameter{"limb_angle", 55.0 * degree});
+  EXPECT_EQ(describe(recipe.operations[3]), "undermine a region of 3 points");
+
+  const nlohmann::json written = recipeToJson(recipe);
+  EXPECT_EQ(written["operations"][3]["operation"], "undermine");
+  EXPECT_EQ(written["operations"][3]["region"].size(), 3u);
+  EXPECT_EQ(written["operations"][3]["region"][0].size(), 2u);
+  EXPECT_EQ(written["operations"][4], nlohmann::json({{"operation", "clear-undermining"}}));
+  EXPECT_EQ(written["formatVersion"], 1);
+  const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
+  EXPECT_EQ(recipeToJson(read), written);
+  EXPECT_EQ(std::get<UndermineRegion>(read.operations[5]).region, std::get<UndermineRegion>(recipe.operations[5]).region);
+
+  const IncisionPlan first = applyRecipe(recipe, phantom().skin, library());
+  const IncisionPlan again = applyRecipe(read, phantom().skin, library());
+  expectSamePlan(first, again);
+  // The clear dropped the first; setting a parameter kept the other two.
+  ASSERT_EQ(first.underminedRegions().size(), 2u);
+  EXPECT_EQ(first.underminedRegions()[0], std::get<UndermineRegion>(recipe.operations[5]).region);
+  EXPECT_EQ(first.parameters().at("limb_angle"), 55.0 * degree);
+  // Placing a procedure starts afresh, regions too.
+  EXPECT_TRUE(applyOperation(first, placeZ(), 9, phantom().skin, library()).underminedRegions().empty());
+
+  SimulationOptions options;
+  options.elementSize = 2.5;
+  options.regionRadius = 15.0;
+  options.threads = 2;
+  const PlanPrediction a = simulatePlan(phantom().skin, phantom().bone, first, options);
+  const PlanPrediction b = simulatePlan(phantom().skin, phantom().bone, again, options);
+  EXPECT_FALSE(a.continuum.underminedNodes.empty());
+  EXPECT_EQ(a.continuum.underminedNodes, b.continuum.underminedNodes);
+  ASSERT_EQ(a.displacements.size(), b.displacements.size());
+  EXPECT_EQ(std::memcmp(a.displacements.data(), b.displacements.data(),
+                        std::size_t(a.displacements.size()) * sizeof(double)),
+            0);
+
+  // The scene keeps them through the recipe.
+  RecordedPlan recorded(std::string(64, 'd'));
+  for (const auto& o : recipe.operations)
+    recorded.apply(o, phantom().skin, library());
+  PlanNode node;
+  node.setName("right cheek");
+  IncisionLogic::writePlan(recorded.plan(), node);
+  IncisionLogic::writeRecipe(recorded.recipe(), node);
+  PlanNode back;
+  back.fromJson(nlohmann::json::parse(node.toJson().dump()));
+  expectSamePlan(IncisionLogic::readPlan(back), first);
+
+  // A hand-edited region is refused naming the operation and the point.
+  nlohmann::json bad = written;
+  bad["operations"][5]["region"][1] = nlohmann::json::array({0.1});
+  try
+  {
+    recipeFromJson(bad);
+    ADD_FAILURE() << "a region point of one number was accepted";
+  }
+  catch (const RecipeError& e)
+  {
+    EXPECT_EQ(e.operation(), 6);
+    EXPECT_TRUE(contains(e.what(), "operation 6 (undermine): point 1 of \"region\" must be two numbers")) << e.what();
+  }
+  bad["operations"][5].erase("region");
+  EXPECT_THROW(recipeFromJson(bad), RecipeError);
 }
 
 TEST(CtContentHash, TheSameScanReadTwiceUnderOtherNamesHashesTheSame)

@@ -439,6 +439,80 @@ TEST(PlanSimulation, UnderminingReducesTheClosureForce)
   EXPECT_LT((force[3] - force[4]) / 20.0, (force[0] - force[2]) / 10.0);
 }
 
+/// Tissue between radii rOuter and rInner under a chart polygon (chart u =
+/// r0 (θ − θc), v = z): the area in (θ, z) is the chart area / r0.
+double cylinderShellVolume(const std::vector<ChartPoint>& polygon, double r0, double rOuter, double rInner)
+{
+  double twiceArea = 0.0;
+  for (std::size_t i = 0; i < polygon.size(); ++i)
+  {
+    const ChartPoint& a = polygon[i];
+    const ChartPoint& b = polygon[(i + 1) % polygon.size()];
+    twiceArea += a.x() * b.y() - a.y() * b.x();
+  }
+  return std::abs(0.5 * twiceArea) / r0 * (rOuter * rOuter - rInner * rInner) / 2.0;
+}
+
+TEST(PlanSimulation, ExcisedVolumeFromTheElementsIsTheAnalyticShell)
+{
+  // A 24 × 8 mm ellipse on the phantom (skin r = 80, bone r = 70): the
+  // excised tissue is the prism of the refined hole from r = 80 to 70, and
+  // with the cut through the skin layer only (one layer of three equal
+  // ones), from r = 80 to 80 − 10 / 3. The elements are quadratic, the
+  // cylinder is not, but along the rays they meet it to 4e-10 here.
+  const IncisionPlan plan = procedure("elliptical-excision")
+                              .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  const double r0 = plan.chart(phantom().skin).radius();
+  for (const int cutLayers : {0, 1})
+  {
+    SimulationOptions o = testOptions();
+    o.cutLayers = cutLayers;
+    const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, o);
+    const double analytic = cylinderShellVolume(p.hole.points, r0, 80.0, cutLayers == 0 ? 70.0 : 80.0 - 10.0 / 3.0);
+    std::printf("[excised volume] cut through %d of 3 layers: elements %.4f mm3, analytic %.4f mm3 (relative %.2g); "
+                "range maps %.4f mm3\n",
+                cutLayers == 0 ? 3 : cutLayers, p.excisedVolume, analytic, p.excisedVolume / analytic - 1.0,
+                excisedVolume(plan, phantom().skin, phantom().bone));
+    EXPECT_NEAR(p.excisedVolume, analytic, 1e-6 * analytic);
+    EXPECT_EQ(p.excisedTissue.mesh.elements.size(),
+              std::size_t(cutLayers == 0 ? 3 : 1) * (p.hole.points.size() - 2));
+    EXPECT_LT(p.maxSutureGap, 1e-9);
+    if (cutLayers == 0)
+    { // the second method, over the plan's own hole polygon
+      EXPECT_NEAR(p.excisedVolume, excisedVolume(plan, phantom().skin, phantom().bone), 2e-3 * analytic);
+    }
+  }
+}
+
+TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
+{
+  // A 60° Z-plasty cut through the skin layer only: the flaps stay bonded
+  // to the tissue below, so transposing them lengthens the central axis
+  // less than the full-thickness cut does; only the cut layer is sutured.
+  const IncisionPlan plan =
+    procedure("z-plasty").place(phantom().skin, {0.0, 0.0},
+                                {{"central_length", 16.0}, {"limb_angle", 60.0 * degree}, {"axis_angle", 90.0 * degree}});
+  SimulationOptions o = testOptions();
+  const PlanPrediction full = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  o.cutLayers = 1;
+  const PlanPrediction partial = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  ASSERT_TRUE(full.zPlasty && partial.zPlasty);
+  std::printf("[Z 60°] gain %.1f %% cut through 3 of 3 layers, %.1f %% through 1; sutures %zu and %zu; "
+              "closure force %.3g N and %.3g N\n",
+              100 * full.zPlasty->predicted.fraction, 100 * partial.zPlasty->predicted.fraction,
+              full.continuum.sutures.size(), partial.continuum.sutures.size(), full.closure.magnitudeSum,
+              partial.closure.magnitudeSum);
+  EXPECT_LT(partial.maxSutureGap, 1e-9);
+  EXPECT_GT(partial.zPlasty->predicted.gain, 0.0);
+  EXPECT_LT(partial.zPlasty->predicted.fraction, full.zPlasty->predicted.fraction);
+  EXPECT_LT(partial.continuum.sutures.size(), full.continuum.sutures.size());
+  EXPECT_LT(partial.continuum.mesh.nodeCount(), full.continuum.mesh.nodeCount()); // the twins below are one
+  EXPECT_EQ(partial.excisedVolume, 0.0); // a Z-plasty removes nothing
+
+  o.cutLayers = 4;
+  EXPECT_THROW(simulatePlan(phantom().skin, phantom().bone, plan, o), std::invalid_argument);
+}
+
 TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
 {
   const Phantom& ph = phantom();

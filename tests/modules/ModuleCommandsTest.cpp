@@ -55,6 +55,12 @@ std::string nrrdHeader(const fs::path& file)
   return header;
 }
 
+std::string fileText(const fs::path& file)
+{
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
 std::array<int, 2> pngSize(const fs::path& file)
 {
   auto reader = vtkSmartPointer<vtkPNGReader>::New();
@@ -240,9 +246,57 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   std::ifstream csv(out / "measurements.csv");
   const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("excised area,hole,,"), std::string::npos) << text;
-  EXPECT_NE(text.find("excised volume (skin to bone),hole,,"), std::string::npos) << text;
+  // The excised volume from the elements of the excised tissue (full
+  // thickness here) and, as a second method, the range maps' integral.
+  auto csvValue = [](const std::string& csvText, const std::string& quantity) {
+    const auto at = csvText.find(quantity + ",");
+    if (at == std::string::npos)
+      return std::nan("");
+    std::stringstream line(csvText.substr(at, csvText.find('\n', at) - at));
+    std::string cell;
+    for (int i = 0; i < 4; ++i)
+      std::getline(line, cell, ',');
+    return std::stod(cell);
+  };
+  const double excisedFull = csvValue(text, "excised volume (elements; cut through 3 of 3 layers)");
+  const double excisedMaps = csvValue(text, "excised volume to the bone (range maps)");
+  EXPECT_GT(excisedFull, 0.0) << text;
+  EXPECT_NEAR(excisedFull, excisedMaps, 0.05 * excisedMaps) << text;
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex("Closure force: ([0-9.]+) N over all sutures"))) << r.output;
   EXPECT_GT(std::stod(m[1]), 0.0) << r.output;
+  // The peak skin stress near the wound: printed in kPa with where, and in the table.
+  ASSERT_TRUE(std::regex_search(
+    r.output, m,
+    std::regex("Skin stress within 10.0 mm of the wound: peak von Mises ([0-9.]+) kPa at theta ([0-9.+-]+) deg, z "
+               "([0-9.+-]+) mm \\(([0-9.]+) mm from the wound edge\\)")))
+    << r.output;
+  const double peakKpa = std::stod(m[1]);
+  EXPECT_GT(peakKpa, 0.0) << r.output;
+  EXPECT_LE(std::stod(m[4]), 10.0) << r.output;
+  EXPECT_NEAR(std::stod(m[2]), -90.0, 30.0) << r.output; // on the front, near the plan
+  EXPECT_NE(text.find("peak skin von Mises near wound,skin within 10 mm of the wound,,"), std::string::npos) << text;
+  EXPECT_NE(text.find("mean skin von Mises near wound,"), std::string::npos) << text;
+
+  // A cut through the skin layer only (§3.2.2: cutting to a depth): less
+  // tissue removed, the depth kept in plan.json and replayed the same.
+  const fs::path shallow = folder / "shallow", shallowAgain = folder / "shallow-replay";
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
+              "--element-size 2.5 --cut-depth 1 --out " + quoted(shallow.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("cut through 1 of 3 tissue layers"), std::string::npos) << r.output;
+  const std::string shallowText = fileText(shallow / "measurements.csv");
+  const double excisedShallow = csvValue(shallowText, "excised volume (elements; cut through 1 of 3 layers)");
+  EXPECT_GT(excisedShallow, 0.2 * excisedFull) << shallowText;
+  EXPECT_LT(excisedShallow, 0.5 * excisedFull) << shallowText;
+  EXPECT_EQ(nlohmann::json::parse(fileText(shallow / "plan.json"))["simulation"]["cutLayers"], 1);
+  r = runCaps("plan " + quoted(ct.string()) + " --replay " + quoted((shallow / "plan.json").string()) + " --out " +
+              quoted(shallowAgain.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_EQ(fileText(shallowAgain / "measurements.csv"), shallowText);
+  EXPECT_EQ(runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --cut-depth 4 " +
+                    "--out " + quoted(shallow.string()))
+              .exitCode,
+            2);
 
   // The undermining study: one row per width, the force falls as the band widens.
   const fs::path study = folder / "undermined";
@@ -262,13 +316,33 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
     table.push_back(row);
   }
   ASSERT_EQ(table.size(), 2u) << header;
-  ASSERT_EQ(table[0].size(), 5u);
-  ASSERT_EQ(table[1].size(), 5u);
+  ASSERT_EQ(table[0].size(), 7u);
+  ASSERT_EQ(table[1].size(), 7u);
+  EXPECT_NE(header.find(",peak skin von Mises near wound (kPa)"), std::string::npos) << header;
   EXPECT_EQ(table[0][0], 0.0);
   EXPECT_EQ(table[0][1], 0.0); // no bone node released without undermining
   EXPECT_GT(table[1][1], 0.0);
   EXPECT_GT(table[0][2], table[1][2]) << r.output;
   EXPECT_LT(table[1][4], 1e-9);
+  // Without undermining the peak stress is the one of the plain run (same plan, same mesh).
+  EXPECT_GT(table[0][5], 0.0);
+  EXPECT_GT(table[1][5], 0.0);
+  for (const auto& row : table) // the band's mean is below its peak
+  {
+    EXPECT_GT(row[6], 0.0);
+    EXPECT_LT(row[6], row[5]);
+  }
+  EXPECT_NEAR(table[0][5], peakKpa, 0.051 + 1e-3 * peakKpa) << r.output;
+  // And the plot of both against the width.
+  ASSERT_TRUE(fs::exists(study / "undermining.png")) << r.output;
+  {
+    std::ifstream png(study / "undermining.png", std::ios::binary);
+    char signature[8] = {};
+    png.read(signature, 8);
+    EXPECT_EQ(std::string(signature, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  }
+  EXPECT_EQ(pngSize(study / "undermining.png"), (std::array<int, 2>{1000, 600}));
+  EXPECT_NE(r.output.find("wrote " + (study / "undermining.png").string()), std::string::npos) << r.output;
   EXPECT_EQ(runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --undermine 5,-1 " +
                     "--out " + quoted(study.string()))
               .exitCode,
@@ -346,12 +420,6 @@ TEST(ModuleCommands, BadInputAndUsage)
 }
 
 namespace {
-
-std::string fileText(const fs::path& file)
-{
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 // Every component of a point-data array of a VTU file, read back with VTK.
 std::vector<double> vtuPointArray(const fs::path& file, const char* name)
