@@ -28,8 +28,9 @@ const char* kDemoUsage =
   ".nrrd, and the thickness review pictures skin-range.png, thickness.png,\n"
   "thickness-normal.png, as `caps rangemap`); a Z-plasty on the left cheek and an\n"
   "elliptical excision on the forehead, predicted (z-plasty/ and elliptical-excision/,\n"
-  "as `caps plan`); and sample.caps (the scene, which `caps` opens and ParaView or\n"
-  "3D Slicer can read file by file).\n";
+  "as `caps plan`); sample.caps (the scene, which `caps` opens and ParaView or\n"
+  "3D Slicer can read file by file); and plan-report.pdf, the printed plan of both\n"
+  "(as `caps report`).\n";
 
 // Seconds since @a start, for the demo's step times.
 double secondsSince(std::chrono::steady_clock::time_point start)
@@ -181,6 +182,12 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
   }
   out << "wrote " << bundle.string() << "\n";
   stepDone("save scene");
+
+  // 7. The plan report of the saved scene, as a surgeon would print it.
+  if (int code = runModuleCommand(session, "report",
+                                  {bundle.string(), "--pdf", (folder / "plan-report.pdf").string()}, out, err))
+    return code;
+  stepDone("report");
   out << "Demo finished: results in " << folder.string() << "\n";
   return 0;
 }

@@ -52,7 +52,10 @@ void ModuleManager::loadFolder(const fs::path& folder)
 
   for (const auto& file : files)
   {
-    void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL);
+    // Never unmapped (RTLD_NODELETE): a plugin's libraries may register
+    // global objects elsewhere (VTK's rendering factories in VTK's core
+    // registry) that are destroyed at exit, after the manager is gone.
+    void* handle = dlopen(file.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
     if (!handle)
     {
       const char* why = dlerror();
