@@ -210,6 +210,31 @@ void MainWindow::buildMenus()
                   QKeySequence::SaveAs);
   recent_menu_ = file->addMenu(tr("&Recent"));
   updateRecentMenu();
+  // What the modules add to the File menu (the report's export and print).
+  bool separated = false;
+  for (const auto& loaded : session_.modules().modules())
+    for (const ModuleAction& action : loaded.module->actions())
+    {
+      if (action.menu != "File")
+        continue;
+      if (!separated)
+        file->addSeparator();
+      separated = true;
+      const Module* module = loaded.module.get();
+      QAction* entry = file->addAction(QString::fromStdString(action.title), this, [this, module, action]() {
+        try
+        {
+          action.run(session_.logic(*module), *this);
+        }
+        catch (const std::exception& e)
+        {
+          showError(action.title, e.what());
+        }
+      });
+      if (!action.shortcut.empty())
+        entry->setShortcut(QKeySequence(QString::fromStdString(action.shortcut)));
+      entry->setObjectName(QString::fromStdString(module->name() + ":" + action.title));
+    }
   file->addSeparator();
   file->addAction(tr("&Quit"), this, &QWidget::close, QKeySequence::Quit);
 

@@ -25,7 +25,7 @@ class ModuleHost;
 
 /// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
 /// in a way that breaks plugins built against the old headers.
-inline constexpr int kModuleApiVersion = 1;
+inline constexpr int kModuleApiVersion = 2;
 
 /// The module's algorithmic side, bound to the scene. Subclasses add the
 /// module's operations; it never includes a widget header.
@@ -54,6 +54,16 @@ struct ModuleCommand
   std::function<int(ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out,
                     std::ostream& err)>
     run;
+};
+
+/// A menu entry a module adds to the workstation (File > Export plan report).
+struct ModuleAction
+{
+  std::string menu;     ///< the menu it goes in: "File"
+  std::string title;    ///< "Export plan report as &PDF..."
+  std::string shortcut; ///< a QKeySequence text ("Ctrl+P"), or empty
+  /// Runs on the GUI thread; long work goes through host.runTask.
+  std::function<void(ModuleLogic& logic, ModuleHost& host)> run;
 };
 
 /// Progress report of long work: fraction in [0,1] and the current step;
@@ -99,6 +109,8 @@ public:
     return nullptr;
   }
   virtual std::vector<ModuleCommand> commands() const { return {}; }
+  /// Menu entries of the module in the workstation.
+  virtual std::vector<ModuleAction> actions() const { return {}; }
   /// Whether the module opens this path (a dropped folder, a recent file).
   virtual bool canOpen(const std::filesystem::path& path) const
   {

@@ -1,7 +1,17 @@
 // The Report module plugin: the plan report (issue 7), `caps report`.
 
+#include <QApplication>
+#include <QFileDialog>
+#include <QPrintDialog>
+#include <QPrinter>
+
 #include "modules/core/Module.h"
+#include "modules/report/PlanReport.h"
 #include "modules/report/ReportCommands.h"
+
+#ifndef CAPS_VERSION
+#define CAPS_VERSION "unknown"
+#endif
 
 namespace caps {
 namespace {
@@ -11,6 +21,53 @@ class ReportLogic : public ModuleLogic
 public:
   using ModuleLogic::ModuleLogic;
 };
+
+/// The report of the workstation's scene, built on the GUI thread with a
+/// busy cursor (its renders share the display with the views).
+report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool deidentify)
+{
+  host.showStatus("Writing the plan report...");
+  QApplication::setOverrideCursor(Qt::WaitCursor);
+  try
+  {
+    report::ReportOptions options;
+    options.deidentify = deidentify;
+    report::ReportDocument doc = report::buildPlanReport(logic.scene(), options);
+    QApplication::restoreOverrideCursor();
+    return doc;
+  }
+  catch (...)
+  {
+    QApplication::restoreOverrideCursor();
+    host.showStatus("");
+    throw;
+  }
+}
+
+void exportPdf(ModuleLogic& logic, ModuleHost& host, bool deidentify)
+{
+  const QString file = QFileDialog::getSaveFileName(host.window(), "Export the plan report",
+                                                    deidentify ? "plan-report-deidentified.pdf" : "plan-report.pdf",
+                                                    "PDF (*.pdf)");
+  if (file.isEmpty())
+    return;
+  const report::ReportDocument doc = reportOfScene(logic, host, deidentify);
+  report::PdfMetadata metadata{"CAPS surgical plan report", std::string("CAPS ") + CAPS_VERSION};
+  const int pages = doc.writePdf(file.toStdString(), report::PaperSize::A4, metadata);
+  host.showStatus("Wrote " + file.toStdString() + " (" + std::to_string(pages) + " pages)");
+}
+
+void printReport(ModuleLogic& logic, ModuleHost& host)
+{
+  QPrinter printer(QPrinter::HighResolution);
+  printer.setDocName("CAPS surgical plan report");
+  QPrintDialog dialog(&printer, host.window());
+  if (dialog.exec() != QDialog::Accepted)
+    return;
+  const report::ReportDocument doc = reportOfScene(logic, host, false);
+  const int pages = doc.render(printer);
+  host.showStatus("Sent the plan report to the printer (" + std::to_string(pages) + " pages)");
+}
 
 class ReportModule : public Module
 {
@@ -24,6 +81,15 @@ public:
            "thickness, the storyboard of snapshots and the model's assumptions.";
   }
   std::vector<ModuleCommand> commands() const override { return reportCommands(); }
+  std::vector<ModuleAction> actions() const override
+  {
+    return {{"File", "Export plan report as &PDF...", "Ctrl+E",
+             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, false); }},
+            {"File", "Export &de-identified plan report as PDF...", "",
+             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, true); }},
+            {"File", "&Print plan report...", "Ctrl+P",
+             [](ModuleLogic& logic, ModuleHost& host) { printReport(logic, host); }}};
+  }
   std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const override { return std::make_unique<ReportLogic>(scene); }
 };
 

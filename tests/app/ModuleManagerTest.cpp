@@ -35,6 +35,26 @@ TEST(ModuleManager, LoadsTheVolumesPluginFromItsFile)
   EXPECT_TRUE(manager.failures().empty()) << manager.report();
 }
 
+// The Report module adds File > Export and File > Print to the workstation.
+TEST(ModuleManager, TheReportModuleAddsExportAndPrintToTheFileMenu)
+{
+  caps::ModuleManager manager;
+  manager.loadFolder(CAPS_MODULE_DIR);
+  const caps::Module* report = manager.find("report");
+  ASSERT_NE(report, nullptr) << manager.report();
+  std::vector<std::string> titles;
+  for (const auto& action : report->actions())
+  {
+    EXPECT_EQ(action.menu, "File");
+    EXPECT_TRUE(bool(action.run)) << action.title;
+    titles.push_back(action.title);
+  }
+  ASSERT_EQ(titles.size(), 3u);
+  EXPECT_EQ(titles[0], "Export plan report as &PDF...");
+  EXPECT_EQ(titles[2], "&Print plan report...");
+  EXPECT_NE(manager.findCommand("report").second, nullptr);
+}
+
 TEST(ModuleManager, ReportsEveryBadPluginWithItsReason)
 {
   const fs::path folder = caps::test::scratchFolder();
