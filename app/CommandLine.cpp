@@ -183,7 +183,13 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
   out << "wrote " << bundle.string() << "\n";
   stepDone("save scene");
 
-  // 7. The plan report of the saved scene, as a surgeon would print it.
+  // 7. Two snapshots for the storyboard, as the workstation's snapshot
+  // button takes them, then the plan report of the saved scene, as a
+  // surgeon would print it.
+  for (const char* view : {"before", "after"})
+    if (int code = runModuleCommand(session, "snapshot",
+                                    {bundle.string(), "--plan", "Z-plasty 1", "--view", view}, out, err))
+      return code;
   if (int code = runModuleCommand(session, "report",
                                   {bundle.string(), "--pdf", (folder / "plan-report.pdf").string()}, out, err))
     return code;

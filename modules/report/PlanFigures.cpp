@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,7 +35,23 @@ const RangeMapNode* mapOfRole(const Scene& scene, const std::string& role)
 }
 
 
-/// The patient's whole skin surface (the Segment module's), or null.
+/// Pixels for a figure printed widthMm wide at dpi.
+int pixels(double widthMm, double dpi) { return int(std::lround(widthMm / 25.4 * dpi)); }
+
+/// A nice upper end for a colour bar: 1, 2 or 5 × 10^k at or above value.
+double niceCeiling(double value)
+{
+  if (!(value > 0.0))
+    return 1.0;
+  const double power = std::pow(10.0, std::floor(std::log10(value)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * power >= value)
+      return m * power;
+  return 10.0 * power;
+}
+
+} // namespace
+
 vtkPolyData* headSkin(const Scene& scene)
 {
   vtkPolyData* fallback = nullptr;
@@ -59,19 +76,23 @@ vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name)
   return nullptr;
 }
 
-/// Pixels for a figure printed widthMm wide at dpi.
-int pixels(double widthMm, double dpi) { return int(std::lround(widthMm / 25.4 * dpi)); }
-
-/// The cut path on the skin, every 0.5 mm, its cut points labelled p0, p1, ...
-LineLayer incisionLine(const PlanFacts& plan, const incision::SkinChart& chart)
+LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled)
 {
   LineLayer line;
-  const std::vector<incision::ChartPoint> path = plan.plan.chartPath(chart);
+  line.markLabelledPoints = labelled;
+  const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
+  // Every cut point of a short cut; of a long one (an ellipse's 17) the
+  // ends and a few between, so the labels do not cover one another.
+  const std::size_t every = path.size() <= 6 ? 1 : (path.size() + 3) / 4;
   for (std::size_t i = 0; i < path.size(); ++i)
   {
     line.points.push_back(chart.lift(path[i]));
-    std::string label = "p";
-    label += std::to_string(i);
+    std::string label;
+    if (labelled && (i % every == 0 || i + 1 == path.size()))
+    {
+      label = "p";
+      label += std::to_string(i);
+    }
     line.labels.push_back(label);
     if (i + 1 == path.size())
       break;
@@ -82,22 +103,10 @@ LineLayer incisionLine(const PlanFacts& plan, const incision::SkinChart& chart)
       line.labels.push_back("");
     }
   }
+  if (!labelled)
+    line.labels.clear();
   return line;
 }
-
-/// A nice upper end for a colour bar: 1, 2 or 5 × 10^k at or above value.
-double niceCeiling(double value)
-{
-  if (!(value > 0.0))
-    return 1.0;
-  const double power = std::pow(10.0, std::floor(std::log10(value)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * power >= value)
-      return m * power;
-  return 10.0 * power;
-}
-
-} // namespace
 
 PlanFigures::PlanFigures(Scene& scene, const VolumeNode& volume, double dpi)
   : scene_(scene), volume_(volume), dpi_(dpi)
@@ -151,13 +160,13 @@ void PlanFigures::addStoryboard(ReportDocument& doc) const
                        (snapshot->caption().empty() ? snapshot->name() : snapshot->caption()));
     if (images.size() == 2)
     {
-      doc.figures(images, 82.0, captions);
+      doc.figures(images, 82.0, captions, false);
       images.clear();
       captions.clear();
     }
   }
   if (!images.empty())
-    doc.figures(images, 82.0, captions);
+    doc.figures(images, 82.0, captions, false);
   if (number == 0)
     doc.paragraph("No snapshots were taken for this plan. Snapshots taken in the workstation (the views a surgeon "
                   "keeps while planning, §3.3.3) appear here in the order taken, with their captions.");
@@ -176,89 +185,124 @@ seg::RangeMap PlanFigures::skinMap(const PlanFacts&) const
   return RangeMapLogic::toRangeMap(*skin);
 }
 
-void PlanFigures::addIncisionViews(ReportDocument& doc, const PlanFacts& plan) const
+namespace {
+/// Whether the plan lies on the patient's left (towards θ = 0).
+bool onTheLeft(const PlanFacts& plan)
 {
-  vtkPolyData* head = headSkin(scene_);
-  if (!head)
+  return std::sin(plan.plan.centre().theta - viewTheta(View::Front)) > 0.0;
+}
+} // namespace
+
+std::string planViewName(PlanView view, bool left)
+{
+  switch (view)
   {
-    doc.paragraph("The scene has no skin surface to draw the incision on: segment the CT (Segment module).");
-    return;
+  case PlanView::Front: return "front";
+  case PlanView::Oblique: return left ? "oblique, patient's left" : "oblique, patient's right";
+  case PlanView::Profile: return left ? "profile, patient's left" : "profile, patient's right";
+  case PlanView::Before: return "before the operation, the incision drawn";
+  case PlanView::After: return "predicted after closure (same camera)";
+  case PlanView::Stress: return "von Mises stress after closure (kPa)";
   }
+  return "";
+}
+
+std::optional<Figure> PlanFigures::planFigure(const PlanFacts& plan, PlanView view, double printWidthMm,
+                                              double heightPerWidth) const
+{
   const seg::RangeMap skin = skinMap(plan);
   const seg::CylindricalFrame& frame = skin.frame();
   const incision::SkinChart chart = plan.plan.chart(skin);
-  const Eigen::Vector3d target = frame.origin() + frame.direction() * plan.plan.centre().z;
-  // The oblique and profile views from the side the plan is on.
-  const double theta = plan.plan.centre().theta;
-  const bool left = std::sin(theta - viewTheta(View::Front)) > 0.0; // towards θ = 0, the patient's left
-  const View views[] = {View::Front, left ? View::ObliqueLeft : View::ObliqueRight,
-                        left ? View::ProfileLeft : View::ProfileRight};
-  std::vector<QImage> images;
-  for (const View view : views)
+  Figure figure;
+  figure.printWidthMm = printWidthMm;
+  figure.width = pixels(printWidthMm, dpi_);
+  figure.height = int(std::lround(figure.width * heightPerWidth));
+  LineLayer line = incisionLine(plan.plan, chart);
+  line.widthPixels = std::max(3.0, 1.2 * figure.pixelsPerPoint());
+  if (view == PlanView::Front || view == PlanView::Oblique || view == PlanView::Profile)
   {
-    Figure figure;
-    figure.printWidthMm = 56.0;
-    figure.width = pixels(figure.printWidthMm, dpi_);
-    figure.height = int(std::lround(figure.width * 1.25));
-    figure.camera = lookAtCamera(target, frame.radialDirection(viewTheta(view)), frame.direction(), 105.0,
+    vtkPolyData* head = headSkin(scene_);
+    if (!head)
+      return std::nullopt;
+    // The oblique and profile views from the side the plan is on.
+    const bool left = onTheLeft(plan);
+    const View v = view == PlanView::Front     ? View::Front
+                   : view == PlanView::Oblique ? (left ? View::ObliqueLeft : View::ObliqueRight)
+                                               : (left ? View::ProfileLeft : View::ProfileRight);
+    const Eigen::Vector3d target = frame.origin() + frame.direction() * plan.plan.centre().z;
+    figure.camera = lookAtCamera(target, frame.radialDirection(viewTheta(v)), frame.direction(), 105.0,
                                  figure.sceneAspect(), 20.0, 1.05);
     figure.surfaces.push_back(SurfaceLayer::solid(head, {0.90, 0.76, 0.66}));
-    LineLayer line = incisionLine(plan, chart);
-    line.widthPixels = std::max(3.0, 1.2 * figure.pixelsPerPoint());
     figure.lines.push_back(line);
-    images.push_back(toQImage(renderFigure(figure).GetPointer()));
+    return figure;
   }
-  doc.figures(images, 56.0,
-              {"front", std::string(left ? "oblique, patient's left" : "oblique, patient's right"),
-               std::string(left ? "profile, patient's left" : "profile, patient's right")});
+  vtkPolyData* before = surfaceNamed(scene_, plan.name + " skin before");
+  vtkPolyData* after = surfaceNamed(scene_, plan.name + " skin after");
+  if (!before || !after)
+    return std::nullopt;
+  const std::string shade = before->GetPointData()->GetArray("skin_shade") ? "skin_shade" : "skin_colour";
+  if (view == PlanView::Stress)
+  {
+    double top = 1e3 * plan.woundStress.peakVonMises;
+    if (!(top > 0.0))
+      if (vtkDataArray* stress = after->GetPointData()->GetArray("von_mises_kPa"))
+        top = stress->GetRange()[1];
+    top = niceCeiling(top);
+    figure.colourBar = ColourBar{"von Mises stress (kPa)", {0.0, top}, ColourMap::Viridis, 6, "%.0f"};
+    figure.camera = fitCamera(std::vector<vtkPolyData*>{after}, frame.radialDirection(plan.plan.centre().theta),
+                              frame.direction(), figure.sceneAspect(), 20.0, 1.05);
+    figure.surfaces.push_back(SurfaceLayer::scalars(after, "von_mises_kPa", 0.0, top, ColourMap::Viridis));
+    return figure;
+  }
+  // One camera for before and after: along the radial direction at the
+  // plan's centre, framing both surfaces.
+  figure.camera = fitCamera(std::vector<vtkPolyData*>{before, after}, frame.radialDirection(plan.plan.centre().theta),
+                            frame.direction(), figure.sceneAspect(), 20.0, 1.05);
+  if (view == PlanView::Before)
+  {
+    figure.surfaces.push_back(SurfaceLayer::pointColours(before, shade));
+    figure.lines.push_back(line);
+  }
+  else
+    figure.surfaces.push_back(SurfaceLayer::pointColours(after, shade));
+  return figure;
+}
+
+void PlanFigures::addIncisionViews(ReportDocument& doc, const PlanFacts& plan) const
+{
+  std::vector<QImage> images;
+  std::vector<std::string> captions;
+  for (const PlanView view : {PlanView::Front, PlanView::Oblique, PlanView::Profile})
+  {
+    const std::optional<Figure> figure = planFigure(plan, view, 56.0, 1.25);
+    if (!figure)
+    {
+      doc.paragraph("The scene has no skin surface to draw the incision on: segment the CT (Segment module).");
+      return;
+    }
+    images.push_back(toQImage(renderFigure(*figure).GetPointer()));
+    captions.push_back(planViewName(view, onTheLeft(plan)));
+  }
+  doc.figures(images, 56.0, captions);
   doc.paragraph("The incision drawn on the patient's skin from the CT (solid line, §3.3.1), its cut points numbered "
-                "p0, p1, ... in the scalpel's order as in the measurements below.");
+                "p0, p1, ... in the scalpel's order as in the measurements below (on a long cut, the ends and a few "
+                "between).");
 }
 
 void PlanFigures::addPredictionViews(ReportDocument& doc, const PlanFacts& plan) const
 {
-  vtkPolyData* before = surfaceNamed(scene_, plan.name + " skin before");
-  vtkPolyData* after = surfaceNamed(scene_, plan.name + " skin after");
-  if (!before || !after)
+  const std::optional<Figure> pre = planFigure(plan, PlanView::Before, 82.0, 0.8);
+  const std::optional<Figure> post = planFigure(plan, PlanView::After, 82.0, 0.8);
+  const std::optional<Figure> stress = planFigure(plan, PlanView::Stress, 120.0, 0.6);
+  if (!pre || !post || !stress)
   {
     doc.paragraph("The scene does not hold the display surfaces of this plan (skin before and after): predict it "
                   "again (caps plan) to see them here.");
     return;
   }
-  const seg::RangeMap skin = skinMap(plan);
-  const seg::CylindricalFrame& frame = skin.frame();
-  const incision::SkinChart chart = plan.plan.chart(skin);
-  const std::string shade = before->GetPointData()->GetArray("skin_shade") ? "skin_shade" : "skin_colour";
-  // One camera for before, after and the stress map: along the radial
-  // direction at the plan's centre, framing both surfaces.
-  Figure base;
-  base.printWidthMm = 82.0;
-  base.width = pixels(base.printWidthMm, dpi_);
-  base.height = int(std::lround(base.width * 0.8));
-  const Camera camera = fitCamera(std::vector<vtkPolyData*>{before, after},
-                                  frame.radialDirection(plan.plan.centre().theta), frame.direction(),
-                                  base.sceneAspect(), 20.0, 1.05);
-  Figure pre = base, post = base;
-  pre.camera = post.camera = camera;
-  pre.surfaces.push_back(SurfaceLayer::pointColours(before, shade));
-  LineLayer line = incisionLine(plan, chart);
-  line.widthPixels = std::max(3.0, 1.0 * pre.pixelsPerPoint());
-  pre.lines.push_back(line);
-  post.surfaces.push_back(SurfaceLayer::pointColours(after, shade));
-  doc.figures({toQImage(renderFigure(pre).GetPointer()), toQImage(renderFigure(post).GetPointer())}, 82.0,
-              {"before the operation, the incision drawn", "predicted after closure (same camera)"});
-
-  // The stress map: von Mises on the closed skin, with its colour bar.
-  Figure stress;
-  stress.printWidthMm = 120.0;
-  stress.width = pixels(stress.printWidthMm, dpi_);
-  stress.height = int(std::lround(stress.width * 0.6));
-  const double top = niceCeiling(1e3 * plan.woundStress.peakVonMises);
-  stress.colourBar = ColourBar{"von Mises stress (kPa)", {0.0, top}, ColourMap::Viridis, 6, "%.0f"};
-  stress.camera = fitCamera(std::vector<vtkPolyData*>{after}, frame.radialDirection(plan.plan.centre().theta),
-                            frame.direction(), stress.sceneAspect(), 20.0, 1.05);
-  stress.surfaces.push_back(SurfaceLayer::scalars(after, "von_mises_kPa", 0.0, top, ColourMap::Viridis));
-  doc.figures({toQImage(renderFigure(stress).GetPointer())}, 120.0,
+  doc.figures({toQImage(renderFigure(*pre).GetPointer()), toQImage(renderFigure(*post).GetPointer())}, 82.0,
+              {planViewName(PlanView::Before, false), planViewName(PlanView::After, false)});
+  doc.figures({toQImage(renderFigure(*stress).GetPointer())}, 120.0,
               {"von Mises stress on the skin after closure (kPa), nodal averages extrapolated from the Gauss points "
                "(§4.7); largest within 10 mm of the wound " +
                std::to_string(int(std::lround(1e3 * plan.woundStress.peakVonMises))) + " kPa"});
@@ -297,7 +341,7 @@ void PlanFigures::addThicknessOnFace(ReportDocument& doc, const PlanFacts& plan)
   figure.camera = lookAtCamera(target, frame.radialDirection(viewTheta(View::Front)), frame.direction(), 105.0,
                                figure.sceneAspect(), 20.0, 1.05);
   figure.surfaces.push_back(SurfaceLayer::scalars(painted, "thickness_mm", 0.0, 30.0, ColourMap::Viridis));
-  LineLayer line = incisionLine(plan, plan.plan.chart(skin));
+  LineLayer line = incisionLine(plan.plan, plan.plan.chart(skin));
   line.widthPixels = std::max(3.0, 1.0 * figure.pixelsPerPoint());
   line.colour = {0.85, 0.1, 0.1};
   figure.lines.push_back(line);

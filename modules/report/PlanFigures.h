@@ -6,7 +6,14 @@
 /// unwrapped and painted on the face; the storyboard. Renders are made
 /// offscreen at print resolution (ReportFigures).
 
+#include <optional>
+#include <string>
+
 #include <QImage>
+
+#include "modules/incision/IncisionPlan.h"
+#include "modules/incision/SkinChart.h"
+#include "modules/report/ReportFigures.h"
 
 #include "segmentation/RangeMap.h"
 
@@ -20,11 +27,39 @@ namespace caps::report {
 class ReportDocument;
 struct PlanFacts;
 
+/// The views of a plan the report and the storyboard show.
+enum class PlanView
+{
+  Front,   ///< the face from the front, the incision drawn
+  Oblique, ///< 45° from the side the plan is on
+  Profile, ///< 90° from that side
+  Before,  ///< close-up of the display surface before the operation, the incision drawn
+  After,   ///< the same camera after closure
+  Stress,  ///< the closed skin coloured by von Mises stress, with its colour bar
+};
+/// The patient's whole skin surface (the Segment module's "Skin"), or null.
+vtkPolyData* headSkin(const Scene& scene);
+/// The polydata of the Surface node named @a name, or null.
+vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name);
+/// The cut path of @a plan lifted onto the skin every 0.5 mm (§3.3.1: a
+/// solid line), its cut points labelled p0, p1, ... when @a labelled (on a
+/// long cut the ends and a few between, so labels do not overlap).
+LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled = true);
+
+/// A caption for a view; @a left: the plan is on the patient's left.
+std::string planViewName(PlanView view, bool left);
+
 class PlanFigures
 {
 public:
   /// @a dpi: the figures' resolution at their printed size.
   PlanFigures(Scene& scene, const VolumeNode& volume, double dpi);
+
+  /// The figure of one view of @a plan (only its name and plan are needed,
+  /// and its wound stress for Stress), @a printWidthMm wide on paper at this
+  /// object's resolution; std::nullopt when the scene lacks the surfaces.
+  std::optional<Figure> planFigure(const PlanFacts& plan, PlanView view, double printWidthMm,
+                                   double heightPerWidth) const;
 
   /// Front, oblique and profile views of the face with the cut drawn and its
   /// points numbered.

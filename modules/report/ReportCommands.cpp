@@ -1,15 +1,20 @@
 #include "modules/report/ReportCommands.h"
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
 
+#include "modules/report/PlanAnimation.h"
 #include "modules/report/PlanReport.h"
+#include "modules/report/Storyboard.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
+#include "scene/SnapshotNode.h"
 
 #ifndef CAPS_VERSION
 #define CAPS_VERSION "unknown"
@@ -19,6 +24,16 @@ namespace fs = std::filesystem;
 
 namespace caps {
 namespace {
+
+/// Loads the scene bundle a command works on.
+/// @throws std::invalid_argument when there is none at @a path.
+void loadScene(const fs::path& path, Scene& scene)
+{
+  if (!fs::is_directory(path))
+    throw std::invalid_argument("there is no scene at " + path.string() +
+                                ": give the NAME.caps folder that the workstation or caps demo saved");
+  loadSceneBundle(scene, path);
+}
 
 const char* kReportUsage =
   "usage: caps report SCENE.caps --pdf OUT.pdf [--deidentify] [--paper a4|letter]\n"
@@ -129,11 +144,8 @@ int runReport(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& 
   }
   try
   {
-    if (!fs::is_directory(args.scene))
-      throw std::invalid_argument("there is no scene at " + args.scene.string() +
-                                  ": give the NAME.caps folder that the workstation or caps demo saved");
     Scene scene;
-    loadSceneBundle(scene, args.scene);
+    loadScene(args.scene, scene);
     const TaskProgress progress = cli::consoleProgress(err);
     const report::ReportDocument doc = report::buildPlanReport(scene, args.options, progress);
     if (!args.pdf.parent_path().empty())
@@ -152,11 +164,272 @@ int runReport(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& 
   }
 }
 
+const char* kAnimateUsage =
+  "usage: caps animate SCENE.caps --out DIR [--plan NAME] [--frames N] [--turntable-frames M]\n"
+  "                    [--size WxH] [--fps F] [--no-turntable] [--no-video]\n"
+  "\n"
+  "Exports the animations of a plan of a saved scene (thesis §3.3.3): the skin\n"
+  "morphing from before the operation to the predicted result, seen from one\n"
+  "camera framing both, and a turntable once round the head with the incision\n"
+  "drawn, starting from the front. Each is written as a PNG sequence\n"
+  "(DIR/pre-post/frame-0000.png ..., DIR/turntable/frame-0000.png ...) and, when\n"
+  "ffmpeg is installed (Debian package ffmpeg), as DIR/pre-post.mp4 and\n"
+  "DIR/turntable.mp4 (H.264, yuv420p). Without ffmpeg the frames are still\n"
+  "written and the command to make the videos later is printed.\n"
+  "\n"
+  "  --out DIR             the folder to write into (frames already there are replaced)\n"
+  "  --plan NAME           the plan to animate (default the scene's first plan)\n"
+  "  --frames N            frames of the pre -> post animation (default 30, at least 2)\n"
+  "  --turntable-frames M  frames of the turn around the head (default 72, at least 2)\n"
+  "  --size WxH            frame size in pixels (default 960x720; odd sizes are made even)\n"
+  "  --fps F               frame rate of the videos (default 24)\n"
+  "  --no-turntable        only the pre -> post animation\n"
+  "  --no-video            only the PNG sequences\n"
+  "\n"
+  "The environment variable CAPS_FFMPEG names the ffmpeg to run (default: ffmpeg\n"
+  "on PATH). Frames are rendered offscreen; without a display, CAPS starts its own\n"
+  "X server (Xvfb, Debian package xvfb).\n"
+  "Exit status: 0 when written, 1 when the scene cannot be animated (the message\n"
+  "says why), 2 on wrong usage.\n";
+
+struct AnimateArgs
+{
+  fs::path scene;
+  fs::path out;
+  std::string plan;
+  report::AnimationOptions options;
+  bool help = false;
+};
+
+/// A whole positive number, or nullopt.
+std::optional<int> positiveInt(const std::string& text)
+{
+  try
+  {
+    std::size_t used = 0;
+    const int value = std::stoi(text, &used);
+    if (used == text.size() && value > 0)
+      return value;
+  }
+  catch (const std::exception&)
+  {
+  }
+  return std::nullopt;
+}
+
+std::optional<std::string> parseAnimate(const std::vector<std::string>& args, AnimateArgs& parsed)
+{
+  for (std::size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    const bool hasValue = i + 1 < args.size();
+    if (a == "--help" || a == "-h")
+      parsed.help = true;
+    else if (a == "--out")
+    {
+      if (!hasValue)
+        return "--out needs the folder to write into";
+      parsed.out = args[++i];
+    }
+    else if (a == "--plan")
+    {
+      if (!hasValue)
+        return "--plan needs the name of a plan of the scene";
+      parsed.plan = args[++i];
+    }
+    else if (a == "--frames" || a == "--turntable-frames")
+    {
+      const auto n = positiveInt(hasValue ? args[++i] : "");
+      if (!n || *n < 2 || *n > 10000)
+        return a + " needs a number of frames from 2 to 10000";
+      (a == "--frames" ? parsed.options.prePostFrames : parsed.options.turntableFrames) = *n;
+    }
+    else if (a == "--size")
+    {
+      const std::string size = hasValue ? args[++i] : "";
+      const std::size_t x = size.find('x');
+      const auto w = x == std::string::npos ? std::nullopt : positiveInt(size.substr(0, x));
+      const auto h = x == std::string::npos ? std::nullopt : positiveInt(size.substr(x + 1));
+      if (!w || !h || *w < 16 || *h < 16 || *w > 8192 || *h > 8192)
+        return "--size needs WIDTHxHEIGHT in pixels, 16 to 8192 each (e.g. 960x720)";
+      parsed.options.width = *w;
+      parsed.options.height = *h;
+    }
+    else if (a == "--fps")
+    {
+      double fps = 0.0;
+      try
+      {
+        fps = hasValue ? std::stod(args[++i]) : 0.0;
+      }
+      catch (const std::exception&)
+      {
+      }
+      if (!(fps > 0.0 && fps <= 240.0))
+        return "--fps needs a frame rate from 0 to 240";
+      parsed.options.framesPerSecond = fps;
+    }
+    else if (a == "--no-turntable")
+      parsed.options.turntable = false;
+    else if (a == "--no-video")
+      parsed.options.video = false;
+    else if (!a.empty() && a[0] == '-')
+      return "unknown option " + a;
+    else if (parsed.scene.empty())
+      parsed.scene = a;
+    else
+      return "one scene at a time (got " + parsed.scene.string() + " and " + a + ")";
+  }
+  if (parsed.help)
+    return std::nullopt;
+  if (parsed.scene.empty())
+    return "SCENE.caps missing";
+  if (parsed.out.empty())
+    return "--out DIR missing";
+  return std::nullopt;
+}
+
+void printSequence(std::ostream& out, const report::FrameSequence& sequence)
+{
+  out << "wrote " << sequence.folder.string() << "/frame-0000.png ... (" << sequence.frames << " frames, "
+      << sequence.width << "x" << sequence.height << ")\n";
+  if (!sequence.video.empty())
+    out << "wrote " << sequence.video.string() << "\n";
+}
+
+int runAnimate(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
+{
+  AnimateArgs args;
+  if (auto problem = parseAnimate(argv, args))
+  {
+    err << "caps animate: " << *problem << "\n" << kAnimateUsage;
+    return 2;
+  }
+  if (args.help)
+  {
+    out << kAnimateUsage;
+    return 0;
+  }
+  try
+  {
+    Scene scene;
+    loadScene(args.scene, scene);
+    const TaskProgress progress = cli::consoleProgress(err);
+    const report::AnimationResult result =
+      report::writePlanAnimation(scene, args.plan, args.out, args.options, progress);
+    out << "plan \"" << result.planName << "\"\n";
+    printSequence(out, result.prePost);
+    if (result.turntable)
+      printSequence(out, *result.turntable);
+    char timing[96];
+    std::snprintf(timing, sizeof timing, "rendered %d frames in %.1f s (%.2f frames/s)\n", result.framesRendered,
+                  result.renderSeconds, result.framesRendered / std::max(1e-9, result.renderSeconds));
+    out << timing;
+    if (!result.videoMessage.empty())
+      out << result.videoMessage << "\n";
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    err << "caps animate: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+const char* kSnapshotUsage =
+  "usage: caps snapshot SCENE.caps --plan NAME --view VIEW [--caption TEXT] [--size WxH]\n"
+  "\n"
+  "Adds a snapshot of a plan to the scene's storyboard (thesis §3.3.3), as the\n"
+  "workstation's snapshot button does, and saves the scene; the report prints the\n"
+  "snapshots in order with their captions.\n"
+  "\n"
+  "  --plan NAME       the plan (as the scene names it, e.g. \"Z-plasty 1\")\n"
+  "  --view VIEW       front, oblique or profile (the face, the incision drawn), before or\n"
+  "                    after (close-up, the same camera), stress (von Mises, colour bar)\n"
+  "  --caption TEXT    the caption (default: the plan and the view)\n"
+  "  --size WxH        pixels (default 1200x900)\n"
+  "Exit status: 0 when added, 1 when the scene cannot give that view, 2 on wrong usage.\n";
+
+int runSnapshot(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+{
+  fs::path scenePath;
+  std::string plan, view, caption;
+  int width = 1200, height = 900;
+  std::optional<std::string> problem;
+  for (std::size_t i = 0; i < args.size() && !problem; ++i)
+  {
+    const std::string& a = args[i];
+    const bool hasValue = i + 1 < args.size();
+    if (a == "--help" || a == "-h")
+    {
+      out << kSnapshotUsage;
+      return 0;
+    }
+    if ((a == "--plan" || a == "--view" || a == "--caption" || a == "--size") && !hasValue)
+      problem = a + " needs a value";
+    else if (a == "--plan")
+      plan = args[++i];
+    else if (a == "--view")
+      view = args[++i];
+    else if (a == "--caption")
+      caption = args[++i];
+    else if (a == "--size")
+    {
+      const std::string size = args[++i];
+      const auto x = size.find('x');
+      try
+      {
+        width = std::stoi(size.substr(0, x));
+        height = std::stoi(size.substr(x + 1));
+      }
+      catch (const std::exception&)
+      {
+        problem = "--size needs WxH in pixels, e.g. 1200x900";
+      }
+      if (x == std::string::npos || width < 64 || height < 64 || width > 8000 || height > 8000)
+        problem = "--size needs WxH in pixels from 64 to 8000, e.g. 1200x900";
+    }
+    else if (!a.empty() && a[0] == '-')
+      problem = "unknown option " + a;
+    else if (scenePath.empty())
+      scenePath = a;
+    else
+      problem = "one scene at a time";
+  }
+  if (!problem && scenePath.empty())
+    problem = "SCENE.caps missing";
+  if (!problem && (plan.empty() || view.empty()))
+    problem = "--plan NAME and --view VIEW are needed";
+  if (problem)
+  {
+    err << "caps snapshot: " << *problem << "\n" << kSnapshotUsage;
+    return 2;
+  }
+  try
+  {
+    const report::PlanView planView = report::planViewFromName(view);
+    Scene scene;
+    loadScene(scenePath, scene);
+    const SnapshotNode& snapshot = report::takePlanSnapshot(scene, plan, planView, caption, width, height);
+    saveSceneBundle(scene, scenePath);
+    out << "added " << snapshot.name() << " (\"" << snapshot.caption() << "\") to " << scenePath.string() << "\n";
+    return 0;
+  }
+  catch (const std::exception& e)
+  {
+    err << "caps snapshot: " << e.what() << "\n";
+    return 1;
+  }
+}
+
 } // namespace
 
 std::vector<ModuleCommand> reportCommands()
 {
-  return {{"report", "write the plan report of a scene as a PDF", kReportUsage, runReport}};
+  return {{"report", "write the plan report of a scene as a PDF", kReportUsage, runReport},
+          {"snapshot", "add a view of a plan to the scene's storyboard", kSnapshotUsage, runSnapshot},
+          {"animate", "export a plan's pre -> post animation and a turntable as PNG frames and MP4", kAnimateUsage,
+           runAnimate}};
 }
 
 } // namespace caps

@@ -102,7 +102,8 @@ void ReportDocument::table(const std::vector<std::string>& header, const std::ve
   html_ += "</table>\n";
 }
 
-void ReportDocument::figures(const std::vector<QImage>& images, double widthMm, const std::vector<std::string>& captions)
+void ReportDocument::figures(const std::vector<QImage>& images, double widthMm, const std::vector<std::string>& captions,
+                             bool lettered)
 {
   // One paragraph of images: a line of the layout, which moves whole to the
   // next page when it does not fit (a table cell would be cut in two).
@@ -122,7 +123,7 @@ void ReportDocument::figures(const std::vector<QImage>& images, double widthMm, 
       continue;
     if (!caption.empty())
       caption += " ";
-    if (captions.size() > 1)
+    if (lettered && captions.size() > 1)
     {
       caption += '(';
       caption += char('a' + i);

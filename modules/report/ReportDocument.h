@@ -49,8 +49,10 @@ public:
   /// A table with a header row; numbers are right-aligned.
   void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
   /// Figures side by side, each @a widthMm wide on paper, and their
-  /// captions under them, lettered (a), (b), ... when there are several.
-  void figures(const std::vector<QImage>& images, double widthMm, const std::vector<std::string>& captions);
+  /// captions under them, lettered (a), (b), ... when there are several
+  /// (unless @a lettered is false: captions numbered by the caller).
+  void figures(const std::vector<QImage>& images, double widthMm, const std::vector<std::string>& captions,
+               bool lettered = true);
   /// The next content starts on a new page.
   void pageBreak();
   ///@}

@@ -1,0 +1,436 @@
+#include "modules/report/PlanAnimation.h"
+
+#include "modules/report/PlanFigures.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+#include <vtkCellArray.h>
+#include <vtkDataArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkFloatArray.h>
+#include <vtkImageData.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
+
+#include "modules/incision/IncisionLogic.h"
+#include "modules/incision/SkinChart.h"
+#include "modules/rangemap/RangeMapLogic.h"
+#include "scene/PlanNode.h"
+#include "scene/RangeMapNode.h"
+#include "scene/Scene.h"
+#include "scene/SurfaceNode.h"
+#include "segmentation/Progress.h"
+
+namespace fs = std::filesystem;
+
+namespace caps::report {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+const PlanNode& findPlan(const Scene& scene, const std::string& name)
+{
+  const std::vector<Node*> plans = scene.nodesOfType(NodeType::Plan);
+  if (plans.empty())
+    throw std::invalid_argument("the scene has no plan to animate: draw one (Incision module, or caps plan) first");
+  if (name.empty())
+    return *static_cast<const PlanNode*>(plans.front());
+  std::string names;
+  for (Node* n : plans)
+  {
+    if (n->name() == name)
+      return *static_cast<const PlanNode*>(n);
+    names += names.empty() ? "\"" : ", \"";
+    names += n->name();
+    names += "\"";
+  }
+  throw std::invalid_argument("the scene has no plan named \"" + name + "\"; its plans are " + names);
+}
+
+/// The skin range map the plan is drawn on (its own, else the scene's "skin" map).
+seg::RangeMap skinMapOf(const Scene& scene, const PlanNode& plan)
+{
+  if (const auto* own = scene.nodeAs<RangeMapNode>(plan.rangeMapId()))
+    return RangeMapLogic::toRangeMap(*own);
+  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
+    if (static_cast<const RangeMapNode*>(n)->role() == "skin")
+      return RangeMapLogic::toRangeMap(*static_cast<const RangeMapNode*>(n));
+  throw std::invalid_argument("the scene has no skin range map to draw plan \"" + plan.name() +
+                              "\" on: make the range maps (RangeMap module, caps rangemap) first");
+}
+
+/// Blends two unsigned char arrays of the same shape; null when either is missing or they differ.
+vtkSmartPointer<vtkDataArray> blendColours(vtkDataArray* a, vtkDataArray* b, double s)
+{
+  auto* ca = vtkUnsignedCharArray::SafeDownCast(a);
+  auto* cb = vtkUnsignedCharArray::SafeDownCast(b);
+  if (!ca || !cb || ca->GetNumberOfTuples() != cb->GetNumberOfTuples() ||
+      ca->GetNumberOfComponents() != cb->GetNumberOfComponents())
+    return nullptr;
+  if (s <= 0.0)
+    return a;
+  if (s >= 1.0)
+    return b;
+  auto out = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  out->SetName(ca->GetName());
+  out->SetNumberOfComponents(ca->GetNumberOfComponents());
+  out->SetNumberOfTuples(ca->GetNumberOfTuples());
+  const vtkIdType n = ca->GetNumberOfValues();
+  for (vtkIdType i = 0; i < n; ++i)
+    out->SetValue(i, static_cast<unsigned char>(std::lround((1.0 - s) * ca->GetValue(i) + s * cb->GetValue(i))));
+  return out;
+}
+
+/// Fails with seg::Cancelled when the user asked to stop.
+void report(const TaskProgress& progress, double fraction, const std::string& step)
+{
+  if (progress && !progress(std::clamp(fraction, 0.0, 1.0), step))
+    throw seg::Cancelled();
+}
+
+std::string frameName(int index)
+{
+  char name[32];
+  std::snprintf(name, sizeof name, "frame-%04d.png", index);
+  return name;
+}
+
+/// An empty folder for a sequence: earlier frames there are removed (ffmpeg
+/// would otherwise pick up the frames of a longer earlier run), and so is the
+/// earlier run's video beside it, which would no longer match the frames.
+void prepareFolder(const fs::path& folder)
+{
+  fs::create_directories(folder);
+  fs::remove(folder.parent_path() / (folder.filename().string() + ".mp4"));
+  for (const auto& entry : fs::directory_iterator(folder))
+  {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("frame-", 0) == 0 && entry.path().extension() == ".png")
+      fs::remove(entry.path());
+  }
+}
+
+std::string shellQuoted(const std::string& s)
+{
+  std::string q = "'";
+  for (char c : s)
+  {
+    if (c == '\'')
+      q += "'\\''";
+    else
+      q += c;
+  }
+  q += "'";
+  return q;
+}
+
+bool isExecutableFile(const fs::path& p)
+{
+  std::error_code ec;
+  return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+}
+
+std::string ffmpegCommandLine(const fs::path& ffmpeg, const FrameSequence& sequence, const fs::path& video,
+                              double framesPerSecond)
+{
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%g", framesPerSecond);
+  std::string command = shellQuoted(ffmpeg.string());
+  command += " -y -loglevel error -framerate ";
+  command += rate;
+  command += " -i ";
+  command += shellQuoted((sequence.folder / "frame-%04d.png").string());
+  command += " -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -c:v libx264 -pix_fmt yuv420p ";
+  command += shellQuoted(video.string());
+  return command;
+}
+
+/// Runs a shell command line; its exit status and what it printed.
+std::pair<int, std::string> runCommand(const std::string& command)
+{
+  std::string output;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe)
+    return {-1, "cannot start a shell"};
+  std::array<char, 4096> buffer;
+  std::size_t n;
+  while ((n = std::fread(buffer.data(), 1, buffer.size(), pipe)) > 0)
+    output.append(buffer.data(), n);
+  const int status = ::pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+/// The turntable's camera at θ: it frames a cylinder about the head axis holding
+/// the whole skin, sampled at angles that turn with θ, so the distance and the
+/// target are the same in every frame (no zooming as the head turns).
+Camera turntableCamera(const seg::CylindricalFrame& frame, double rMax, double zMin, double zMax, double theta,
+                       double aspect)
+{
+  std::vector<Eigen::Vector3d> points;
+  const int around = 36;
+  for (int j = 0; j < around; ++j)
+  {
+    const Eigen::Vector3d radial = frame.radialDirection(theta + 2.0 * kPi * j / around) * rMax;
+    for (double z : {zMin, zMax})
+      points.push_back(frame.origin() + frame.direction() * z + radial);
+  }
+  return fitCamera(points, frame.radialDirection(theta), frame.direction(), aspect, 20.0, 1.04);
+}
+
+} // namespace
+
+vtkSmartPointer<vtkPolyData> blendSurfaces(vtkPolyData* before, vtkPolyData* after, double s)
+{
+  if (!before || !after)
+    throw std::invalid_argument("blendSurfaces: a surface is missing");
+  const vtkIdType n = before->GetNumberOfPoints();
+  if (after->GetNumberOfPoints() != n)
+    throw std::invalid_argument("the skin before has " + std::to_string(n) + " points and the skin after " +
+                                std::to_string(after->GetNumberOfPoints()) +
+                                ": they are not the same display surface (predict the plan again, caps plan)");
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(n);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    double a[3], b[3];
+    before->GetPoint(i, a);
+    after->GetPoint(i, b);
+    points->SetPoint(i, (1.0 - s) * a[0] + s * b[0], (1.0 - s) * a[1] + s * b[1], (1.0 - s) * a[2] + s * b[2]);
+  }
+  auto out = vtkSmartPointer<vtkPolyData>::New();
+  out->SetPoints(points);
+  out->SetVerts(before->GetVerts());
+  out->SetLines(before->GetLines());
+  out->SetPolys(before->GetPolys());
+  out->SetStrips(before->GetStrips());
+  for (const char* name : {"skin_shade", "skin_colour"})
+    if (auto blended = blendColours(before->GetPointData()->GetArray(name), after->GetPointData()->GetArray(name), s))
+      out->GetPointData()->AddArray(blended);
+  vtkDataArray* na = before->GetPointData()->GetNormals();
+  vtkDataArray* nb = after->GetPointData()->GetNormals();
+  if (na && nb && na->GetNumberOfTuples() == n && nb->GetNumberOfTuples() == n && na->GetNumberOfComponents() == 3 &&
+      nb->GetNumberOfComponents() == 3)
+  {
+    auto normals = vtkSmartPointer<vtkFloatArray>::New();
+    normals->SetName("Normals");
+    normals->SetNumberOfComponents(3);
+    normals->SetNumberOfTuples(n);
+    for (vtkIdType i = 0; i < n; ++i)
+    {
+      double a[3], b[3];
+      na->GetTuple(i, a);
+      nb->GetTuple(i, b);
+      Eigen::Vector3d v((1.0 - s) * a[0] + s * b[0], (1.0 - s) * a[1] + s * b[1], (1.0 - s) * a[2] + s * b[2]);
+      if (v.norm() > 0.0)
+        v.normalize();
+      normals->SetTuple3(i, v.x(), v.y(), v.z());
+    }
+    out->GetPointData()->SetNormals(normals);
+  }
+  return out;
+}
+
+std::optional<fs::path> findFfmpeg()
+{
+  std::string wanted = "ffmpeg";
+  if (const char* env = std::getenv("CAPS_FFMPEG"); env && *env)
+    wanted = env;
+  if (wanted.find('/') != std::string::npos)
+    return isExecutableFile(wanted) ? std::optional<fs::path>(fs::absolute(wanted)) : std::nullopt;
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
+  for (std::size_t start = 0; start <= dirs.size();)
+  {
+    std::size_t end = dirs.find(':', start);
+    if (end == std::string::npos)
+      end = dirs.size();
+    const fs::path candidate = fs::path(end > start ? dirs.substr(start, end - start) : ".") / wanted;
+    if (isExecutableFile(candidate))
+      return fs::absolute(candidate);
+    start = end + 1;
+  }
+  return std::nullopt;
+}
+
+AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, const fs::path& outDir,
+                                   const AnimationOptions& options, const TaskProgress& progress)
+{
+  const int width = options.width - options.width % 2;
+  const int height = options.height - options.height % 2;
+  if (width < 16 || height < 16 || width > 8192 || height > 8192)
+    throw std::invalid_argument("the frame size must be within 16–8192 pixels a side (got " +
+                                std::to_string(options.width) + " × " + std::to_string(options.height) + ")");
+  if (options.prePostFrames < 2)
+    throw std::invalid_argument("the pre → post animation needs at least 2 frames");
+  if (options.turntable && options.turntableFrames < 2)
+    throw std::invalid_argument("the turntable needs at least 2 frames");
+  if (!(options.framesPerSecond > 0.0))
+    throw std::invalid_argument("the frame rate must be positive");
+
+  const PlanNode& planNode = findPlan(scene, planName);
+  AnimationResult result;
+  result.planName = planNode.name();
+  vtkPolyData* before = surfaceNamed(scene, result.planName + " skin before");
+  vtkPolyData* after = surfaceNamed(scene, result.planName + " skin after");
+  if (!before || !after)
+    throw std::invalid_argument("the scene does not hold the display surfaces of plan \"" + result.planName +
+                                "\" (\"" + result.planName + " skin before\" and \"" + result.planName +
+                                " skin after\"): predict it (caps plan, or Simulate in the workstation) first");
+  if (before->GetNumberOfPoints() != after->GetNumberOfPoints())
+    throw std::invalid_argument("plan \"" + result.planName + "\": the skin before has " +
+                                std::to_string(before->GetNumberOfPoints()) + " points and the skin after " +
+                                std::to_string(after->GetNumberOfPoints()) +
+                                ", so one cannot be morphed into the other: predict the plan again (caps plan)");
+  const seg::RangeMap skin = skinMapOf(scene, planNode);
+  const seg::CylindricalFrame& frame = skin.frame();
+  const incision::IncisionPlan plan = IncisionLogic::readPlan(planNode);
+  vtkPolyData* head = options.turntable ? headSkin(scene) : nullptr;
+  if (options.turntable && !head)
+    throw std::invalid_argument("the scene has no skin surface (\"Skin\") for the turntable: segment the CT "
+                                "(Segment module, caps segment) first, or leave the turntable out");
+
+  const int total = options.prePostFrames + (options.turntable ? options.turntableFrames : 0);
+  const auto started = std::chrono::steady_clock::now();
+  int done = 0;
+
+  // Pre → post: one camera along the radial direction at the plan's centre, framing both surfaces.
+  Figure base;
+  base.width = width;
+  base.height = height;
+  base.multiSamples = options.multiSamples;
+  result.prePost.folder = fs::absolute(outDir) / "pre-post";
+  result.prePost.width = width;
+  result.prePost.height = height;
+  result.prePost.camera = fitCamera(std::vector<vtkPolyData*>{before, after},
+                                    frame.radialDirection(plan.centre().theta), frame.direction(),
+                                    base.sceneAspect(), 20.0, 1.05);
+  const std::string shade = before->GetPointData()->GetArray("skin_shade") ? "skin_shade" : "skin_colour";
+  prepareFolder(result.prePost.folder);
+  for (int k = 0; k < options.prePostFrames; ++k)
+  {
+    report(progress, 0.95 * done / total, "Rendering the pre → post animation");
+    const double s = double(k) / (options.prePostFrames - 1);
+    Figure figure = base;
+    figure.camera = result.prePost.camera;
+    figure.surfaces.push_back(SurfaceLayer::pointColours(blendSurfaces(before, after, s), shade));
+    writePng(renderFigure(figure).GetPointer(), result.prePost.folder / frameName(k));
+    ++result.prePost.frames;
+    ++done;
+  }
+
+  // The turntable: the head skin with the incision, once round the axis from the front.
+  if (options.turntable)
+  {
+    FrameSequence turn;
+    turn.folder = fs::absolute(outDir) / "turntable";
+    turn.width = width;
+    turn.height = height;
+    double rMax = 0.0, zMin = std::numeric_limits<double>::infinity(), zMax = -zMin;
+    for (vtkIdType i = 0; i < head->GetNumberOfPoints(); ++i)
+    {
+      double x[3];
+      head->GetPoint(i, x);
+      const seg::CylindricalPoint c = frame.toCylindrical(Eigen::Vector3d(x[0], x[1], x[2]));
+      rMax = std::max(rMax, c.r);
+      zMin = std::min(zMin, c.z);
+      zMax = std::max(zMax, c.z);
+    }
+    if (!(rMax > 0.0) || !(zMax > zMin))
+      throw std::invalid_argument("the skin surface is empty: segment the CT again");
+    Figure figure = base;
+    figure.surfaces.push_back(SurfaceLayer::solid(head, {0.90, 0.76, 0.66}));
+    LineLayer line = incisionLine(plan, plan.chart(skin), false);
+    line.widthPixels = std::max(3.0, height / 240.0);
+    figure.lines.push_back(line);
+    prepareFolder(turn.folder);
+    for (int k = 0; k < options.turntableFrames; ++k)
+    {
+      report(progress, 0.95 * done / total, "Rendering the turntable");
+      const double theta = viewTheta(View::Front) + 2.0 * kPi * k / options.turntableFrames;
+      figure.camera = turntableCamera(frame, rMax, zMin, zMax, theta, figure.sceneAspect());
+      if (k == 0)
+        turn.camera = figure.camera;
+      writePng(renderFigure(figure).GetPointer(), turn.folder / frameName(k));
+      ++turn.frames;
+      ++done;
+    }
+    result.turntable = turn;
+  }
+  result.framesRendered = done;
+  result.renderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  // The videos.
+  std::vector<FrameSequence*> sequences{&result.prePost};
+  if (result.turntable)
+    sequences.push_back(&*result.turntable);
+  const std::optional<fs::path> ffmpeg = findFfmpeg();
+  result.ffmpegFound = ffmpeg.has_value();
+  for (FrameSequence* sequence : sequences)
+    sequence->ffmpegCommand = ffmpegCommandLine(ffmpeg.value_or("ffmpeg"), *sequence,
+                                                sequence->folder.parent_path() /
+                                                  (sequence->folder.filename().string() + ".mp4"),
+                                                options.framesPerSecond);
+  if (options.video && !ffmpeg)
+  {
+    const char* env = std::getenv("CAPS_FFMPEG");
+    std::string message = "no MP4 written: ";
+    if (env && *env)
+    {
+      message += "CAPS_FFMPEG is set to ";
+      message += env;
+      message += ", which is not an executable file";
+    }
+    else
+      message += "ffmpeg was not found on PATH";
+    message += ". Install it (Debian package ffmpeg: apt-get install ffmpeg) and run:";
+    for (const FrameSequence* sequence : sequences)
+    {
+      message += "\n  ";
+      message += sequence->ffmpegCommand;
+    }
+    result.videoMessage = message;
+  }
+  else if (options.video)
+  {
+    for (std::size_t i = 0; i < sequences.size(); ++i)
+    {
+      FrameSequence& sequence = *sequences[i];
+      const fs::path video = sequence.folder.parent_path() / (sequence.folder.filename().string() + ".mp4");
+      std::string step = "Encoding ";
+      step += video.filename().string();
+      report(progress, 0.95 + 0.05 * double(i) / double(sequences.size()), step);
+      const auto [status, output] = runCommand(sequence.ffmpegCommand);
+      if (status != 0 || !fs::exists(video) || fs::file_size(video) == 0)
+      {
+        std::string problem = "ffmpeg could not encode ";
+        problem += video.string();
+        problem += " (exit status ";
+        problem += std::to_string(status);
+        problem += "): ";
+        problem += output.empty() ? std::string("no message") : output;
+        problem += "\nThe frames are written; the command was:\n  ";
+        problem += sequence.ffmpegCommand;
+        throw std::runtime_error(problem);
+      }
+      sequence.video = video;
+    }
+  }
+  report(progress, 1.0, "Animation written");
+  return result;
+}
+
+} // namespace caps::report

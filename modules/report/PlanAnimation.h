@@ -1,0 +1,94 @@
+#pragma once
+/// @file PlanAnimation.h
+/// @brief Animation export (issue 7 item 3; thesis §3.3.3 documentation):
+/// the skin morphing from before the operation to the predicted result, and
+/// a turntable around the head with the incision drawn, each written as a
+/// PNG sequence and, when Debian's ffmpeg is there, as an MP4.
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <vtkSmartPointer.h>
+
+#include "modules/core/Module.h"
+#include "modules/report/ReportFigures.h"
+
+class vtkPolyData;
+
+namespace caps {
+class Scene;
+}
+
+namespace caps::report {
+
+/// What to write and how.
+struct AnimationOptions
+{
+  /// Frame size in pixels; odd values are rounded down to even (yuv420p video needs even sizes).
+  int width = 960;
+  int height = 720;
+  /// Frames of the pre → post morph (at least 2: the first is the skin before, the last after).
+  int prePostFrames = 30;
+  /// Frames of one turn around the head axis (at least 2), starting from the front.
+  int turntableFrames = 72;
+  bool turntable = true;
+  /// Encode each sequence as an MP4 when ffmpeg is found.
+  bool video = true;
+  double framesPerSecond = 24.0;
+  /// MSAA samples of each frame (0: none).
+  int multiSamples = 4;
+};
+
+/// One PNG sequence: folder/frame-0000.png … and, when made, its video.
+struct FrameSequence
+{
+  std::filesystem::path folder;
+  int frames = 0;
+  int width = 0;
+  int height = 0;
+  Camera camera;                 ///< the pre → post camera; the turntable's first (front) camera
+  std::filesystem::path video;   ///< the MP4, empty when none was made
+  std::string ffmpegCommand;     ///< the command line that makes (or would make) the MP4
+};
+
+/// What writePlanAnimation() wrote.
+struct AnimationResult
+{
+  std::string planName;
+  FrameSequence prePost;
+  std::optional<FrameSequence> turntable;
+  /// False when videos were asked for and ffmpeg was not found (nothing failed: the frames are written).
+  bool ffmpegFound = false;
+  /// For the user: why there is no video and how to make it later; empty when the videos were made or not asked for.
+  std::string videoMessage;
+  int framesRendered = 0;
+  double renderSeconds = 0.0; ///< wall time spent rendering and writing the frames
+};
+
+/// The skin at @a s in [0, 1] of the way from @a before to @a after: points
+/// (1−s)·before + s·after, and the point arrays skin_shade / skin_colour and
+/// normals blended the same way when both surfaces have them. Cells are
+/// before's.
+/// @throws std::invalid_argument when the point counts differ.
+vtkSmartPointer<vtkPolyData> blendSurfaces(vtkPolyData* before, vtkPolyData* after, double s);
+
+/// The ffmpeg to run: $CAPS_FFMPEG when set (a path, or a name searched on
+/// PATH), otherwise `ffmpeg` on PATH; nullopt when it is not an executable file.
+std::optional<std::filesystem::path> findFfmpeg();
+
+/// Writes the animations of the plan named @a planName (empty: the scene's
+/// first plan) into @a outDir: pre-post/frame-NNNN.png (the display surfaces
+/// "<plan> skin before" → "<plan> skin after" coloured by skin_shade, one
+/// camera framing both), turntable/frame-NNNN.png (the "Skin" surface with the
+/// incision, the camera going once round the head axis from the front), and
+/// pre-post.mp4 / turntable.mp4 when ffmpeg is found. Frames already in those
+/// folders are replaced.
+/// @throws std::invalid_argument naming what is missing (no such plan, no
+/// display surfaces, different point counts, no skin range map), seg::Cancelled
+/// when @a progress asks to stop, std::runtime_error when a file cannot be
+/// written or ffmpeg fails.
+AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, const std::filesystem::path& outDir,
+                                   const AnimationOptions& options, const TaskProgress& progress = {});
+
+} // namespace caps::report
