@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -83,7 +85,8 @@ const Animated& animated()
 {
   static const Animated a = [] {
     Animated made;
-    made.out = fs::temp_directory_path() / "caps-tests" / "PlanAnimation.frames";
+    // One folder per test process: ctest runs these tests side by side.
+    made.out = fs::temp_directory_path() / "caps-tests" / ("PlanAnimation.frames-" + std::to_string(getpid()));
     fs::remove_all(made.out);
     caps::Scene& scene = demoScene();
     const auto start = std::chrono::steady_clock::now();
