@@ -1,5 +1,6 @@
 #include "app/MainWindow.h"
 
+#include <algorithm>
 #include <iostream>
 
 #include <QAction>
@@ -9,6 +10,7 @@
 #include <QDockWidget>
 #include <QDragEnterEvent>
 #include <QDropEvent>
+#include <QKeyEvent>
 #include <QFileDialog>
 #include <QGridLayout>
 #include <QLabel>
@@ -26,11 +28,16 @@
 #include <QToolBar>
 #include <QVBoxLayout>
 
+#include <vtkCamera.h>
 #include <vtkImageData.h>
+#include <vtkLookupTable.h>
 #include <vtkMatrix3x3.h>
 #include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkWindowToImageFilter.h>
 
 #include "app/Session.h"
+#include "scene/LabelMapNode.h"
 #include "scene/SceneBundle.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
@@ -64,6 +71,10 @@ MainWindow::MainWindow(Session& session, QWidget* parent) : QMainWindow(parent),
   buildMenus();
   observeScene();
   resize(1400, 900);
+  // The layout the user left (dock width, toolbars, window size) comes back.
+  QSettings settings; // the application's: tests run under their own organisation name
+  restoreGeometry(settings.value("window/geometry").toByteArray());
+  restoreState(settings.value("window/state").toByteArray());
 }
 
 MainWindow::~MainWindow()
@@ -107,10 +118,30 @@ void MainWindow::buildViews()
     });
   }
 
+  connect(view3d_, &ui::ThreeDView::surfaceClicked, this,
+          [this](const QString& key, double x, double y, double z) {
+            if (!pick_handler_)
+              return;
+            // One click, one pick: the handler may arm the next one itself.
+            auto handler = std::move(pick_handler_);
+            pick_handler_ = nullptr;
+            view3d_->unsetCursor();
+            statusBar()->clearMessage();
+            try
+            {
+              handler(SurfacePick{{x, y, z}, key.toStdString()});
+            }
+            catch (const std::exception& e)
+            {
+              showError("Pick", e.what());
+            }
+          });
+
   auto* toolbar = addToolBar(tr("Views"));
   toolbar->setObjectName("ViewsToolBar");
   toolbar->addWidget(new QLabel(tr(" Module: "), this));
   module_selector_ = new QComboBox(this);
+  module_selector_->setObjectName("ModuleSelector");
   toolbar->addWidget(module_selector_);
   toolbar->addSeparator();
   toolbar->addWidget(new QLabel(tr(" Window/level: "), this));
@@ -156,16 +187,35 @@ void MainWindow::buildModulePanels()
   dock->setWidget(panels_);
   addDockWidget(Qt::LeftDockWidgetArea, dock);
 
+  // The selector lists the modules in the order of the work (§5.6: fewer
+  // choices, in the order a surgeon makes them); modules not named here follow.
+  static const std::vector<std::string> workOrder{"volumes", "segment",  "rangemap", "incision",
+                                                  "simulate", "results", "report"};
+  std::vector<const ModuleManager::Loaded*> ordered;
   for (const auto& loaded : session_.modules().modules())
+    ordered.push_back(&loaded);
+  auto rank = [](const std::string& name) {
+    return std::find(workOrder.begin(), workOrder.end(), name) - workOrder.begin();
+  };
+  std::stable_sort(ordered.begin(), ordered.end(), [&](const auto* a, const auto* b) {
+    return rank(a->module->name()) < rank(b->module->name());
+  });
+  for (const auto* loaded : ordered)
   {
-    const Module& module = *loaded.module;
+    const Module& module = *loaded->module;
     QWidget* panel = module.createPanel(session_.logic(module), *this, panels_);
     if (!panel)
     {
       panel = new QLabel(QString::fromStdString(module.help()), panels_);
       static_cast<QLabel*>(panel)->setWordWrap(true);
     }
-    panels_->addWidget(panel);
+    // Long panels (the thickness review) scroll instead of squeezing.
+    auto* scroll = new QScrollArea(panels_);
+    scroll->setWidgetResizable(true);
+    scroll->setFrameShape(QFrame::NoFrame);
+    scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
+    scroll->setWidget(panel);
+    panels_->addWidget(scroll);
     module_selector_->addItem(QString::fromStdString(module.title()),
                               QString::fromStdString(module.name()));
   }
@@ -174,8 +224,12 @@ void MainWindow::buildModulePanels()
     panels_->addWidget(new QLabel(tr("No module loaded: run caps --list-modules to see why."),
                                   panels_));
   }
-  connect(module_selector_, qOverload<int>(&QComboBox::currentIndexChanged), panels_,
-          &QStackedWidget::setCurrentIndex);
+  connect(module_selector_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int index) {
+    // A pick or a marker belongs to the panel that asked for it.
+    cancelPick();
+    view3d_->hideMarker();
+    panels_->setCurrentIndex(index);
+  });
   // The work starts with loading a CT.
   const int start = module_selector_->findData(QString("volumes"));
   if (start >= 0)
@@ -244,10 +298,25 @@ void MainWindow::buildMenus()
   slices_in_3d_->setChecked(true);
   connect(slices_in_3d_, &QAction::toggled, this,
           [this](bool on) { view3d_->setSlicesVisible(on); });
+  overlay_action_ = view->addAction(tr("Segmentation &overlay on the slices"));
+  overlay_action_->setCheckable(true);
+  overlay_action_->setChecked(true);
+  overlay_action_->setShortcut(QKeySequence(tr("Ctrl+L")));
+  connect(overlay_action_, &QAction::toggled, this, [this](bool) { updateOverlay(); });
   view->addAction(tr("&Reset 3D view"), this, [this]() {
     view3d_->resetCamera();
     view3d_->renderWindow()->Render();
-  });
+  }, QKeySequence(tr("Ctrl+R")));
+
+  // The modules in the order of the work, Ctrl+1 for the first.
+  QMenu* modules = menuBar()->addMenu(tr("&Modules"));
+  for (int i = 0; i < module_selector_->count(); ++i)
+  {
+    QAction* entry = modules->addAction(module_selector_->itemText(i), this,
+                                        [this, i]() { module_selector_->setCurrentIndex(i); });
+    if (i < 9)
+      entry->setShortcut(QKeySequence(QString("Ctrl+%1").arg(i + 1)));
+  }
 
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&About CAPS"), this, [this]() {
@@ -272,14 +341,29 @@ void MainWindow::observeScene()
       else if (event == SceneEvent::NodeModified && node.id() == volume_id_)
         showVolume(node.id());
     }
+    else if (node.type() == NodeType::LabelMap)
+    {
+      // After the removal has happened, so the old label map is gone.
+      QTimer::singleShot(0, this, [this]() { updateOverlay(); });
+    }
     else if (node.type() == NodeType::Surface)
     {
       const auto& surface = static_cast<const SurfaceNode&>(node);
       if (event == SceneEvent::NodeAboutToBeRemoved)
         view3d_->removeSurface(node.id());
       else
-        view3d_->setSurface(node.id(), surface.polyData(), surface.color(), surface.opacity(),
-                            surface.visible());
+      {
+        ui::SurfaceStyle style;
+        style.colour = surface.color();
+        style.opacity = surface.opacity();
+        style.visible = surface.visible();
+        style.colourArray = surface.colourArray();
+        style.range = surface.scalarRange();
+        style.colourMap = surface.colourMap();
+        style.colourBarTitle = surface.colourBarTitle();
+        style.lineWidth = surface.lineWidth();
+        view3d_->setSurface(node.id(), surface.polyData(), style);
+      }
       // The opaque slice planes would hide the face: a new surface turns them off.
       if (event == SceneEvent::NodeAdded && slices_in_3d_->isChecked())
         slices_in_3d_->setChecked(false);
@@ -300,6 +384,7 @@ void MainWindow::showVolume(const std::string& id)
     applyWindowLevel(volume->window(), volume->level());
     setWindowTitle(QString("CAPS - %1").arg(QString::fromStdString(volume->name())));
   }
+  updateOverlay();
 }
 
 void MainWindow::applyWindowLevel(double window, double level)
@@ -425,6 +510,7 @@ void MainWindow::taskFinished(const std::string& title, std::function<void()> fi
 void MainWindow::showError(const std::string& title, const std::string& message)
 {
   error_reported_ = true;
+  reported_errors_.push_back(title + ": " + message);
   if (unattended_)
   {
     std::cerr << "caps: " << title << ": " << message << "\n";
@@ -514,19 +600,32 @@ void MainWindow::saveScene(bool askForName)
     if (target.extension() != ".caps")
       target += ".caps";
   }
+  saveSceneTo(target);
+}
+
+bool MainWindow::saveSceneTo(const fs::path& bundle)
+{
+  if (task_thread_)
+  {
+    showError("Not saved yet", "Wait for '" + progress_label_->text().toStdString() +
+                                 "' to finish, or cancel it, then save again.");
+    return false;
+  }
   QApplication::setOverrideCursor(Qt::WaitCursor);
   progress_label_->setText(tr("Saving scene"));
   progress_label_->show();
   progress_->show();
+  bool saved = false;
   try
   {
-    saveSceneBundle(session_.scene(), target, [this](double fraction, const std::string&) {
+    saveSceneBundle(session_.scene(), bundle, [this](double fraction, const std::string&) {
       progress_->setValue(static_cast<int>(fraction * 1000));
       QApplication::processEvents(QEventLoop::ExcludeUserInputEvents);
     });
-    scene_path_ = target;
-    addRecent(target);
-    showStatus("Saved scene " + target.string());
+    scene_path_ = bundle;
+    addRecent(bundle);
+    showStatus("Saved scene " + bundle.string());
+    saved = true;
   }
   catch (const std::exception& e)
   {
@@ -536,11 +635,12 @@ void MainWindow::saveScene(bool askForName)
   progress_label_->hide();
   progress_->hide();
   QApplication::restoreOverrideCursor();
+  return saved;
 }
 
 void MainWindow::addRecent(const fs::path& path)
 {
-  QSettings settings("CAPS", "caps");
+  QSettings settings;
   QStringList recent = settings.value("recentFiles").toStringList();
   const QString entry = QString::fromStdString(fs::absolute(path).lexically_normal().string());
   recent.removeAll(entry);
@@ -554,7 +654,7 @@ void MainWindow::addRecent(const fs::path& path)
 void MainWindow::updateRecentMenu()
 {
   recent_menu_->clear();
-  QSettings settings("CAPS", "caps");
+  QSettings settings;
   const QStringList recent = settings.value("recentFiles").toStringList();
   for (const QString& entry : recent)
     recent_menu_->addAction(entry, this, [this, entry]() { openPath(entry.toStdString()); });
@@ -578,8 +678,147 @@ void MainWindow::dropEvent(QDropEvent* event)
     }
 }
 
+void MainWindow::pickInThreeDView(const std::string& prompt, std::function<void(const SurfacePick&)> picked)
+{
+  pick_handler_ = std::move(picked);
+  statusBar()->showMessage(QString::fromStdString(prompt + "  (Esc cancels)"));
+  view3d_->setCursor(Qt::CrossCursor);
+  view3d_->setFocus();
+}
+
+void MainWindow::cancelPick()
+{
+  pick_handler_ = nullptr;
+  view3d_->unsetCursor();
+  statusBar()->clearMessage();
+}
+
+ViewCapture MainWindow::captureThreeDView()
+{
+  ViewCapture capture;
+  vtkRenderWindow* window = view3d_->renderWindow();
+  window->Render();
+  auto grabber = vtkSmartPointer<vtkWindowToImageFilter>::New();
+  grabber->SetInput(window);
+  grabber->SetInputBufferTypeToRGB();
+  grabber->ReadFrontBufferOff();
+  grabber->Update();
+  capture.image = vtkSmartPointer<vtkImageData>::New();
+  capture.image->DeepCopy(grabber->GetOutput());
+  vtkCamera* camera = view3d_->renderer()->GetActiveCamera();
+  camera->GetPosition(capture.camera.position.data());
+  camera->GetFocalPoint(capture.camera.focalPoint.data());
+  camera->GetViewUp(capture.camera.viewUp.data());
+  capture.camera.viewAngle = camera->GetViewAngle();
+  return capture;
+}
+
+void MainWindow::setThreeDViewCamera(const SnapshotNode::Camera& c)
+{
+  vtkCamera* camera = view3d_->renderer()->GetActiveCamera();
+  camera->SetPosition(c.position.data());
+  camera->SetFocalPoint(c.focalPoint.data());
+  camera->SetViewUp(c.viewUp.data());
+  camera->SetViewAngle(c.viewAngle);
+  view3d_->renderer()->ResetCameraClippingRange();
+  view3d_->renderWindow()->Render();
+}
+
+void MainWindow::setCursorPosition(const std::array<double, 3>& position)
+{
+  // The views work in image space (the volume's axes, origin kept): patient
+  // LPS goes there through the transposed direction matrix.
+  std::array<double, 3> inImage = position;
+  auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
+  if (volume && volume->image())
+  {
+    vtkImageData* image = volume->image();
+    const double* origin = image->GetOrigin();
+    vtkMatrix3x3* direction = image->GetDirectionMatrix();
+    for (int a = 0; a < 3; ++a)
+    {
+      inImage[static_cast<size_t>(a)] = origin[a];
+      for (int b = 0; b < 3; ++b)
+        inImage[static_cast<size_t>(a)] += direction->GetElement(b, a) * (position[static_cast<size_t>(b)] - origin[b]);
+    }
+  }
+  moveCursor(inImage);
+  view3d_->setMarker(position);
+}
+
+void MainWindow::previewThresholds(const std::optional<std::array<double, 2>>& hu)
+{
+  threshold_preview_ = hu;
+  updateOverlay();
+}
+
+void MainWindow::updateOverlay()
+{
+  auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
+  vtkSmartPointer<vtkImageData> overlay;
+  auto colours = vtkSmartPointer<vtkLookupTable>::New();
+  // Soft tissue a warm tint, bone a pale yellow, both see-through.
+  const double tissue[4] = {0.95, 0.45, 0.30, 0.35};
+  const double bone[4] = {1.0, 0.95, 0.45, 0.55};
+  if (volume && volume->image() && threshold_preview_)
+  {
+    // The CT itself through a table by HU: what the thresholds would label.
+    overlay = volume->image();
+    constexpr double low = -1024.0, high = 3071.0;
+    const int n = static_cast<int>(high - low) + 1;
+    colours->SetNumberOfTableValues(n);
+    colours->SetTableRange(low, high);
+    for (int i = 0; i < n; ++i)
+    {
+      const double hu = low + i;
+      if (hu >= (*threshold_preview_)[1])
+        colours->SetTableValue(i, bone);
+      else if (hu >= (*threshold_preview_)[0])
+        colours->SetTableValue(i, tissue);
+      else
+        colours->SetTableValue(i, 0, 0, 0, 0);
+    }
+    colours->SetUseBelowRangeColor(true);
+    colours->SetBelowRangeColor(0, 0, 0, 0);
+    colours->SetUseAboveRangeColor(true);
+    colours->SetAboveRangeColor(bone);
+  }
+  else if (volume && volume->image() && overlay_action_->isChecked())
+  {
+    LabelMapNode* labels = nullptr;
+    for (Node* node : session_.scene().nodesOfType(NodeType::LabelMap))
+      if (static_cast<LabelMapNode*>(node)->referenceVolumeId() == volume_id_)
+        labels = static_cast<LabelMapNode*>(node);
+    if (labels && labels->image())
+    {
+      overlay = labels->image();
+      colours->SetNumberOfTableValues(3);
+      colours->SetTableRange(0, 2);
+      colours->SetTableValue(0, 0, 0, 0, 0);
+      colours->SetTableValue(1, tissue);
+      colours->SetTableValue(2, bone);
+    }
+  }
+  for (ui::SliceView* view : slice_views_)
+    view->setOverlay(overlay, overlay ? colours.GetPointer() : nullptr);
+}
+
+void MainWindow::keyPressEvent(QKeyEvent* event)
+{
+  if (event->key() == Qt::Key_Escape && pick_handler_)
+  {
+    cancelPick();
+    showStatus("Pick cancelled.");
+    return;
+  }
+  QMainWindow::keyPressEvent(event);
+}
+
 void MainWindow::closeEvent(QCloseEvent* event)
 {
+  QSettings settings;
+  settings.setValue("window/geometry", saveGeometry());
+  settings.setValue("window/state", saveState());
   if (task_thread_)
   {
     cancel_requested_ = true;

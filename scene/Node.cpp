@@ -8,6 +8,7 @@
 #include "scene/Scene.h"
 #include "scene/SceneError.h"
 #include "scene/SnapshotNode.h"
+#include "scene/LandmarksNode.h"
 #include "scene/SolutionNode.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
@@ -66,6 +67,7 @@ std::unique_ptr<Node> Node::create(NodeType type) {
     case NodeType::FeMesh: return std::make_unique<FeMeshNode>();
     case NodeType::Solution: return std::make_unique<SolutionNode>();
     case NodeType::Snapshot: return std::make_unique<SnapshotNode>();
+    case NodeType::Landmarks: return std::make_unique<LandmarksNode>();
   }
   throw SceneError("unknown node type");
 }

@@ -6,7 +6,7 @@
 namespace caps {
 
 namespace {
-constexpr std::array<std::pair<NodeType, std::string_view>, 8> kNames{{
+constexpr std::array<std::pair<NodeType, std::string_view>, 9> kNames{{
     {NodeType::Volume, "Volume"},
     {NodeType::LabelMap, "LabelMap"},
     {NodeType::Surface, "Surface"},
@@ -15,6 +15,7 @@ constexpr std::array<std::pair<NodeType, std::string_view>, 8> kNames{{
     {NodeType::FeMesh, "FeMesh"},
     {NodeType::Solution, "Solution"},
     {NodeType::Snapshot, "Snapshot"},
+    {NodeType::Landmarks, "Landmarks"},
 }};
 }  // namespace
 

@@ -12,6 +12,8 @@
 #include <vtkImageData.h>
 #include <vtkImageProperty.h>
 #include <vtkImageSlice.h>
+#include <vtkImageStack.h>
+#include <vtkScalarsToColors.h>
 #include <vtkImageSliceMapper.h>
 #include <vtkInteractorStyleImage.h>
 #include <vtkLineSource.h>
@@ -120,6 +122,18 @@ SliceView::SliceView(SliceOrientation orientation, QWidget* parent)
   slice_actor_->GetProperty()->SetInterpolationTypeToLinear();
   slice_actor_->GetProperty()->SetColorWindow(400.0);
   slice_actor_->GetProperty()->SetColorLevel(40.0);
+  overlay_mapper_ = vtkSmartPointer<vtkImageSliceMapper>::New();
+  overlay_actor_ = vtkSmartPointer<vtkImageSlice>::New();
+  overlay_actor_->SetMapper(overlay_mapper_);
+  overlay_actor_->GetProperty()->SetInterpolationTypeToNearest();
+  overlay_actor_->GetProperty()->UseLookupTableScalarRangeOn();
+  overlay_actor_->GetProperty()->SetLayerNumber(1);
+  overlay_actor_->VisibilityOff();
+  slice_actor_->GetProperty()->SetLayerNumber(0);
+  stack_ = vtkSmartPointer<vtkImageStack>::New();
+  stack_->AddImage(slice_actor_);
+  stack_->AddImage(overlay_actor_);
+  stack_->SetActiveLayer(0);
 
   line_a_ = vtkSmartPointer<vtkLineSource>::New();
   line_b_ = vtkSmartPointer<vtkLineSource>::New();
@@ -173,7 +187,8 @@ void SliceView::setImage(vtkImageData* image)
   if (!image)
   {
     image_ = nullptr;
-    renderer_->RemoveViewProp(slice_actor_);
+    renderer_->RemoveViewProp(stack_);
+    overlay_actor_->VisibilityOff();
     renderer_->RemoveActor(crosshair_a_);
     renderer_->RemoveActor(crosshair_b_);
     updateAnnotation();
@@ -192,12 +207,37 @@ void SliceView::setImage(vtkImageData* image)
   for (int a = 0; a < 3; ++a)
     cursor_[a] = origin[a] + spacing[a] * (dims[a] - 1) / 2.0;
   slice_ = (dims[sliceAxis()] - 1) / 2;
-  renderer_->AddViewProp(slice_actor_);
+  renderer_->AddViewProp(stack_);
   renderer_->AddActor(crosshair_a_);
   renderer_->AddActor(crosshair_b_);
   updateSlicePlane();
   resetCamera();
   renderWindow()->Render();
+}
+
+void SliceView::setOverlay(vtkImageData* overlay, vtkScalarsToColors* colours)
+{
+  if (!overlay || !colours || !image_)
+  {
+    overlay_actor_->VisibilityOff();
+    renderWindow()->Render();
+    return;
+  }
+  // On the CT's display grid (identity direction), as the CT itself.
+  auto copy = vtkSmartPointer<vtkImageData>::New();
+  copy->ShallowCopy(overlay);
+  copy->SetDirectionMatrix(1, 0, 0, 0, 1, 0, 0, 0, 1);
+  overlay_mapper_->SetInputData(copy);
+  overlay_mapper_->SetOrientation(mapper_->GetOrientation());
+  overlay_mapper_->SetSliceNumber(slice_);
+  overlay_actor_->GetProperty()->SetLookupTable(colours);
+  overlay_actor_->VisibilityOn();
+  renderWindow()->Render();
+}
+
+bool SliceView::hasOverlay() const
+{
+  return overlay_actor_->GetVisibility() != 0;
 }
 
 vtkImageData* SliceView::image() const
@@ -355,6 +395,7 @@ void SliceView::updateSlicePlane()
   if (!image_)
     return;
   mapper_->SetSliceNumber(slice_);
+  overlay_mapper_->SetSliceNumber(slice_);
   updateCrosshair();
   updateAnnotation();
 }

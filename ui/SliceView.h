@@ -11,6 +11,8 @@ class vtkActor;
 class vtkCornerAnnotation;
 class vtkImageData;
 class vtkImageSlice;
+class vtkImageStack;
+class vtkScalarsToColors;
 class vtkImageSliceMapper;
 class vtkLineSource;
 class vtkRenderer;
@@ -43,6 +45,12 @@ public:
   /// Shows @a image (nullptr clears the view) at its middle slice.
   void setImage(vtkImageData* image);
   vtkImageData* image() const;
+
+  /// Draws @a overlay (an image on the same grid as the CT: a label map, or
+  /// the CT itself) over the slice through @a colours (RGBA per value; alpha
+  /// 0 leaves the CT visible). nullptr hides the overlay.
+  void setOverlay(vtkImageData* overlay, vtkScalarsToColors* colours);
+  bool hasOverlay() const;
 
   void setWindowLevel(double window, double level);
   double window() const;
@@ -85,6 +93,9 @@ private:
   vtkSmartPointer<vtkImageData> image_;
   vtkSmartPointer<vtkImageSliceMapper> mapper_;
   vtkSmartPointer<vtkImageSlice> slice_actor_;
+  vtkSmartPointer<vtkImageSliceMapper> overlay_mapper_;
+  vtkSmartPointer<vtkImageSlice> overlay_actor_;
+  vtkSmartPointer<vtkImageStack> stack_; ///< the CT below, the overlay above (no z-fighting)
   vtkSmartPointer<vtkLineSource> line_a_;
   vtkSmartPointer<vtkLineSource> line_b_;
   vtkSmartPointer<vtkActor> crosshair_a_;

@@ -3,7 +3,18 @@
 #include <algorithm>
 #include <cmath>
 
+#include <QMouseEvent>
+#include <QTimer>
+
 #include <vtkActor.h>
+#include <vtkCellPicker.h>
+#include <vtkDataArray.h>
+#include <vtkLookupTable.h>
+#include <vtkPointData.h>
+#include <vtkScalarBarActor.h>
+#include <vtkSphereSource.h>
+#include <vtkScalarsToColors.h>
+#include <vtkUnsignedCharArray.h>
 #include <vtkAxesActor.h>
 #include <vtkCamera.h>
 #include <vtkCaptionActor2D.h>
@@ -21,6 +32,8 @@
 #include <vtkRenderWindowInteractor.h>
 #include <vtkRenderer.h>
 #include <vtkTextProperty.h>
+
+#include "ui/ColourMaps.h"
 
 namespace caps::ui {
 
@@ -99,7 +112,7 @@ void ThreeDView::setImage(vtkImageData* image)
     renderer_->AddActor(outline_);
   }
   resetCamera();
-  renderWindow()->Render();
+  requestRender();
 }
 
 void ThreeDView::setSlicesVisible(bool visible)
@@ -107,14 +120,14 @@ void ThreeDView::setSlicesVisible(bool visible)
   slices_visible_ = visible;
   for (auto& slice : slices_)
     slice->SetVisibility(visible);
-  renderWindow()->Render();
+  requestRender();
 }
 
 void ThreeDView::setWindowLevel(double window, double level)
 {
   image_property_->SetColorWindow(window);
   image_property_->SetColorLevel(level);
-  renderWindow()->Render();
+  requestRender();
 }
 
 void ThreeDView::setCursorPosition(const std::array<double, 3>& position)
@@ -128,11 +141,10 @@ void ThreeDView::setCursorPosition(const std::array<double, 3>& position)
       std::lround((position[axis] - image_->GetOrigin()[axis]) / image_->GetSpacing()[axis]);
     mappers_[axis]->SetSliceNumber(static_cast<int>(std::clamp<long>(index, 0, dims[axis] - 1)));
   }
-  renderWindow()->Render();
+  requestRender();
 }
 
-void ThreeDView::setSurface(const std::string& key, vtkPolyData* surface,
-                            const std::array<double, 3>& colour, double opacity, bool visible)
+void ThreeDView::setSurface(const std::string& key, vtkPolyData* surface, const SurfaceStyle& style)
 {
   removeSurface(key);
   if (!surface)
@@ -140,14 +152,198 @@ void ThreeDView::setSurface(const std::string& key, vtkPolyData* surface,
   auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   mapper->SetInputData(surface);
   mapper->ScalarVisibilityOff();
+  vtkDataArray* scalars =
+    style.colourArray.empty() ? nullptr : surface->GetPointData()->GetArray(style.colourArray.c_str());
+  if (scalars)
+  {
+    mapper->ScalarVisibilityOn();
+    mapper->SetScalarModeToUsePointFieldData();
+    mapper->SelectColorArray(style.colourArray.c_str());
+    if (vtkUnsignedCharArray::SafeDownCast(scalars) && scalars->GetNumberOfComponents() == 3)
+      mapper->SetColorModeToDirectScalars();
+    else
+    {
+      std::array<double, 2> range = style.range;
+      if (!(range[0] < range[1]))
+      {
+        scalars->GetRange(range.data(), scalars->GetNumberOfComponents() == 1 ? 0 : -1);
+        if (!(range[0] < range[1]))
+          range = {range[0] - 0.5, range[0] + 0.5};
+      }
+      const ColourMap map = colourMapFromName(style.colourMap).value_or(ColourMap::Viridis);
+      auto table = colourMapLookupTable(map, range);
+      if (scalars->GetNumberOfComponents() > 1)
+        table->SetVectorModeToMagnitude();
+      mapper->SetLookupTable(table);
+      mapper->UseLookupTableScalarRangeOn();
+      mapper->SetColorModeToMapScalars();
+    }
+  }
   auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
-  actor->GetProperty()->SetColor(colour[0], colour[1], colour[2]);
-  actor->GetProperty()->SetOpacity(opacity);
-  actor->SetVisibility(visible);
+  actor->GetProperty()->SetColor(style.colour[0], style.colour[1], style.colour[2]);
+  actor->GetProperty()->SetOpacity(style.opacity);
+  actor->GetProperty()->SetLineWidth(static_cast<float>(style.lineWidth));
+  actor->GetProperty()->SetPointSize(static_cast<float>(style.lineWidth));
+  actor->SetVisibility(style.visible);
   renderer_->AddActor(actor);
   surfaces_[key] = actor;
-  renderWindow()->Render();
+  styles_[key] = style;
+  updateColourBar();
+  requestRender();
+}
+
+std::optional<std::array<double, 2>> ThreeDView::colourBarRange() const
+{
+  if (!colour_bar_ || !colour_bar_->GetVisibility() || !colour_bar_->GetLookupTable())
+    return std::nullopt;
+  const double* range = colour_bar_->GetLookupTable()->GetRange();
+  return std::array<double, 2>{range[0], range[1]};
+}
+
+void ThreeDView::requestRender()
+{
+  // A prediction adds and edits a dozen surfaces in a row; one render after
+  // them, not one each (software OpenGL takes most of a second for the head).
+  if (render_pending_)
+    return;
+  render_pending_ = true;
+  QTimer::singleShot(0, this, [this]() {
+    render_pending_ = false;
+    renderWindow()->Render();
+  });
+}
+
+void ThreeDView::setMarker(const std::array<double, 3>& position)
+{
+  if (!marker_)
+  {
+    auto sphere = vtkSmartPointer<vtkSphereSource>::New();
+    sphere->SetRadius(1.5);
+    sphere->SetThetaResolution(16);
+    sphere->SetPhiResolution(12);
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputConnection(sphere->GetOutputPort());
+    marker_ = vtkSmartPointer<vtkActor>::New();
+    marker_->SetMapper(mapper);
+    marker_->GetProperty()->SetColor(1.0, 0.85, 0.0);
+    marker_->PickableOff();
+    renderer_->AddActor(marker_);
+  }
+  marker_->SetPosition(position[0], position[1], position[2]);
+  marker_->SetVisibility(true);
+  requestRender();
+}
+
+void ThreeDView::hideMarker()
+{
+  if (marker_)
+    marker_->SetVisibility(false);
+  requestRender();
+}
+
+void ThreeDView::updateColourBar()
+{
+  // One bar, for the first visible surface coloured through a colour map.
+  vtkScalarsToColors* table = nullptr;
+  std::string title;
+  for (const auto& [key, actor] : surfaces_)
+  {
+    vtkMapper* mapper = actor->GetMapper();
+    if (!actor->GetVisibility() || !mapper->GetScalarVisibility() ||
+        mapper->GetColorMode() == VTK_COLOR_MODE_DIRECT_SCALARS)
+      continue;
+    table = mapper->GetLookupTable();
+    const SurfaceStyle& style = styles_[key];
+    title = style.colourBarTitle.empty() ? style.colourArray : style.colourBarTitle;
+    break;
+  }
+  if (!table)
+  {
+    if (colour_bar_)
+      colour_bar_->SetVisibility(false);
+    return;
+  }
+  if (!colour_bar_)
+  {
+    colour_bar_ = vtkSmartPointer<vtkScalarBarActor>::New();
+    colour_bar_->SetOrientationToVertical();
+    colour_bar_->SetNumberOfLabels(5);
+    colour_bar_->SetLabelFormat("%.3g");
+    colour_bar_->SetPosition(0.84, 0.08);
+    colour_bar_->SetWidth(0.15);
+    colour_bar_->SetHeight(0.80);
+    colour_bar_->SetBarRatio(0.3);
+    colour_bar_->UnconstrainedFontSizeOn();
+    colour_bar_->GetTitleTextProperty()->SetFontSize(13);
+    colour_bar_->GetTitleTextProperty()->SetJustificationToRight();
+    colour_bar_->GetLabelTextProperty()->SetFontSize(12);
+    colour_bar_->GetTitleTextProperty()->ItalicOff();
+    colour_bar_->GetLabelTextProperty()->ItalicOff();
+    renderer_->AddViewProp(colour_bar_);
+  }
+  colour_bar_->SetLookupTable(table);
+  // A long title ("von Mises stress (kPa)") goes on two lines so it stays
+  // inside the view above the narrow bar.
+  if (title.size() > 14)
+  {
+    const auto middle = title.size() / 2;
+    const auto before = title.rfind(' ', middle), after = title.find(' ', middle);
+    const auto split = before == std::string::npos ? after
+                       : after == std::string::npos ? before
+                       : (middle - before <= after - middle ? before : after);
+    if (split != std::string::npos)
+      title[split] = '\n';
+  }
+  colour_bar_->SetTitle(title.c_str());
+  colour_bar_->SetVisibility(true);
+}
+
+bool ThreeDView::pickSurface(int x, int y, std::string& key, std::array<double, 3>& position) const
+{
+  auto picker = vtkSmartPointer<vtkCellPicker>::New();
+  picker->SetTolerance(0.0005);
+  picker->PickFromListOn();
+  for (const auto& [name, actor] : surfaces_)
+    if (actor->GetVisibility())
+      picker->AddPickList(actor);
+  const double ratio = devicePixelRatioF();
+  const int* size = renderWindow()->GetSize();
+  const double displayX = x * ratio;
+  const double displayY = size[1] - 1 - y * ratio;
+  if (!picker->Pick(displayX, displayY, 0.0, renderer_))
+    return false;
+  vtkActor* hit = picker->GetActor();
+  for (const auto& [name, actor] : surfaces_)
+    if (actor == hit)
+    {
+      key = name;
+      picker->GetPickPosition(position.data());
+      return true;
+    }
+  return false;
+}
+
+void ThreeDView::mousePressEvent(QMouseEvent* event)
+{
+  press_valid_ = event->button() == Qt::LeftButton;
+  press_position_ = event->pos();
+  QVTKOpenGLNativeWidget::mousePressEvent(event);
+}
+
+void ThreeDView::mouseReleaseEvent(QMouseEvent* event)
+{
+  QVTKOpenGLNativeWidget::mouseReleaseEvent(event);
+  if (!press_valid_ || event->button() != Qt::LeftButton)
+    return;
+  press_valid_ = false;
+  // A drag turns the view; only a click picks.
+  if ((event->pos() - press_position_).manhattanLength() > 4)
+    return;
+  std::string key;
+  std::array<double, 3> position{};
+  if (pickSurface(event->pos().x(), event->pos().y(), key, position))
+    emit surfaceClicked(QString::fromStdString(key), position[0], position[1], position[2]);
 }
 
 void ThreeDView::removeSurface(const std::string& key)
@@ -157,7 +353,9 @@ void ThreeDView::removeSurface(const std::string& key)
     return;
   renderer_->RemoveActor(it->second);
   surfaces_.erase(it);
-  renderWindow()->Render();
+  styles_.erase(key);
+  updateColourBar();
+  requestRender();
 }
 
 void ThreeDView::resetCamera()
@@ -168,8 +366,9 @@ void ThreeDView::resetCamera()
   camera->SetPosition(0, -1, 0); // anterior is -y (LPS)
   camera->SetViewUp(0, 0, 1);
   renderer_->ResetCamera();
-  camera->Azimuth(-30.0); // a three-quarter view shows all three planes
-  camera->Elevation(15.0);
+  // The face faces the viewer (issue 6), seen a little from above as a
+  // surgeon standing at the table sees it.
+  camera->Elevation(10.0);
   camera->OrthogonalizeViewUp();
   renderer_->ResetCameraClippingRange();
 }

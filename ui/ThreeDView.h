@@ -5,8 +5,10 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 
+#include <QPoint>
 #include <QVTKOpenGLNativeWidget.h>
 #include <vtkSmartPointer.h>
 
@@ -19,7 +21,24 @@ class vtkOrientationMarkerWidget;
 class vtkPolyData;
 class vtkRenderer;
 
+class vtkScalarBarActor;
+
 namespace caps::ui {
+
+/// How the 3D view draws a surface (what a SurfaceNode says).
+struct SurfaceStyle
+{
+  std::array<double, 3> colour{0.9, 0.75, 0.65};
+  double opacity = 1.0;
+  bool visible = true;
+  /// Point array to colour by; empty: the solid colour. 3-component unsigned
+  /// char arrays are RGB as they are; others go through colourMap over range.
+  std::string colourArray;
+  std::array<double, 2> range{0.0, 0.0}; ///< lo >= hi: the array's own range
+  std::string colourMap = "viridis";     ///< ui/ColourMaps.h name
+  std::string colourBarTitle;            ///< empty: the array name
+  double lineWidth = 1.0;
+};
 
 class ThreeDView : public QVTKOpenGLNativeWidget
 {
@@ -37,17 +56,49 @@ public:
   /// Moves the three slice planes through @a position (image space, mm).
   void setCursorPosition(const std::array<double, 3>& position);
 
+  /// Shows a small marker at @a position (world, mm): the point the user
+  /// chose in another view (a thickness map, a table).
+  void setMarker(const std::array<double, 3>& position);
+  void hideMarker();
+
   /// Adds or replaces the surface @a key (a node id, say).
-  void setSurface(const std::string& key, vtkPolyData* surface, const std::array<double, 3>& colour,
-                  double opacity, bool visible);
+  void setSurface(const std::string& key, vtkPolyData* surface, const SurfaceStyle& style);
   void removeSurface(const std::string& key);
+
+  /// The value range of the colour bar shown; std::nullopt when none is.
+  std::optional<std::array<double, 2>> colourBarRange() const;
+
+  /// Renders once control returns to the event loop, however many changes
+  /// ask for it before then.
+  void requestRender();
 
   /// Looks at the face from the front (anterior view, superior up).
   void resetCamera();
   vtkRenderer* renderer() const;
 
+  /// The surface under display point (x, y) (widget pixels, Qt's origin top
+  /// left): its key and the world point hit; false on background or slices.
+  bool pickSurface(int x, int y, std::string& key, std::array<double, 3>& position) const;
+
+signals:
+  /// A left click (press and release within a few pixels, so not a turn of
+  /// the view) on surface @a key at world @a position.
+  void surfaceClicked(const QString& key, double x, double y, double z);
+
+protected:
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseReleaseEvent(QMouseEvent* event) override;
+
 private:
+  void updateColourBar();
+
   vtkSmartPointer<vtkRenderer> renderer_;
+  vtkSmartPointer<vtkScalarBarActor> colour_bar_;
+  vtkSmartPointer<vtkActor> marker_;
+  std::map<std::string, SurfaceStyle> styles_;
+  QPoint press_position_;
+  bool press_valid_ = false;
+  bool render_pending_ = false;
   vtkSmartPointer<vtkImageData> image_;
   vtkSmartPointer<vtkImageProperty> image_property_;
   std::array<vtkSmartPointer<vtkImageSliceMapper>, 3> mappers_;

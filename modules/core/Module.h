@@ -9,14 +9,22 @@
 /// tests drive exactly what the GUI drives), an optional Qt panel, and
 /// optional command-line subcommands.
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include <vtkSmartPointer.h>
+
+#include "scene/Node.h"
+#include "scene/SnapshotNode.h"
+
 class QWidget;
+class vtkImageData;
 
 namespace caps {
 
@@ -25,7 +33,7 @@ class ModuleHost;
 
 /// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
 /// in a way that breaks plugins built against the old headers.
-inline constexpr int kModuleApiVersion = 2;
+inline constexpr int kModuleApiVersion = 3;
 
 /// The module's algorithmic side, bound to the scene. Subclasses add the
 /// module's operations; it never includes a widget header.
@@ -75,6 +83,20 @@ using TaskProgress = std::function<bool(double fraction, const std::string& step
 /// may (to add nodes, for instance).
 using TaskWork = std::function<std::function<void()>(const TaskProgress& progress)>;
 
+/// A point the user clicked on a surface in the 3D view.
+struct SurfacePick
+{
+  std::array<double, 3> position{}; ///< patient LPS, mm, on the surface
+  NodeId surface;                   ///< the Surface node clicked
+};
+
+/// The 3D view as it is on screen: its pixels and the camera that made them.
+struct ViewCapture
+{
+  vtkSmartPointer<vtkImageData> image; ///< RGB, unsigned char, origin bottom left (VTK)
+  SnapshotNode::Camera camera;
+};
+
 /// What the workstation offers a module's panel.
 class ModuleHost
 {
@@ -91,6 +113,34 @@ public:
   virtual void showStatus(const std::string& message) = 0;
   /// The main window, as parent for dialogs.
   virtual QWidget* window() = 0;
+
+  /// @name The 3D view
+  ///@{
+  /// Arms a pick: the next left click (a click, not a drag that turns the
+  /// view) on a visible surface in the 3D view calls @a picked on the GUI
+  /// thread; @a prompt goes in the status bar meanwhile. The view still
+  /// turns and zooms while armed (§5.6: a changeable viewpoint while
+  /// drawing). A new request replaces an armed one; Esc cancels it.
+  virtual void pickInThreeDView(const std::string& prompt, std::function<void(const SurfacePick&)> picked) = 0;
+  /// Disarms a pick requested with pickInThreeDView(); nothing if none.
+  virtual void cancelPick() = 0;
+  /// The 3D view as shown now, at its size on screen.
+  virtual ViewCapture captureThreeDView() = 0;
+  /// Moves the 3D view's camera.
+  virtual void setThreeDViewCamera(const SnapshotNode::Camera& camera) = 0;
+  /// Moves the cursor (the crosshair of the slice views and the slices of
+  /// the 3D view) to @a position (patient LPS, mm) and marks it in the 3D view.
+  virtual void setCursorPosition(const std::array<double, 3>& position) = 0;
+  ///@}
+
+  /// @name The slice views
+  ///@{
+  /// Colours the CT on the slice views by thresholds while the user sets
+  /// them (§4.2: the skin and bone thresholds): soft tissue from hu[0] (HU),
+  /// bone from hu[1]; std::nullopt goes back to the segmentation's own
+  /// overlay (its label map), if any.
+  virtual void previewThresholds(const std::optional<std::array<double, 2>>& hu) = 0;
+  ///@}
 };
 
 /// A workstation module: metadata and factories only.

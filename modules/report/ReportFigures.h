@@ -13,6 +13,7 @@
 #include <vtkSmartPointer.h>
 
 #include "scene/SnapshotNode.h"
+#include "ui/ColourMaps.h"
 
 class vtkImageData;
 class vtkPolyData;
@@ -30,18 +31,10 @@ using Camera = SnapshotNode::Camera;
 /// An RGB colour, each channel in [0, 1].
 using Rgb = std::array<double, 3>;
 
-/// @name Colour maps
+/// @name Colour maps (shared with the workstation's views: ui/ColourMaps.h)
 ///@{
-/// Colour maps for scalars on the face, all readable in print and in grey.
-enum class ColourMap
-{
-  CoolWarm,  ///< Moreland's diverging blue → grey → red; for signed values (strain, displacement)
-  Viridis,   ///< perceptually uniform dark blue → green → yellow; for stress
-  Thickness, ///< ColorBrewer YlGnBu: pale yellow (thin) → dark blue (thick); for tissue thickness
-};
-
-/// The map's colour at t in [0, 1] (clamped).
-Rgb colourMapColour(ColourMap map, double t);
+using ColourMap = ui::ColourMap;
+using ui::colourMapColour;
 ///@}
 
 /// @brief One surface of a figure and how it is coloured.
