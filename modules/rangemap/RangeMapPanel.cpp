@@ -1,27 +1,59 @@
 #include "modules/rangemap/RangeMapPanel.h"
 
+#include <cmath>
+#include <fstream>
 #include <memory>
+#include <numbers>
 
 #include <QCheckBox>
+#include <QComboBox>
+#include <QFileDialog>
 #include <QFontDatabase>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QHBoxLayout>
+#include <QHeaderView>
 #include <QLabel>
+#include <QLineEdit>
 #include <QPushButton>
+#include <QTableWidget>
+#include <QTimer>
 #include <QVBoxLayout>
 
 #include "modules/rangemap/RangeMapLogic.h"
+#include "modules/rangemap/RangeMapView.h"
 #include "modules/segment/SegmentLogic.h"
 #include "scene/LabelMapNode.h"
+#include "scene/LandmarksNode.h"
 #include "scene/Scene.h"
+#include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
 
 namespace caps {
 namespace {
 
-// The volume the panel works on: the newest one (a selector comes with the full panel).
+constexpr double kDegree = std::numbers::pi / 180.0;
+constexpr double kHistogramBin = 1.0; // mm
+constexpr int kHistogramBins = 30;
+constexpr double kThicknessTop = 30.0; // mm: facial soft tissue is thinner almost everywhere
+// The segmentation's skin: translucent so the bone shows through it.
+constexpr double kSkinOpacity = 0.6;
+
+// The volume the panel works on: the newest one.
 VolumeNode* currentVolume(Scene& scene)
 {
   const auto volumes = scene.nodesOfType(NodeType::Volume);
   return volumes.empty() ? nullptr : static_cast<VolumeNode*>(volumes.back());
+}
+
+/// The segmentation's skin surface (the newest "Skin").
+SurfaceNode* skinSurface(Scene& scene)
+{
+  SurfaceNode* found = nullptr;
+  for (Node* node : scene.nodesOfType(NodeType::Surface))
+    if (node->name() == "Skin")
+      found = static_cast<SurfaceNode*>(node);
+  return found;
 }
 
 QString statistics(const RangeMapOutput& output)
@@ -38,6 +70,19 @@ QString statistics(const RangeMapOutput& output)
          line("Radial:", output.radialStatistics) + line("Normal:", output.normalStatistics);
 }
 
+QString millimetres(double v)
+{
+  return std::isfinite(v) ? QString::number(v, 'f', 1) : QString("-");
+}
+
+enum MapKind
+{
+  kThicknessRadial,
+  kThicknessNormal,
+  kSkinRadius,
+  kBoneRadius
+};
+
 } // namespace
 
 RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* parent)
@@ -45,21 +90,131 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
 {
   auto* layout = new QVBoxLayout(this);
   smooth_ = new QCheckBox(tr("Smooth the maps (3 x 3 box, thesis eq. 4.2)"), this);
+  smooth_->setObjectName("rangemap.smooth");
   layout->addWidget(smooth_);
   run_ = new QPushButton(tr("Build range and thickness maps"), this);
+  run_->setObjectName("rangemap.run");
   layout->addWidget(run_);
   status_ = new QLabel(this);
+  status_->setObjectName("rangemap.status");
   status_->setWordWrap(true);
   status_->setFont(QFontDatabase::systemFont(QFontDatabase::FixedFont));
   layout->addWidget(status_);
+
+  // Thickness review (thesis §4.2: the soft tissue between the two maps).
+  auto* review = new QGroupBox(tr("Thickness review"), this);
+  auto* reviewLayout = new QVBoxLayout(review);
+  auto* row = new QHBoxLayout;
+  map_kind_ = new QComboBox(review);
+  map_kind_->setObjectName("rangemap.mapKind");
+  map_kind_->addItem(tr("Thickness, radial"), kThicknessRadial);
+  map_kind_->addItem(tr("Thickness, along the skin normal"), kThicknessNormal);
+  map_kind_->addItem(tr("Skin, distance from the axis"), kSkinRadius);
+  map_kind_->addItem(tr("Bone, distance from the axis"), kBoneRadius);
+  row->addWidget(map_kind_, 1);
+  paint_ = new QCheckBox(tr("On the 3D skin"), review);
+  paint_->setObjectName("rangemap.paintThickness");
+  paint_->setToolTip(tr("Paints the radial thickness on the skin surface with the same colours"));
+  row->addWidget(paint_);
+  reviewLayout->addLayout(row);
+  map_view_ = new RangeMapView(review);
+  map_view_->setObjectName("rangemap.map");
+  map_view_->setToolTip(tr("Hover to read the maps; click to show the point on the face and in the slices"));
+  reviewLayout->addWidget(map_view_);
+  probe_ = new QLabel(tr("Hover over the map to read it."), review);
+  probe_->setObjectName("rangemap.probe");
+  probe_->setWordWrap(true);
+  reviewLayout->addWidget(probe_);
+  histogram_ = new ThicknessHistogram(review);
+  histogram_->setObjectName("rangemap.histogram");
+  reviewLayout->addWidget(histogram_);
+  layout->addWidget(review);
+
+  auto* marks = new QGroupBox(tr("Landmarks"), this);
+  auto* marksLayout = new QVBoxLayout(marks);
+  auto* nameRow = new QHBoxLayout;
+  landmark_name_ = new QLineEdit(marks);
+  landmark_name_->setObjectName("rangemap.landmarkName");
+  landmark_name_->setPlaceholderText(tr("name, e.g. nasion"));
+  nameRow->addWidget(landmark_name_, 1);
+  add_landmark_ = new QPushButton(tr("Add on the face"), marks);
+  add_landmark_->setObjectName("rangemap.addLandmark");
+  add_landmark_->setToolTip(tr("Then click the point on the skin in the 3D view"));
+  nameRow->addWidget(add_landmark_);
+  marksLayout->addLayout(nameRow);
+  landmarks_ = new QTableWidget(0, 5, marks);
+  landmarks_->setObjectName("rangemap.landmarks");
+  landmarks_->setHorizontalHeaderLabels(
+    {tr("Name"), tr("θ (°)"), tr("z (mm)"), tr("Radial (mm)"), tr("Normal (mm)")});
+  landmarks_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
+  landmarks_->horizontalHeader()->setStretchLastSection(true);
+  landmarks_->verticalHeader()->hide();
+  landmarks_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  landmarks_->setSelectionBehavior(QAbstractItemView::SelectRows);
+  landmarks_->setMinimumHeight(110);
+  marksLayout->addWidget(landmarks_);
+  auto* buttons = new QHBoxLayout;
+  locate_ = new QPushButton(tr("Find on the map"), marks);
+  locate_->setObjectName("rangemap.locate");
+  locate_->setToolTip(tr("Click a point on the 3D skin to see it on the map"));
+  remove_landmark_ = new QPushButton(tr("Remove"), marks);
+  remove_landmark_->setObjectName("rangemap.removeLandmark");
+  export_landmarks_ = new QPushButton(tr("Export CSV..."), marks);
+  export_landmarks_->setObjectName("rangemap.exportLandmarks");
+  buttons->addWidget(locate_);
+  buttons->addWidget(remove_landmark_);
+  buttons->addWidget(export_landmarks_);
+  marksLayout->addLayout(buttons);
+  layout->addWidget(marks);
   layout->addStretch(1);
 
   connect(run_, &QPushButton::clicked, this, &RangeMapPanel::run);
+  connect(map_kind_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) { showMap(); });
+  connect(paint_, &QCheckBox::toggled, this, &RangeMapPanel::paintThickness);
+  connect(map_view_, &RangeMapView::hovered, this, &RangeMapPanel::showProbe);
+  connect(map_view_, &RangeMapView::clicked, this, &RangeMapPanel::locate);
+  connect(add_landmark_, &QPushButton::clicked, this, &RangeMapPanel::addLandmark);
+  connect(remove_landmark_, &QPushButton::clicked, this, &RangeMapPanel::removeLandmark);
+  connect(export_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::exportLandmarks);
+  connect(landmarks_, &QTableWidget::cellDoubleClicked, this, [this](int r, int) {
+    LandmarksNode* node = landmarksNode(false);
+    if (!node || !review_ || r >= static_cast<int>(node->landmarks().size()))
+      return;
+    const auto chart = review_->chartOf(node->landmarks()[static_cast<size_t>(r)].position);
+    locate(chart[0], chart[1]);
+  });
+  connect(locate_, &QPushButton::clicked, this, [this]() {
+    if (!review_)
+    {
+      host_.showError("Find on the map", "Build the range maps first.");
+      return;
+    }
+    host_.pickInThreeDView("Click a point on the skin to find it on the map", [this](const SurfacePick& pick) {
+      if (!review_)
+        return;
+      const auto chart = review_->chartOf(pick.position);
+      map_view_->setMarker(chart);
+      showProbe(chart[0], chart[1]);
+    });
+  });
+
   observer_ = logic_.scene().addObserver([this](SceneEvent, const Node& node) {
     if (node.type() == NodeType::Volume)
       updateFromScene();
+    else if (node.type() == NodeType::RangeMap && !reload_pending_)
+    {
+      // Four maps arrive one after the other: read them once, afterwards.
+      reload_pending_ = true;
+      QTimer::singleShot(0, this, [this]() {
+        reload_pending_ = false;
+        reloadMaps();
+      });
+    }
+    else if (node.type() == NodeType::Landmarks)
+      updateLandmarks();
   });
   updateFromScene();
+  reloadMaps();
 }
 
 RangeMapPanel::~RangeMapPanel()
@@ -71,8 +226,235 @@ void RangeMapPanel::updateFromScene()
 {
   VolumeNode* volume = currentVolume(logic_.scene());
   run_->setEnabled(volume != nullptr);
-  status_->setText(volume ? tr("Volume: %1").arg(QString::fromStdString(volume->name()))
-                          : tr("Load a CT in the Volumes module first."));
+  if (!review_)
+    status_->setText(volume ? tr("Volume: %1").arg(QString::fromStdString(volume->name()))
+                            : tr("Load a CT in the Volumes module first."));
+}
+
+void RangeMapPanel::reloadMaps()
+{
+  review_ = ThicknessReview::fromScene(logic_.scene());
+  const bool ready = review_.has_value();
+  for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, locate_, remove_landmark_,
+                                                    export_landmarks_})
+    w->setEnabled(ready);
+  if (!ready)
+  {
+    map_view_->clear();
+    histogram_->setCounts({}, kHistogramBin);
+    return;
+  }
+  // The thickness colours run to the face's 98th percentile, in whole 5 mm,
+  // so a few deep samples (the orbits, the nose) do not wash the face out.
+  const std::vector<int> counts = review_->faceHistogram(kHistogramBin, 200);
+  long total = 0;
+  for (int c : counts)
+    total += c;
+  long seen = 0;
+  double p98 = 25.0;
+  for (std::size_t k = 0; k < counts.size(); ++k)
+  {
+    seen += counts[k];
+    if (total > 0 && seen >= 0.98 * double(total))
+    {
+      p98 = (double(k) + 1.0) * kHistogramBin;
+      break;
+    }
+  }
+  // The neck and the scalp's edges reach far deeper than the face: the
+  // colours stop at 30 mm, deeper is the last colour.
+  thickness_top_ = std::clamp(std::ceil(p98 / 5.0) * 5.0, 5.0, kThicknessTop);
+  histogram_->setCounts(review_->faceHistogram(kHistogramBin, std::min(kHistogramBins, int(thickness_top_ + 5))),
+                        kHistogramBin);
+  showMap();
+  updateLandmarks();
+  if (paint_->isChecked())
+    paintThickness(true);
+}
+
+void RangeMapPanel::showMap()
+{
+  if (!review_)
+    return;
+  const int kind = map_kind_->currentData().toInt();
+  auto rangeOf = [](const seg::RangeMap& map) {
+    std::vector<float> v;
+    for (float x : map.values())
+      if (std::isfinite(x))
+        v.push_back(x);
+    if (v.empty())
+      return std::pair{0.0, 1.0};
+    std::sort(v.begin(), v.end());
+    const double lo = v[v.size() * 2 / 100], hi = v[v.size() * 98 / 100];
+    return std::pair{std::floor(lo / 10.0) * 10.0, std::ceil(hi / 10.0) * 10.0};
+  };
+  switch (kind)
+  {
+  case kThicknessNormal:
+    if (!review_->thicknessNormal().empty())
+    {
+      map_view_->setMap(review_->thicknessNormal(), ui::ColourMap::Thickness, 0.0, thickness_top_,
+                        tr("soft-tissue thickness along the skin normal (mm)"));
+      break;
+    }
+    [[fallthrough]];
+  case kThicknessRadial:
+    map_view_->setMap(review_->thickness(), ui::ColourMap::Thickness, 0.0, thickness_top_,
+                      tr("soft-tissue thickness, radial (mm)"));
+    break;
+  case kSkinRadius: {
+    const auto [lo, hi] = rangeOf(review_->skin());
+    map_view_->setMap(review_->skin(), ui::ColourMap::Viridis, lo, hi, tr("skin: distance from the head axis (mm)"));
+    break;
+  }
+  case kBoneRadius: {
+    const auto [lo, hi] = rangeOf(review_->bone());
+    map_view_->setMap(review_->bone(), ui::ColourMap::Viridis, lo, hi, tr("bone: distance from the head axis (mm)"));
+    break;
+  }
+  }
+}
+
+void RangeMapPanel::showProbe(double theta, double z)
+{
+  if (!review_)
+    return;
+  const ThicknessProbe p = review_->probe(theta, z);
+  probe_->setText(tr("θ %1°  z %2 mm   skin %3  bone %4 mm\nthickness: radial %5 mm, along the normal %6 mm")
+                    .arg(p.theta / kDegree, 0, 'f', 1)
+                    .arg(p.z, 0, 'f', 1)
+                    .arg(millimetres(p.skinRadius))
+                    .arg(millimetres(p.boneRadius))
+                    .arg(millimetres(p.thickness))
+                    .arg(millimetres(p.thicknessNormal)));
+}
+
+void RangeMapPanel::locate(double theta, double z)
+{
+  if (!review_)
+    return;
+  map_view_->setMarker(std::array<double, 2>{theta, z});
+  showProbe(theta, z);
+  const ThicknessProbe p = review_->probe(theta, z);
+  if (std::isfinite(p.skinPoint[0]))
+    host_.setCursorPosition(p.skinPoint);
+  else
+    host_.showStatus("No skin was found there on the map.");
+}
+
+void RangeMapPanel::paintThickness(bool on)
+{
+  SurfaceNode* skin = skinSurface(logic_.scene());
+  if (!skin || !skin->polyData())
+  {
+    if (on)
+      host_.showError("Thickness on the skin", "There is no skin surface: segment the CT in the Segment module.");
+    return;
+  }
+  if (on && review_)
+  {
+    skin->setPolyData(review_->paintThickness(skin->polyData()));
+    skin->setColourMap(ui::colourMapName(ui::ColourMap::Thickness));
+    skin->setScalarRange({0.0, thickness_top_});
+    skin->setColourBarTitle("Soft-tissue thickness (mm)");
+    skin->setOpacity(1.0);
+    skin->setColourArray("thickness_mm");
+  }
+  else if (!on)
+  {
+    skin->setOpacity(kSkinOpacity);
+    skin->setColourArray("");
+  }
+}
+
+LandmarksNode* RangeMapPanel::landmarksNode(bool create)
+{
+  const auto nodes = logic_.scene().nodesOfType(NodeType::Landmarks);
+  if (!nodes.empty())
+    return static_cast<LandmarksNode*>(nodes.back());
+  if (!create)
+    return nullptr;
+  auto node = std::make_unique<LandmarksNode>();
+  node->setName("Landmarks");
+  return static_cast<LandmarksNode*>(logic_.scene().addNode(std::move(node)));
+}
+
+void RangeMapPanel::addLandmark()
+{
+  if (!review_)
+  {
+    host_.showError("Add a landmark", "Build the range maps first: a landmark's thickness is read off them.");
+    return;
+  }
+  host_.pickInThreeDView("Click the landmark on the skin", [this](const SurfacePick& pick) {
+    LandmarksNode* node = landmarksNode(true);
+    QString name = landmark_name_->text().trimmed();
+    if (name.isEmpty())
+      name = tr("Landmark %1").arg(node->landmarks().size() + 1);
+    node->add({name.toStdString(), pick.position});
+    landmark_name_->clear();
+    const auto chart = review_->chartOf(pick.position);
+    map_view_->setMarker(chart);
+    showProbe(chart[0], chart[1]);
+  });
+}
+
+void RangeMapPanel::removeLandmark()
+{
+  LandmarksNode* node = landmarksNode(false);
+  const int row = landmarks_->currentRow();
+  if (!node || row < 0)
+  {
+    host_.showStatus("Choose a landmark in the table first.");
+    return;
+  }
+  node->remove(static_cast<size_t>(row));
+}
+
+void RangeMapPanel::exportLandmarks()
+{
+  LandmarksNode* node = landmarksNode(false);
+  if (!node || node->landmarks().empty() || !review_)
+  {
+    host_.showError("Export landmarks", "There are no landmarks yet: add some with 'Add on the face'.");
+    return;
+  }
+  const QString file = QFileDialog::getSaveFileName(host_.window(), tr("Export the landmarks"), "landmarks.csv",
+                                                    tr("CSV (*.csv)"));
+  if (file.isEmpty())
+    return;
+  std::ofstream out(file.toStdString(), std::ios::binary);
+  out << review_->landmarksCsv(node->landmarks());
+  out.close();
+  if (!out)
+    host_.showError("Export landmarks", "Could not write " + file.toStdString() +
+                                          ": check the folder exists and you may write there.");
+  else
+    host_.showStatus("Landmarks written to " + file.toStdString());
+}
+
+void RangeMapPanel::updateLandmarks()
+{
+  LandmarksNode* node = landmarksNode(false);
+  const auto& list = node ? node->landmarks() : std::vector<LandmarksNode::Landmark>{};
+  landmarks_->setRowCount(static_cast<int>(list.size()));
+  std::vector<std::pair<QString, std::array<double, 2>>> onMap;
+  for (std::size_t r = 0; r < list.size(); ++r)
+  {
+    const QString name = QString::fromStdString(list[r].name);
+    QStringList cells{name, "-", "-", "-", "-"};
+    if (review_)
+    {
+      const auto chart = review_->chartOf(list[r].position);
+      const ThicknessProbe p = review_->probe(chart[0], chart[1]);
+      cells = QStringList{name, QString::number(p.theta / kDegree, 'f', 1), QString::number(p.z, 'f', 1),
+                          millimetres(p.thickness), millimetres(p.thicknessNormal)};
+      onMap.emplace_back(name, chart);
+    }
+    for (int c = 0; c < cells.size(); ++c)
+      landmarks_->setItem(static_cast<int>(r), c, new QTableWidgetItem(cells[c]));
+  }
+  map_view_->setLandmarks(std::move(onMap));
 }
 
 void RangeMapPanel::run()

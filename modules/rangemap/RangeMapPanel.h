@@ -1,17 +1,30 @@
 #pragma once
 /// @file RangeMapPanel.h
-/// @brief The RangeMap module's minimal panel: Run, and the thickness statistics.
+/// @brief The RangeMap module's panel: builds the range and thickness maps,
+/// then the thickness review (issue 6 item 3): the unwrapped map with a
+/// probe, the thickness painted on the 3D skin, its histogram, and
+/// landmarks with their thickness, exportable as CSV.
+
+#include <optional>
 
 #include <QWidget>
 
+#include "modules/rangemap/ThicknessReview.h"
+
 class QCheckBox;
+class QComboBox;
 class QLabel;
+class QLineEdit;
 class QPushButton;
+class QTableWidget;
 
 namespace caps {
 
 class ModuleHost;
 class RangeMapLogic;
+class RangeMapView;
+class ThicknessHistogram;
+class LandmarksNode;
 
 class RangeMapPanel : public QWidget
 {
@@ -23,13 +36,37 @@ public:
 private:
   void run();
   void updateFromScene();
+  void reloadMaps();
+  void showMap();
+  void showProbe(double theta, double z);
+  void locate(double theta, double z);
+  void paintThickness(bool on);
+  void addLandmark();
+  void removeLandmark();
+  void exportLandmarks();
+  void updateLandmarks();
+  LandmarksNode* landmarksNode(bool create);
 
   RangeMapLogic& logic_;
   ModuleHost& host_;
   int observer_ = -1;
+  std::optional<ThicknessReview> review_;
+  double thickness_top_ = 25.0; ///< top of the thickness colour range (mm)
+  bool reload_pending_ = false;
   QCheckBox* smooth_ = nullptr;
   QPushButton* run_ = nullptr;
   QLabel* status_ = nullptr;
+  QComboBox* map_kind_ = nullptr;
+  QCheckBox* paint_ = nullptr;
+  RangeMapView* map_view_ = nullptr;
+  QLabel* probe_ = nullptr;
+  ThicknessHistogram* histogram_ = nullptr;
+  QLineEdit* landmark_name_ = nullptr;
+  QTableWidget* landmarks_ = nullptr;
+  QPushButton* add_landmark_ = nullptr;
+  QPushButton* remove_landmark_ = nullptr;
+  QPushButton* export_landmarks_ = nullptr;
+  QPushButton* locate_ = nullptr;
 };
 
 } // namespace caps

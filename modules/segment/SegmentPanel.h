@@ -5,7 +5,9 @@
 #include <QWidget>
 
 class QDoubleSpinBox;
+class QCheckBox;
 class QLabel;
+class QTableWidget;
 class QPushButton;
 
 namespace caps {
@@ -20,9 +22,15 @@ public:
   SegmentPanel(SegmentLogic& logic, ModuleHost& host, QWidget* parent = nullptr);
   ~SegmentPanel() override;
 
+protected:
+  void showEvent(QShowEvent* event) override;
+  void hideEvent(QHideEvent* event) override;
+
 private:
   void run();
   void updateFromScene();
+  void updatePreview();
+  void updateSurfaces();
 
   SegmentLogic& logic_;
   ModuleHost& host_;
@@ -31,6 +39,9 @@ private:
   QDoubleSpinBox* bone_ = nullptr;
   QPushButton* run_ = nullptr;
   QLabel* status_ = nullptr;
+  QCheckBox* preview_ = nullptr;
+  QTableWidget* surfaces_ = nullptr;
+  bool surfaces_pending_ = false;
 };
 
 } // namespace caps

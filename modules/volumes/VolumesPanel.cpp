@@ -46,6 +46,8 @@ VolumesPanel::VolumesPanel(VolumesLogic& logic, ModuleHost& host, QWidget* paren
   auto* buttons = new QHBoxLayout;
   auto* openFolderButton = new QPushButton(tr("Open DICOM folder..."), this);
   auto* openFileButton = new QPushButton(tr("Open image file..."), this);
+  openFolderButton->setObjectName("volumes.openFolder");
+  openFileButton->setObjectName("volumes.openFile");
   buttons->addWidget(openFolderButton);
   buttons->addWidget(openFileButton);
   layout->addLayout(buttons);
@@ -55,12 +57,14 @@ VolumesPanel::VolumesPanel(VolumesLogic& logic, ModuleHost& host, QWidget* paren
   series_tree_->setHeaderLabels(
     {tr("#"), tr("Patient"), tr("Study date"), tr("Description"), tr("Modality"), tr("Slices"),
      tr("Spacing (mm)")});
+  series_tree_->setObjectName("volumes.series");
   series_tree_->setRootIsDecorated(false);
   series_tree_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
   layout->addWidget(series_tree_, 1);
 
   layout->addWidget(new QLabel(tr("Loaded volume:"), this));
   volumes_ = new QComboBox(this);
+  volumes_->setObjectName("volumes.loaded");
   layout->addWidget(volumes_);
   details_ = new QPlainTextEdit(this);
   details_->setReadOnly(true);

@@ -1,0 +1,76 @@
+#pragma once
+/// @file ThicknessReview.h
+/// @brief What the surgeon reads off the range maps while reviewing the soft
+/// tissue (issue 6 item 3, thesis §4.2): the values at a point of the
+/// unwrapped (θ, z) chart, the thickness painted on the skin surface, its
+/// histogram over the face, and landmarks with their thickness. No widgets.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <vtkSmartPointer.h>
+
+#include "scene/LandmarksNode.h"
+#include "segmentation/RangeMap.h"
+
+class vtkPolyData;
+
+namespace caps {
+
+class Scene;
+
+/// The maps' values at one point of the chart. Lengths in mm, NaN where a
+/// map has no surface.
+struct ThicknessProbe
+{
+  double theta = 0.0; ///< radians, [-π, π)
+  double z = 0.0;     ///< mm along the head axis
+  double skinRadius = 0.0, boneRadius = 0.0;
+  double thickness = 0.0;       ///< radial: skin r − bone r
+  double thicknessNormal = 0.0; ///< along the inward skin normal to the bone
+  std::array<double, 3> skinPoint{}; ///< the skin there (patient LPS); NaN without skin
+};
+
+/// @class ThicknessReview
+/// @brief The skin, bone and thickness maps of the scene's newest range-map set.
+class ThicknessReview
+{
+public:
+  /// The newest map of each role ("skin", "bone", "thickness",
+  /// "thickness-normal"); std::nullopt when the scene has no skin, bone and
+  /// radial thickness map yet.
+  static std::optional<ThicknessReview> fromScene(const Scene& scene);
+  ThicknessReview(seg::RangeMap skin, seg::RangeMap bone, seg::RangeMap thickness, seg::RangeMap thicknessNormal);
+
+  const seg::RangeMap& skin() const { return skin_; }
+  const seg::RangeMap& bone() const { return bone_; }
+  const seg::RangeMap& thickness() const { return thickness_; }
+  /// Empty when the scene had no normal-thickness map.
+  const seg::RangeMap& thicknessNormal() const { return thickness_normal_; }
+
+  /// The values at (θ, z), read bilinearly (eq. 4.9).
+  ThicknessProbe probe(double theta, double z) const;
+  /// The chart point (θ, z) of a world point, as the maps' frame sees it.
+  std::array<double, 2> chartOf(const std::array<double, 3>& world) const;
+
+  /// A copy of @a surface with the point array "thickness_mm": the radial
+  /// thickness at each vertex's (θ, z) (NaN off the maps).
+  vtkSmartPointer<vtkPolyData> paintThickness(vtkPolyData* surface) const;
+
+  /// Counts of the radial thickness over the face (θ in [-π, 0], the front
+  /// half), in bins of @a binWidth mm from 0; values from the last bin's
+  /// start up go into it.
+  std::vector<int> faceHistogram(double binWidth, int bins) const;
+
+  /// The landmarks as CSV, one row each: name, x, y, z (LPS mm), theta
+  /// (degrees), z along the axis (mm), skin radius, bone radius, thickness
+  /// radial and along the normal (mm); NaN as empty fields.
+  std::string landmarksCsv(const std::vector<LandmarksNode::Landmark>& landmarks) const;
+
+private:
+  seg::RangeMap skin_, bone_, thickness_, thickness_normal_;
+};
+
+} // namespace caps

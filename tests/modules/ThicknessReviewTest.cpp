@@ -1,0 +1,136 @@
+// The thickness review's readings (ThicknessReview) on maps whose values are
+// known in closed form: a skin cylinder that widens linearly up the axis
+// around a bone cylinder, so the radial thickness is 10 + 0.1 z mm and
+// bilinear reading (eq. 4.9) is exact.
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include <gtest/gtest.h>
+#include <vtkDoubleArray.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+
+#include "modules/rangemap/ThicknessReview.h"
+#include "segmentation/CylindricalFrame.h"
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double skinRadius(double z) { return 80.0 + 0.1 * z; }
+constexpr double kBoneRadius = 70.0;
+
+caps::ThicknessReview makeReview(caps::seg::CylindricalFrame& frame)
+{
+  // A tilted axis, so nothing depends on the axis being the world's z.
+  frame = caps::seg::CylindricalFrame(Eigen::Vector3d(3, -4, 20), Eigen::Vector3d(0.1, 0.2, 1.0), -50, 50, 128, 51);
+  caps::seg::RangeMap skin(frame), bone(frame), thickness(frame), normal(frame);
+  for (int j = 0; j < frame.nZ(); ++j)
+    for (int i = 0; i < frame.nTheta(); ++i)
+    {
+      const double z = frame.indexToZ(j);
+      skin.at(i, j) = float(skinRadius(z));
+      bone.at(i, j) = float(kBoneRadius);
+      thickness.at(i, j) = float(skinRadius(z) - kBoneRadius);
+      normal.at(i, j) = float(0.99 * (skinRadius(z) - kBoneRadius));
+    }
+  return caps::ThicknessReview(skin, bone, thickness, normal);
+}
+
+TEST(ThicknessReview, ProbeReadsTheMapsAndFindsTheSkinPoint)
+{
+  caps::seg::CylindricalFrame frame;
+  const caps::ThicknessReview review = makeReview(frame);
+  for (double theta : {-kPi / 2, -2.0, 0.3, 3.0})
+    for (double z : {-47.3, 0.0, 12.6})
+    {
+      const caps::ThicknessProbe p = review.probe(theta, z);
+      EXPECT_NEAR(p.skinRadius, skinRadius(z), 1e-4);
+      EXPECT_NEAR(p.boneRadius, kBoneRadius, 1e-4);
+      EXPECT_NEAR(p.thickness, skinRadius(z) - kBoneRadius, 1e-4);
+      EXPECT_NEAR(p.thicknessNormal, 0.99 * (skinRadius(z) - kBoneRadius), 1e-4);
+      const Eigen::Vector3d expected = frame.toWorld(skinRadius(z), theta, z);
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(p.skinPoint[size_t(k)], expected[k], 1e-3);
+      // And back: the chart point of that skin point.
+      const auto chart = review.chartOf(p.skinPoint);
+      EXPECT_NEAR(std::remainder(chart[0] - theta, 2 * kPi), 0.0, 1e-9);
+      EXPECT_NEAR(chart[1], z, 1e-9);
+    }
+  // Off the maps (beyond zMax) there is nothing to read.
+  const caps::ThicknessProbe off = review.probe(0.0, 80.0);
+  EXPECT_TRUE(std::isnan(off.thickness));
+  EXPECT_TRUE(std::isnan(off.skinPoint[0]));
+}
+
+TEST(ThicknessReview, PaintedSkinCarriesTheThicknessUnderEachVertex)
+{
+  caps::seg::CylindricalFrame frame;
+  const caps::ThicknessReview review = makeReview(frame);
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  std::vector<double> expected;
+  for (double theta = -3.0; theta < 3.1; theta += 0.37)
+    for (double z = -45.0; z <= 45.0; z += 7.5)
+    {
+      const Eigen::Vector3d p = frame.toWorld(skinRadius(z), theta, z);
+      points->InsertNextPoint(p.data());
+      expected.push_back(skinRadius(z) - kBoneRadius);
+    }
+  const Eigen::Vector3d above = frame.toWorld(80.0, 0.0, 70.0); // off the maps
+  points->InsertNextPoint(above.data());
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->SetPoints(points);
+  const auto painted = review.paintThickness(surface);
+  auto* values = vtkDoubleArray::SafeDownCast(painted->GetPointData()->GetArray("thickness_mm"));
+  ASSERT_NE(values, nullptr);
+  ASSERT_EQ(values->GetNumberOfTuples(), points->GetNumberOfPoints());
+  for (std::size_t k = 0; k < expected.size(); ++k)
+    EXPECT_NEAR(values->GetValue(vtkIdType(k)), expected[k], 1e-4) << k;
+  EXPECT_TRUE(std::isnan(values->GetValue(vtkIdType(expected.size()))));
+  // The source surface is left as it was.
+  EXPECT_EQ(surface->GetPointData()->GetArray("thickness_mm"), nullptr);
+}
+
+TEST(ThicknessReview, FaceHistogramCountsTheFrontHalf)
+{
+  caps::seg::CylindricalFrame frame;
+  const caps::ThicknessReview review = makeReview(frame);
+  // Thickness 10 + 0.1 z: rows z_j = -50 + 2 j, so row j falls in bin
+  // floor(5 + 0.2 j) of 1 mm bins; every front column (θ <= 0) counts.
+  int frontColumns = 0;
+  for (int i = 0; i < frame.nTheta(); ++i)
+    frontColumns += frame.indexToTheta(i) <= 0.0;
+  std::vector<int> expected(12, 0);
+  for (int j = 0; j < frame.nZ(); ++j)
+  {
+    const double t = 10.0 + 0.1 * frame.indexToZ(j);
+    expected[std::min<size_t>(size_t(std::floor(t + 1e-9)), expected.size() - 1)] += frontColumns;
+  }
+  EXPECT_EQ(review.faceHistogram(1.0, 12), expected);
+}
+
+TEST(ThicknessReview, LandmarksCsvHasOneRowPerLandmarkWithItsThickness)
+{
+  caps::seg::CylindricalFrame frame;
+  const caps::ThicknessReview review = makeReview(frame);
+  const Eigen::Vector3d nasion = frame.toWorld(skinRadius(30.0), -kPi / 2, 30.0);
+  std::vector<caps::LandmarksNode::Landmark> landmarks{
+    {"nasion", {nasion.x(), nasion.y(), nasion.z()}}, {"far, \"away\"", {0.0, 0.0, 500.0}}};
+  std::istringstream csv(review.landmarksCsv(landmarks));
+  std::string header, first, second;
+  std::getline(csv, header);
+  std::getline(csv, first);
+  std::getline(csv, second);
+  EXPECT_EQ(header.rfind("name,x_mm,y_mm,z_mm,theta_deg,axis_z_mm", 0), 0u) << header;
+  // nasion,x,y,z,-90.00,30.00,83.00,70.00,13.00,12.87
+  EXPECT_NE(first.find("nasion,"), std::string::npos);
+  EXPECT_NE(first.find(",-90.00,30.00,83.00,70.00,13.00,12.87"), std::string::npos) << first;
+  // A name with a comma and quotes is quoted; off the maps the readings are empty.
+  EXPECT_EQ(second.rfind("\"far, \"\"away\"\"\",", 0), 0u) << second;
+  EXPECT_EQ(second.substr(second.size() - 4), ",,,,") << second;
+}
+
+} // namespace
