@@ -10,6 +10,7 @@
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
+#include <cmath>
 #include <stdexcept>
 
 namespace caps {
@@ -197,5 +198,66 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
   ids.skinAfter = surface(after, "after", true);
   return ids;
 }
+
+incision::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& node)
+{
+  incision::SimulationOptions options;
+  const nlohmann::json& s = node.simulation();
+  if (!s.is_object())
+    return options;
+  auto number = [&s](const char* key, double& out, double lowest) {
+    const auto it = s.find(key);
+    if (it != s.end() && it->is_number() && std::isfinite(it->get<double>()) && it->get<double>() >= lowest)
+      out = it->get<double>();
+  };
+  auto integer = [&s](const char* key, int& out, int lowest, int highest) {
+    const auto it = s.find(key);
+    if (it != s.end() && it->is_number_integer() && it->get<long long>() >= lowest && it->get<long long>() <= highest)
+      out = int(it->get<long long>());
+  };
+  number("elementSize", options.elementSize, 1e-3);
+  number("regionRadius", options.regionRadius, 1e-3);
+  number("underminingWidth", options.underminingWidth, 0.0);
+  integer("layerCount", options.layerCount, 1, 16);
+  integer("cutLayers", options.cutLayers, 0, options.layerCount);
+  if (const auto materials = s.find("materials"); materials != s.end() && materials->is_array())
+  {
+    fem::MaterialTable table;
+    bool complete = true;
+    for (const auto& m : *materials)
+    {
+      complete = complete && m.is_object() && m.contains("layer") && m["layer"].is_number_integer() &&
+                 m.contains("youngsModulusMPa") && m["youngsModulusMPa"].is_number() &&
+                 m.contains("poissonRatio") && m["poissonRatio"].is_number();
+      if (!complete)
+        break;
+      const double e = m["youngsModulusMPa"].get<double>(), nu = m["poissonRatio"].get<double>();
+      complete = incision::materialProblem(e, nu).empty();
+      table[int(m["layer"].get<long long>())] = fem::LinearElasticMaterial{e, nu, 1.0e-9};
+    }
+    for (int layer = 0; layer < options.layerCount; ++layer)
+      complete = complete && table.count(layer);
+    if (complete)
+      options.materials = table;
+  }
+  return options;
+}
+
+nlohmann::json IncisionLogic::simulationRecord(const incision::SimulationOptions& options)
+{
+  nlohmann::json j = {{"elementSize", options.elementSize},
+                      {"cutLayers", options.cutLayers},
+                      {"regionRadius", options.regionRadius},
+                      {"layerCount", options.layerCount},
+                      {"underminingWidth", options.underminingWidth}};
+  const fem::MaterialTable materials =
+    options.materials.empty() ? incision::defaultFacialTissueMaterials(options.layerCount) : options.materials;
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& [layer, m] : materials)
+    list.push_back({{"layer", layer}, {"youngsModulusMPa", m.youngsModulus}, {"poissonRatio", m.poissonRatio}});
+  j["materials"] = std::move(list);
+  return j;
+}
+
 
 } // namespace caps

@@ -8,6 +8,8 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionPlan.h"
 #include "modules/incision/PlanDisplay.h"
@@ -61,6 +63,19 @@ public:
   /// kept their recipe (the plan itself still reads with readPlan()).
   /// @throws incision::RecipeError naming the plan and the operation at fault.
   static std::optional<incision::PlanRecipe> readRecipe(const PlanNode& node);
+
+  /// The options a node's prediction was made with, so a replay, a report
+  /// or a second look predicts the same thing: incision::SimulationOptions'
+  /// defaults, then what the node's simulation() records: elementSize and
+  /// cutLayers (as `caps plan` writes them), and regionRadius, layerCount,
+  /// underminingWidth and materials when the Simulate panel wrote them.
+  /// Values that do not read are left at the default.
+  static incision::SimulationOptions simulationOptions(const PlanNode& node);
+  /// The simulation() record of a prediction made with @a options:
+  /// {"elementSize", "cutLayers"} (the plan file's fields, PlanRecipe) and
+  /// "regionRadius", "layerCount", "underminingWidth", "materials" ([{layer,
+  /// youngsModulusMPa, poissonRatio}]).
+  static nlohmann::json simulationRecord(const incision::SimulationOptions& options);
 
   /// The scene nodes of a predicted plan.
   struct PredictionNodes

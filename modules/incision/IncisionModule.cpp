@@ -1,7 +1,8 @@
-// The Incision module plugin: metadata and factories only (no panel yet).
+// The Incision module plugin: metadata and factories only.
 
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionLogic.h"
+#include "modules/incision/IncisionPanel.h"
 #include "modules/incision/PlanCommands.h"
 
 namespace caps {
@@ -23,6 +24,10 @@ public:
   std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const override
   {
     return std::make_unique<IncisionLogic>(scene);
+  }
+  QWidget* createPanel(ModuleLogic& logic, ModuleHost& host, QWidget* parent) const override
+  {
+    return new IncisionPanel(static_cast<IncisionLogic&>(logic), host, parent);
   }
 };
 

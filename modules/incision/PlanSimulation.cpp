@@ -222,9 +222,19 @@ RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<Ch
   return out;
 }
 
-PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
-                            const SimulationOptions& options)
+SimulationCancelled::SimulationCancelled() : std::runtime_error("the simulation was cancelled") {}
+
+namespace {
+
+/// simulatePlan(), or with @a meshOnly its meshes only (meshPlan()).
+PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                               const SimulationOptions& options, bool meshOnly)
 {
+  // Between phases only: a phase, once started, runs to its end.
+  auto phase = [&options](double fraction, const std::string& step) {
+    if (options.progress && !options.progress(fraction, step))
+      throw SimulationCancelled();
+  };
   checkOptions(options);
   if (skin.empty())
     throw std::invalid_argument("the skin range map is empty: build it from the CT first");
@@ -245,6 +255,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   checkPlan(plan, skin);
 
   PlanPrediction out;
+  phase(0.0, "Surface mesh around the plan");
   const auto meshStart = std::chrono::steady_clock::now();
 
   // 1. The hole, refined to the element size consistently with the sutures.
@@ -308,6 +319,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     for (std::size_t i = 0; i < polygon.size(); ++i)
       checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
 
+  phase(0.1, "Continuum mesh from the skin to the bone");
   // The bone surface for the depth: holes filled at the default depth under
   // the skin, then smoothed so neighbouring columns do not jump (a jump of
   // a centimetre between 2 mm columns folds the deep elements).
@@ -371,7 +383,16 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
                                "elements (§4.5.2): a mesher bug");
   }
 
+  if (meshOnly)
+    return out;
+
   // 4. Materials, constraints, solve.
+  {
+    std::string step = "Assembly and factorisation (";
+    step += std::to_string(out.continuum.mesh.dofCount());
+    step += " DOF)";
+    phase(0.2, step);
+  }
   out.materials = options.materials.empty() ? defaultFacialTissueMaterials(options.layerCount) : options.materials;
   for (int layer = 0; layer < options.layerCount; ++layer)
     if (!out.materials.count(layer))
@@ -384,6 +405,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
   const double prepareWall = secondsSince(prepareStart);
   if (status != fem::SolverStatus::Success)
     throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
+  phase(0.8, "Solve");
   out.displacements = analysis.solve(fem::LoadCase{});
   out.times.assemble = analysis.times().assemble + analysis.times().constrain;
   out.times.factor = std::max(0.0, prepareWall - out.times.assemble);
@@ -394,6 +416,7 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     throw std::runtime_error("the solve of the plan gave non-finite displacements");
   out.nodalForces = analysis.internalForces(out.displacements);
 
+  phase(0.9, "Closure forces");
   // 5. Closure forces: no load acts on the model, so K U at a sutured node is
   // what its suture pulls with, and at a fixed node what the bone holds.
   ClosureForces& closure = out.closure;
@@ -504,6 +527,30 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
     out.zPlasty = z;
   }
   return out;
+}
+
+} // namespace
+
+std::string materialProblem(double youngsModulusMPa, double poissonRatio)
+{
+  if (!std::isfinite(youngsModulusMPa) || !(youngsModulusMPa > 0.0))
+    return "Young's modulus E must be a positive number (tissue has some stiffness)";
+  if (!std::isfinite(poissonRatio) || !(poissonRatio > 0.0) || !(poissonRatio < 0.5))
+    return "Poisson's ratio \u03bd must lie strictly between 0 and 0.5 (0.5 is incompressible, which this "
+           "displacement model cannot solve; tissue is usually 0.45\u20130.49)";
+  return {};
+}
+
+PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                            const SimulationOptions& options)
+{
+  return runPlanPipeline(skin, bone, plan, options, false);
+}
+
+PlanPrediction meshPlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                        const SimulationOptions& options)
+{
+  return runPlanPipeline(skin, bone, plan, options, true);
 }
 
 } // namespace caps::incision

@@ -5,7 +5,9 @@
 /// mesh → sutures closed by a linear static solve → the displaced skin.
 
 #include <array>
+#include <functional>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,11 @@ namespace caps::incision {
 /// fewer layers the first ones are used; with more, the last repeats.
 /// See PlanSimulation.cpp for the values and where they come from.
 fem::MaterialTable defaultFacialTissueMaterials(int layerCount = 3);
+
+/// What is wrong with a material a user typed (E in MPa); empty when it is
+/// usable: E > 0 and finite, 0 < ν < 0.5 (ν = 0.5 is incompressible, which
+/// a displacement formulation cannot solve).
+std::string materialProblem(double youngsModulusMPa, double poissonRatio);
 
 /// Options of simulatePlan(). Lengths in mm.
 struct SimulationOptions
@@ -69,6 +76,21 @@ struct SimulationOptions
   fem::MaterialTable materials;
   /// Threads of the assembly.
   int threads = 1;
+  /// Called by simulatePlan() between its phases (surface mesh, continuum
+  /// mesh, assembly and factorisation, solve, closure forces) with the
+  /// fraction of the work done and the phase starting; returning false stops
+  /// it with SimulationCancelled. A phase once started runs to its end (the
+  /// assembly and factorisation are one call of fem::LinearStaticAnalysis).
+  /// Empty: not called.
+  std::function<bool(double fraction, const std::string& phase)> progress;
+};
+
+/// Thrown by simulatePlan() and meshPlan() when SimulationOptions::progress
+/// asked them to stop.
+class SimulationCancelled : public std::runtime_error
+{
+public:
+  SimulationCancelled();
 };
 
 /// The skin surface after the operation, for a display: one entry per
@@ -200,6 +222,17 @@ struct PlanPrediction
 /// (the message says why).
 PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                             const SimulationOptions& options = {});
+
+/// @brief The meshes simulatePlan() would solve, without solving: the
+/// fields up to the continuum mesh (surface, hole, sutures,
+/// refinedVertexOf, underminedVertices, continuum, excisedTissue,
+/// excisedVolume, layerCount, cutLayers, times.mesh) are what simulatePlan()
+/// sets with the same arguments; the rest stay empty. For the size of a
+/// model before it is run: continuum.mesh.nodeCount(), elements,
+/// continuum.mesh.dofCount() (= simulatePlan()'s dofCount).
+/// @throws as simulatePlan() does for its checks and meshing.
+PlanPrediction meshPlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                        const SimulationOptions& options = {});
 
 /// @name Pieces of the pipeline, exposed for tests
 ///@{

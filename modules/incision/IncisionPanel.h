@@ -1,0 +1,139 @@
+#pragma once
+/// @file IncisionPanel.h
+/// @brief The incision editor (issue 6 item 4): a procedure placed by a
+/// click on the 3D skin, drawn on it, measured on it, and edited with undo.
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+
+#include <QWidget>
+#include <nlohmann/json.hpp>
+
+#include "scene/Node.h"
+
+class QComboBox;
+class QDoubleSpinBox;
+class QFormLayout;
+class QGroupBox;
+class QLabel;
+class QListWidget;
+class QPushButton;
+class QTableWidget;
+
+namespace caps {
+
+class ModuleHost;
+class IncisionLogic;
+class PlanNode;
+class RangeMapNode;
+struct SurfacePick;
+
+namespace seg {
+class RangeMap;
+}
+namespace incision {
+class IncisionPlan;
+struct PlanRecipe;
+class ProcedureTemplate;
+} // namespace incision
+
+/// @class IncisionPanel
+/// @brief Procedure and parameters, "Place on the skin", the scene's plans,
+/// their live measurements on the skin, and edits recorded on the scene's
+/// undo stack. Each plan the panel draws has a Surface node
+/// "<plan name> incision" of lines (PlanLines.h) kept in step with it.
+class IncisionPanel : public QWidget
+{
+  Q_OBJECT
+public:
+  IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* parent = nullptr);
+  ~IncisionPanel() override;
+
+private:
+  /// @name Building the form
+  ///@{
+  void fillProcedures();
+  /// The parameter form of a procedure, with these values (API units) or its defaults.
+  void buildForm(const incision::ProcedureTemplate& procedure, const std::map<std::string, double>* values);
+  /// The form's values in API units, defaults exactly where untouched.
+  std::map<std::string, double> formValues(const incision::ProcedureTemplate& procedure) const;
+  const incision::ProcedureTemplate* currentProcedure();
+  ///@}
+
+  /// @name Placing and editing
+  ///@{
+  void armPlace();
+  void placeAt(const SurfacePick& pick);
+  void armMove();
+  void moveTo(const NodeId& planId, const SurfacePick& pick);
+  void parameterChanged(const std::string& name);
+  /// Applies a recipe operation to plan @a planId and records it as one undoable edit.
+  bool editPlan(const NodeId& planId, const std::string& label,
+                const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit);
+  void undo();
+  void redo();
+  void deletePlan();
+  ///@}
+
+  /// @name The scene
+  ///@{
+  /// The newest skin range map; nullptr when there is none.
+  const RangeMapNode* newestSkin() const;
+  /// The skin map a plan is drawn on (its own, else the newest).
+  const RangeMapNode* skinOf(const PlanNode& plan) const;
+  /// The map of a node, converted once and kept until the node changes.
+  const seg::RangeMap& rangeMap(const RangeMapNode& node);
+  /// The CT's content hash for a plan on this skin map, as `caps plan` records it; "" when unknown.
+  std::string ctHash(const NodeId& skinId);
+  PlanNode* selectedPlan() const;
+  /// Draws (or redraws) the lines of a plan; @a create makes the node when there is none.
+  void drawLines(const NodeId& planId, bool create);
+  void sceneChanged(int event, const Node& node);
+  void scheduleRefresh();
+  void refresh();
+  ///@}
+
+  /// @name What the panel shows
+  ///@{
+  void refreshPlans();
+  void planSelected();
+  void showSelection();
+  void fillMeasurements(const PlanNode* plan);
+  void refreshButtons();
+  /// Whether a plan has prediction nodes made for another state of it.
+  bool predictionOutOfDate(const PlanNode& plan) const;
+  ///@}
+
+  IncisionLogic& logic_;
+  ModuleHost& host_;
+  int observer_ = -1;
+  bool writing_ = false;       ///< our own edits in progress: their events are not ours to redraw
+  bool refreshPending_ = false;
+  std::set<NodeId> redraw_;    ///< plans whose lines follow a change made elsewhere (undo)
+  std::set<NodeId> dropLines_; ///< line nodes of plans removed
+  std::set<NodeId> dirtyMaps_;
+  std::map<NodeId, std::shared_ptr<seg::RangeMap>> maps_;
+  std::map<NodeId, std::string> hashes_; ///< volume id → content hash
+  /// Plan state (toJson without its name) when its prediction was made, or first seen with one.
+  std::map<NodeId, nlohmann::json> predicted_;
+
+  QComboBox* procedure_ = nullptr;
+  QGroupBox* formBox_ = nullptr;
+  QFormLayout* form_ = nullptr;
+  std::map<std::string, QDoubleSpinBox*> spins_;
+  std::string formProcedure_; ///< the procedure the form is of
+  QPushButton* place_ = nullptr;
+  QListWidget* plans_ = nullptr;
+  QPushButton* move_ = nullptr;
+  QPushButton* undo_ = nullptr;
+  QPushButton* redo_ = nullptr;
+  QPushButton* delete_ = nullptr;
+  QLabel* predictionStatus_ = nullptr;
+  QTableWidget* table_ = nullptr;
+};
+
+} // namespace caps
