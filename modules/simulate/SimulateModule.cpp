@@ -1,8 +1,9 @@
-// The Simulate module plugin: metadata and factories only (no panel yet).
+// The Simulate module plugin: metadata and factories only.
 
 #include "modules/core/Module.h"
 #include "modules/simulate/SimulateCommands.h"
 #include "modules/simulate/SimulateLogic.h"
+#include "modules/simulate/SimulatePanel.h"
 
 namespace caps {
 namespace {
@@ -20,6 +21,10 @@ public:
   std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const override
   {
     return std::make_unique<SimulateLogic>(scene);
+  }
+  QWidget* createPanel(ModuleLogic& logic, ModuleHost& host, QWidget* parent) const override
+  {
+    return new SimulatePanel(static_cast<SimulateLogic&>(logic), host, parent);
   }
   std::vector<ModuleCommand> commands() const override { return simulateCommands(); }
 };

@@ -1,0 +1,503 @@
+#include "modules/simulate/SimulatePanel.h"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QFontDatabase>
+#include <QFormLayout>
+#include <QGroupBox>
+#include <QHeaderView>
+#include <QLabel>
+#include <QPointer>
+#include <QPushButton>
+#include <QScrollArea>
+#include <QSpinBox>
+#include <QTableWidget>
+#include <QThread>
+#include <QTimer>
+#include <QVBoxLayout>
+
+#include "modules/simulate/PlanSimulationRun.h"
+#include "modules/simulate/SimulateLogic.h"
+#include "scene/PlanNode.h"
+#include "scene/Scene.h"
+#include "scene/SurfaceNode.h"
+
+namespace caps {
+namespace {
+
+constexpr int kLayerColumn = 0, kModulusColumn = 1, kPoissonColumn = 2;
+
+QString numberText(double value, int decimals)
+{
+  return QString::number(value, 'f', decimals);
+}
+
+} // namespace
+
+SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* parent)
+  : QWidget(parent), logic_(logic), host_(host)
+{
+  const incision::SimulationOptions defaults;
+  auto* outer = new QVBoxLayout(this);
+  outer->setContentsMargins(0, 0, 0, 0);
+  auto* scroll = new QScrollArea(this);
+  scroll->setWidgetResizable(true);
+  scroll->setFrameShape(QFrame::NoFrame);
+  outer->addWidget(scroll);
+  auto* content = new QWidget(scroll);
+  scroll->setWidget(content);
+  auto* layout = new QVBoxLayout(content);
+
+  // 1. The plan.
+  auto* planBox = new QGroupBox(tr("Plan"), content);
+  auto* planLayout = new QVBoxLayout(planBox);
+  plan_ = new QComboBox(planBox);
+  plan_->setObjectName("simulate.plan");
+  plan_->setToolTip(tr("The plan to predict: the scene's plans (Incision module)."));
+  planLayout->addWidget(plan_);
+  layout->addWidget(planBox);
+
+  // 2. Materials.
+  auto* materialBox = new QGroupBox(tr("Tissue materials (linear elastic)"), content);
+  auto* materialLayout = new QVBoxLayout(materialBox);
+  preset_ = new QComboBox(materialBox);
+  preset_->setObjectName("simulate.preset");
+  preset_->addItem(QString::fromUtf8(simulate::kFacialTissuePreset));
+  preset_->addItem(tr("Custom (edited below)"));
+  preset_->setToolTip(QString::fromStdString(simulate::facialTissueSource()));
+  materialLayout->addWidget(preset_);
+  source_ = new QLabel(tr("Assumed values from published finite element models of the face "
+                          "(Chabanas 2003, Keeve 1998, Barbarino 2009, Mazza 2011), not measured on this "
+                          "patient: hover for details."),
+                       materialBox);
+  source_->setWordWrap(true);
+  source_->setToolTip(preset_->toolTip());
+  source_->setStyleSheet("color: #555;");
+  materialLayout->addWidget(source_);
+  materials_ = new QTableWidget(0, 3, materialBox);
+  materials_->setObjectName("simulate.materials");
+  materials_->setHorizontalHeaderLabels({tr("Layer"), tr("E (kPa)"), QString::fromUtf8("Poisson's \u03bd")});
+  materials_->horizontalHeader()->setSectionResizeMode(kLayerColumn, QHeaderView::Stretch);
+  materials_->horizontalHeader()->setSectionResizeMode(kModulusColumn, QHeaderView::ResizeToContents);
+  materials_->horizontalHeader()->setSectionResizeMode(kPoissonColumn, QHeaderView::ResizeToContents);
+  materials_->verticalHeader()->hide();
+  materials_->setToolTip(tr("Young's modulus E in kPa (1 MPa = 1000 kPa) and Poisson's ratio \u03bd of each "
+                            "layer, skin first. Double-click a value to change it."));
+  materialLayout->addWidget(materials_);
+  layout->addWidget(materialBox);
+
+  // 3. The mesh.
+  auto* meshBox = new QGroupBox(tr("Mesh (thesis \u00a74.5)"), content);
+  auto* form = new QFormLayout(meshBox);
+  layers_ = new QSpinBox(meshBox);
+  layers_->setObjectName("simulate.layers");
+  layers_->setRange(1, 8);
+  layers_->setToolTip(tr("Element layers from the skin to the bone (3: skin, fat, muscle)."));
+  form->addRow(tr("Layers"), layers_);
+  regionRadius_ = new QDoubleSpinBox(meshBox);
+  regionRadius_->setObjectName("simulate.regionRadius");
+  regionRadius_->setRange(5.0, 100.0);
+  regionRadius_->setDecimals(1);
+  regionRadius_->setSuffix(" mm");
+  regionRadius_->setToolTip(tr("How far from the wound the model reaches (its rim is free)."));
+  form->addRow(tr("Region radius"), regionRadius_);
+  elementSize_ = new QDoubleSpinBox(meshBox);
+  elementSize_->setObjectName("simulate.elementSize");
+  elementSize_->setRange(0.5, 10.0);
+  elementSize_->setDecimals(2);
+  elementSize_->setSingleStep(0.5);
+  elementSize_->setSuffix(" mm");
+  elementSize_->setToolTip(tr("Element size at the wound; larger is faster and coarser."));
+  form->addRow(tr("Element size"), elementSize_);
+  cutDepth_ = new QSpinBox(meshBox);
+  cutDepth_->setObjectName("simulate.cutDepth");
+  cutDepth_->setSpecialValueText(tr("full thickness"));
+  cutDepth_->setSuffix(tr(" layer(s)"));
+  cutDepth_->setToolTip(tr("Layers the incision goes through from the skin (\u00a73.2.2); the tissue below stays "
+                           "whole. 0: through every layer."));
+  form->addRow(tr("Cut depth"), cutDepth_);
+  undermining_ = new QDoubleSpinBox(meshBox);
+  undermining_->setObjectName("simulate.undermining");
+  undermining_->setRange(0.0, 50.0);
+  undermining_->setDecimals(1);
+  undermining_->setSuffix(" mm");
+  undermining_->setSpecialValueText(tr("none"));
+  undermining_->setToolTip(tr("Skin freed from the tissue beneath within this distance of the sutured edges "
+                              "(\u00a73.2.4)."));
+  form->addRow(tr("Undermining"), undermining_);
+  estimate_ = new QLabel(meshBox);
+  estimate_->setObjectName("simulate.estimate");
+  estimate_->setWordWrap(true);
+  form->addRow(estimate_);
+  layout->addWidget(meshBox);
+
+  // 4. Run, 5. results, 6. the mesh.
+  run_ = new QPushButton(tr("Run simulation (F5)"), content);
+  run_->setObjectName("simulate.run");
+  run_->setShortcut(QKeySequence(Qt::Key_F5)); // a button's shortcut acts only while it is shown
+  run_->setToolTip(tr("Predict the closure of the plan in the background (Cancel in the status bar)."));
+  layout->addWidget(run_);
+  showMesh_ = new QCheckBox(tr("Show the model: element edges, fixed nodes (red), sutures (green)"), content);
+  showMesh_->setObjectName("simulate.showMesh");
+  showMesh_->setToolTip(tr("The finite element model before the closure, drawn as engineering drawings do "
+                           "(\u00a73.3.1): the skin's element edges (blue), the nodes the bone holds (red "
+                           "points), each suture from node to node (green)."));
+  layout->addWidget(showMesh_);
+  summary_ = new QLabel(content);
+  summary_->setObjectName("simulate.summary");
+  summary_->setWordWrap(true);
+  summary_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  summary_->setText(tr("Run a plan to see its closure force and skin stress here."));
+  layout->addWidget(summary_);
+  layout->addStretch(1);
+
+  estimateTimer_ = new QTimer(this);
+  estimateTimer_->setSingleShot(true);
+  estimateTimer_->setInterval(300);
+  connect(estimateTimer_, &QTimer::timeout, this, &SimulatePanel::estimate);
+
+  // Defaults, then the first plan's own values.
+  layers_->setValue(defaults.layerCount);
+  cutDepth_->setRange(0, defaults.layerCount);
+  regionRadius_->setValue(defaults.regionRadius);
+  elementSize_->setValue(defaults.elementSize);
+  undermining_->setValue(defaults.underminingWidth);
+  resizeMaterials(defaults.layerCount);
+
+  connect(plan_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this]() {
+    if (loading_)
+      return;
+    loadPlanOptions();
+    applyShowMesh();
+  });
+  connect(preset_, qOverload<int>(&QComboBox::activated), this, [this](int index) {
+    if (index == 0)
+      fillMaterialsFromPreset();
+  });
+  connect(materials_, &QTableWidget::itemChanged, this, &SimulatePanel::materialEdited);
+  connect(layers_, qOverload<int>(&QSpinBox::valueChanged), this, [this](int layers) {
+    cutDepth_->setMaximum(layers);
+    resizeMaterials(layers);
+    scheduleEstimate();
+  });
+  for (QDoubleSpinBox* box : {regionRadius_, elementSize_, undermining_})
+    connect(box, qOverload<double>(&QDoubleSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
+  connect(cutDepth_, qOverload<int>(&QSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
+  connect(run_, &QPushButton::clicked, this, &SimulatePanel::run);
+  connect(showMesh_, &QCheckBox::toggled, this, &SimulatePanel::applyShowMesh);
+
+  // Plans come and go with the scene; the combo follows (once per burst of events).
+  observer_ = logic_.scene().addObserver([this](SceneEvent, const Node& node) {
+    if (node.type() != NodeType::Plan && node.type() != NodeType::RangeMap && node.type() != NodeType::Surface)
+      return;
+    if (updatePending_)
+      return;
+    updatePending_ = true;
+    QTimer::singleShot(0, this, [this]() {
+      updatePending_ = false;
+      updatePlans();
+    });
+  });
+  updatePlans();
+}
+
+SimulatePanel::~SimulatePanel()
+{
+  logic_.scene().removeObserver(observer_);
+  // The estimate's thread posts to this panel: let it end first (meshing only, short).
+  if (estimateThread_)
+  {
+    estimateThread_->wait();
+    delete estimateThread_;
+  }
+}
+
+NodeId SimulatePanel::currentPlan() const
+{
+  return plan_->currentData().toString().toStdString();
+}
+
+void SimulatePanel::updatePlans()
+{
+  const NodeId chosen = currentPlan();
+  const QString chosenName = plan_->currentText();
+  loading_ = true;
+  plan_->clear();
+  int keep = -1, sameName = -1;
+  for (Node* n : logic_.scene().nodesOfType(NodeType::Plan))
+  {
+    const QString name = QString::fromStdString(n->name());
+    plan_->addItem(name, QString::fromStdString(n->id()));
+    if (n->id() == chosen)
+      keep = plan_->count() - 1;
+    if (sameName < 0 && name == chosenName)
+      sameName = plan_->count() - 1;
+  }
+  // A run replaces the plan node by one of the same name: stay on it.
+  const int index = keep >= 0 ? keep : (sameName >= 0 ? sameName : (plan_->count() > 0 ? 0 : -1));
+  plan_->setCurrentIndex(index);
+  loading_ = false;
+  run_->setEnabled(plan_->count() > 0);
+  if (plan_->count() == 0)
+    estimate_->setText(tr("No plan in the scene: place one in the Incision module."));
+  if (currentPlan() != chosen)
+  {
+    // A new plan chosen: its own values, unless it is the same plan re-made by a run.
+    if (keep < 0 && sameName < 0)
+      loadPlanOptions();
+    else
+      scheduleEstimate();
+  }
+  showMesh_->setEnabled(plan_->count() > 0);
+  applyShowMesh();
+}
+
+void SimulatePanel::loadPlanOptions()
+{
+  const auto* node = logic_.scene().nodeAs<PlanNode>(currentPlan());
+  if (!node)
+    return;
+  const incision::SimulationOptions o = IncisionLogic::simulationOptions(*node);
+  loading_ = true;
+  layers_->setValue(o.layerCount);
+  cutDepth_->setMaximum(o.layerCount);
+  cutDepth_->setValue(o.cutLayers);
+  regionRadius_->setValue(o.regionRadius);
+  elementSize_->setValue(o.elementSize);
+  undermining_->setValue(o.underminingWidth);
+  loading_ = false;
+  if (o.materials.empty())
+    fillMaterialsFromPreset();
+  else
+  {
+    const QSignalBlocker block(materials_);
+    materials_->setRowCount(0);
+    resizeMaterials(o.layerCount);
+    for (int layer = 0; layer < o.layerCount; ++layer)
+    {
+      materials_->item(layer, kModulusColumn)->setText(numberText(o.materials.at(layer).youngsModulus * 1e3, 2));
+      materials_->item(layer, kPoissonColumn)->setText(numberText(o.materials.at(layer).poissonRatio, 3));
+    }
+    bool preset = true;
+    for (const auto& [layer, m] : incision::defaultFacialTissueMaterials(o.layerCount))
+      preset = preset && o.materials.count(layer) && o.materials.at(layer).youngsModulus == m.youngsModulus &&
+               o.materials.at(layer).poissonRatio == m.poissonRatio;
+    preset_->setCurrentIndex(preset ? 0 : 1);
+  }
+  scheduleEstimate();
+}
+
+void SimulatePanel::resizeMaterials(int layers)
+{
+  const QSignalBlocker block(materials_);
+  const fem::MaterialTable preset = incision::defaultFacialTissueMaterials(layers);
+  const int old = materials_->rowCount();
+  materials_->setRowCount(layers);
+  for (int layer = old; layer < layers; ++layer)
+  {
+    auto* name = new QTableWidgetItem(QString::fromStdString(simulate::layerName(layer)));
+    name->setFlags(Qt::ItemIsEnabled);
+    materials_->setItem(layer, kLayerColumn, name);
+    materials_->setItem(layer, kModulusColumn,
+                        new QTableWidgetItem(numberText(preset.at(layer).youngsModulus * 1e3, 2)));
+    materials_->setItem(layer, kPoissonColumn, new QTableWidgetItem(numberText(preset.at(layer).poissonRatio, 3)));
+  }
+  // Tall enough for every row without a scroll bar.
+  int height = materials_->horizontalHeader()->sizeHint().height() + 2 * materials_->frameWidth();
+  for (int row = 0; row < layers; ++row)
+    height += materials_->rowHeight(row);
+  materials_->setFixedHeight(height);
+}
+
+void SimulatePanel::fillMaterialsFromPreset()
+{
+  {
+    const QSignalBlocker block(materials_);
+    materials_->setRowCount(0);
+  }
+  resizeMaterials(layers_->value());
+  const QSignalBlocker block(preset_);
+  preset_->setCurrentIndex(0);
+}
+
+void SimulatePanel::materialEdited(QTableWidgetItem* item)
+{
+  if (!item || item->column() == kLayerColumn)
+    return;
+  {
+    const QSignalBlocker block(preset_);
+    preset_->setCurrentIndex(1);
+  }
+  const int row = item->row();
+  bool okE = false, okNu = false;
+  const double e = materials_->item(row, kModulusColumn)->text().trimmed().toDouble(&okE);
+  const double nu = materials_->item(row, kPoissonColumn)->text().trimmed().toDouble(&okNu);
+  std::string problem;
+  if (!okE || !okNu)
+    problem = "type a number";
+  else
+    problem = incision::materialProblem(e / 1e3, nu);
+  const QSignalBlocker block(materials_);
+  item->setBackground(problem.empty() ? QBrush() : QBrush(QColor(255, 200, 200)));
+  if (!problem.empty())
+    host_.showError("Material of " + simulate::layerName(row),
+                    "\"" + item->text().toStdString() + "\" is refused: " + problem +
+                      ". Correct it, or choose the preset again; nothing runs until it is valid.");
+}
+
+incision::SimulationOptions SimulatePanel::options(std::string* problem) const
+{
+  incision::SimulationOptions o;
+  o.layerCount = layers_->value();
+  o.cutLayers = cutDepth_->value();
+  o.regionRadius = regionRadius_->value();
+  o.elementSize = elementSize_->value();
+  o.underminingWidth = undermining_->value();
+  o.threads = std::max(1, std::min(2, QThread::idealThreadCount()));
+  for (int layer = 0; layer < materials_->rowCount(); ++layer)
+  {
+    bool okE = false, okNu = false;
+    const double e = materials_->item(layer, kModulusColumn)->text().trimmed().toDouble(&okE) / 1e3;
+    const double nu = materials_->item(layer, kPoissonColumn)->text().trimmed().toDouble(&okNu);
+    const std::string wrong = okE && okNu ? incision::materialProblem(e, nu) : std::string("not a number");
+    if (!wrong.empty())
+    {
+      if (problem && problem->empty())
+        *problem = "the material of " + simulate::layerName(layer) + " is refused: " + wrong;
+      continue;
+    }
+    o.materials[layer] = fem::LinearElasticMaterial{e, nu, 1.0e-9};
+  }
+  return o;
+}
+
+void SimulatePanel::scheduleEstimate()
+{
+  if (loading_)
+    return;
+  ++estimateGeneration_;
+  estimate_->setText(tr("Model size: estimating..."));
+  estimateTimer_->start();
+}
+
+void SimulatePanel::estimate()
+{
+  if (estimateThread_)
+  {
+    estimateAgain_ = true; // one at a time; the newest parameters next
+    return;
+  }
+  if (plan_->count() == 0)
+    return;
+  std::string problem;
+  incision::SimulationOptions o = options(&problem);
+  auto input = std::make_shared<simulate::PlanRunInput>();
+  try
+  {
+    *input = simulate::preparePlanRun(logic_.scene(), currentPlan(), o);
+  }
+  catch (const std::exception& e)
+  {
+    estimate_->setText(tr("Cannot mesh this plan: %1").arg(QString::fromStdString(e.what())));
+    return;
+  }
+  const int generation = estimateGeneration_;
+  estimateThread_ = QThread::create([this, input, generation]() {
+    QString text;
+    try
+    {
+      const simulate::ModelSize size = simulate::estimateModel(*input);
+      text = tr("Model: %1 nodes, %2 elements, %3 DOF (meshed in %4 s)")
+               .arg(size.nodes)
+               .arg(size.elements)
+               .arg(size.dofs)
+               .arg(size.seconds, 0, 'f', 2);
+    }
+    catch (const std::exception& e)
+    {
+      text = tr("Cannot mesh this plan: %1").arg(QString::fromStdString(e.what()));
+    }
+    QMetaObject::invokeMethod(this, [this, text, generation]() {
+      estimateThread_->wait();
+      estimateThread_->deleteLater();
+      estimateThread_ = nullptr;
+      if (generation == estimateGeneration_)
+        estimate_->setText(text);
+      if (estimateAgain_ || generation != estimateGeneration_)
+      {
+        estimateAgain_ = false;
+        estimate();
+      }
+    }, Qt::QueuedConnection);
+  });
+  estimateThread_->start();
+}
+
+void SimulatePanel::run()
+{
+  if (plan_->count() == 0)
+  {
+    host_.showError("Simulate", "There is no plan to simulate: place one in the Incision module first.");
+    return;
+  }
+  std::string problem;
+  const incision::SimulationOptions o = options(&problem);
+  if (!problem.empty())
+  {
+    host_.showError("Simulate", "Not run: " + problem + ". Correct the value in the material table.");
+    return;
+  }
+  auto input = std::make_shared<simulate::PlanRunInput>();
+  try
+  {
+    *input = simulate::preparePlanRun(logic_.scene(), currentPlan(), o);
+  }
+  catch (const std::exception& e)
+  {
+    host_.showError("Simulate", e.what());
+    return;
+  }
+  Scene& scene = logic_.scene();
+  QPointer<SimulatePanel> panel(this);
+  ModuleHost& host = host_;
+  host_.runTask("Simulating " + input->name, [input, &scene, panel, &host](const TaskProgress& progress) {
+    const auto start = std::chrono::steady_clock::now();
+    auto result = std::make_shared<simulate::PlanRunResult>(simulate::runPlan(*input, progress));
+    const double workSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return std::function<void()>([input, result, &scene, panel, &host, workSeconds]() {
+      const bool show = panel && panel->showMesh_->isChecked();
+      simulate::addPlanRun(scene, *input, *result, show);
+      if (panel)
+      {
+        panel->summary_->setText(QString::fromStdString(input->name + "\n" + simulate::summaryText(*result)));
+      }
+      std::ostringstream status;
+      status << "Prediction of '" << input->name << "' done (" << std::fixed << std::setprecision(1) << workSeconds
+             << " s of computation)";
+      host.showStatus(status.str());
+    });
+  });
+}
+
+void SimulatePanel::applyShowMesh()
+{
+  const auto* plan = logic_.scene().nodeAs<PlanNode>(currentPlan());
+  if (!plan)
+    return;
+  const std::string name = plan->name() + " mesh";
+  for (Node* n : logic_.scene().nodesOfType(NodeType::Surface))
+    if (n->name() == name)
+    {
+      auto* surface = static_cast<SurfaceNode*>(n);
+      if (surface->visible() != showMesh_->isChecked())
+        surface->setVisible(showMesh_->isChecked());
+    }
+}
+
+} // namespace caps

@@ -1,0 +1,85 @@
+#pragma once
+/// @file SimulatePanel.h
+/// @brief The Simulate module's panel (issue 6 item 5): a planned incision
+/// turned into a prediction. Choose a plan, the tissue materials and the
+/// mesh; see the model's size before running; Run (F5) in the background
+/// with Cancel; read the closure force and the skin stress near the wound;
+/// show the model's mesh. The work is in PlanSimulationRun.h.
+
+#include <QWidget>
+
+#include "modules/incision/PlanSimulation.h"
+#include "scene/Node.h"
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QPushButton;
+class QSpinBox;
+class QTableWidget;
+class QTableWidgetItem;
+class QThread;
+class QTimer;
+
+namespace caps {
+
+class ModuleHost;
+class SimulateLogic;
+
+class SimulatePanel : public QWidget
+{
+  Q_OBJECT
+public:
+  SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* parent = nullptr);
+  ~SimulatePanel() override;
+
+private:
+  /// The plan combo from the scene's Plan nodes, keeping the choice.
+  void updatePlans();
+  /// The chosen plan's recorded options into the widgets.
+  void loadPlanOptions();
+  /// The material table's rows for the layer count (new rows from the preset).
+  void resizeMaterials(int layers);
+  /// Every row from the preset.
+  void fillMaterialsFromPreset();
+  /// Checks an edited cell; refuses a bad value with a message.
+  void materialEdited(QTableWidgetItem* item);
+  /// The options the widgets give; materials only when all are valid
+  /// (@a problem says what is wrong otherwise).
+  incision::SimulationOptions options(std::string* problem) const;
+  /// Recomputes the estimate after a short pause (parameters change in bursts).
+  void scheduleEstimate();
+  void estimate();
+  void run();
+  /// The chosen plan's "<name> mesh" node shown or hidden as the check box says.
+  void applyShowMesh();
+  NodeId currentPlan() const;
+
+  SimulateLogic& logic_;
+  ModuleHost& host_;
+  int observer_ = -1;
+  bool updatePending_ = false;
+  bool loading_ = false;
+
+  QComboBox* plan_ = nullptr;
+  QComboBox* preset_ = nullptr;
+  QLabel* source_ = nullptr;
+  QTableWidget* materials_ = nullptr;
+  QSpinBox* layers_ = nullptr;
+  QDoubleSpinBox* regionRadius_ = nullptr;
+  QDoubleSpinBox* elementSize_ = nullptr;
+  QSpinBox* cutDepth_ = nullptr;
+  QDoubleSpinBox* undermining_ = nullptr;
+  QLabel* estimate_ = nullptr;
+  QPushButton* run_ = nullptr;
+  QLabel* summary_ = nullptr;
+  QCheckBox* showMesh_ = nullptr;
+
+  QTimer* estimateTimer_ = nullptr;
+  QThread* estimateThread_ = nullptr;
+  bool estimateAgain_ = false;
+  int estimateGeneration_ = 0;
+};
+
+} // namespace caps
