@@ -1,0 +1,377 @@
+// The incision editor (issue 6 item 4) driven as a surgeon drives it: a
+// Z-plasty placed by a click on the demo scene's skin, its lines on the
+// skin, its measurements against the logic's, a parameter changed, undone
+// and redone, a predicted plan edited, the plan deleted.
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+
+#include <QDoubleSpinBox>
+#include <QLabel>
+#include <QListWidget>
+#include <QPushButton>
+#include <QTableWidget>
+
+#include <vtkCellArray.h>
+#include <vtkPolyData.h>
+
+#include "Workstation.h"
+#include "modules/incision/IncisionLogic.h"
+#include "modules/incision/PlanLines.h"
+#include "modules/rangemap/RangeMapLogic.h"
+#include "report/DemoScene.h"
+#include "scene/PlanNode.h"
+#include "scene/RangeMapNode.h"
+#include "scene/SurfaceNode.h"
+
+namespace caps {
+namespace {
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+const RangeMapNode* newestSkin(Scene& scene)
+{
+  const RangeMapNode* skin = nullptr;
+  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
+    if (static_cast<RangeMapNode*>(n)->role() == "skin")
+      skin = static_cast<RangeMapNode*>(n);
+  return skin;
+}
+
+PlanNode* planNamed(Scene& scene, const std::string& name)
+{
+  for (Node* n : scene.nodesOfType(NodeType::Plan))
+    if (n->name() == name)
+      return static_cast<PlanNode*>(n);
+  return nullptr;
+}
+
+SurfaceNode* surfaceNamed(Scene& scene, const std::string& name)
+{
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name() == name)
+      return static_cast<SurfaceNode*>(n);
+  return nullptr;
+}
+
+/// The table's value in the row whose first cell reads @a what; NaN when none.
+double tableValue(QTableWidget* table, const QString& what)
+{
+  for (int r = 0; r < table->rowCount(); ++r)
+    if (table->item(r, 0) && table->item(r, 0)->text() == what && table->item(r, 1))
+      return table->item(r, 1)->text().toDouble();
+  return std::nan("");
+}
+
+/// The world position of the cut points' vertices of a lines polydata, in order.
+std::vector<Eigen::Vector3d> vertexPositions(vtkPolyData* lines)
+{
+  std::vector<Eigen::Vector3d> points;
+  vtkCellArray* verts = lines->GetVerts();
+  verts->InitTraversal();
+  vtkIdType n = 0;
+  const vtkIdType* ids = nullptr;
+  while (verts->GetNextCell(n, ids))
+  {
+    double p[3];
+    lines->GetPoint(ids[0], p);
+    points.emplace_back(p[0], p[1], p[2]);
+  }
+  return points;
+}
+
+/// Checks the plan's lines against the plan and the skin: every point lift
+/// mm outside the skin, one vertex per cut point at its lifted skin point.
+void expectLinesOnSkin(vtkPolyData* lines, const incision::IncisionPlan& plan, const seg::RangeMap& skin)
+{
+  ASSERT_NE(lines, nullptr);
+  ASSERT_GT(lines->GetNumberOfLines(), 0);
+  double worst = 0.0;
+  for (vtkIdType i = 0; i < lines->GetNumberOfPoints(); ++i)
+  {
+    double p[3];
+    lines->GetPoint(i, p);
+    const seg::CylindricalPoint c = skin.frame().toCylindrical(Eigen::Vector3d(p[0], p[1], p[2]));
+    worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - incision::kIncisionLineLift));
+  }
+  EXPECT_LT(worst, 1.0) << "a line point is not lifted 0.5 mm off the skin map";
+  const std::vector<Eigen::Vector3d> vertices = vertexPositions(lines);
+  const incision::SkinChart chart = plan.chart(skin);
+  const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
+  ASSERT_EQ(vertices.size(), path.size());
+  for (std::size_t i = 0; i < path.size(); ++i)
+    EXPECT_NEAR((vertices[i] - chart.lift(path[i])).norm(), incision::kIncisionLineLift, 0.05) << "cut point " << i;
+}
+
+void click(QPushButton* button)
+{
+  ASSERT_NE(button, nullptr);
+  ASSERT_TRUE(button->isEnabled()) << button->objectName().toStdString();
+  QTest::mouseClick(button, Qt::LeftButton);
+}
+
+void selectPlan(QListWidget* list, const std::string& name)
+{
+  const auto items = list->findItems(QString::fromStdString(name), Qt::MatchExactly);
+  ASSERT_EQ(items.size(), 1) << name;
+  list->setCurrentItem(items.front());
+  items.front()->setSelected(true);
+}
+
+} // namespace
+
+TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
+{
+  test::Workstation workstation;
+  Scene& scene = workstation.scene();
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
+  const RangeMapNode* skinNode = newestSkin(scene);
+  ASSERT_NE(skinNode, nullptr) << "the demo scene has no skin range map";
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);
+  PlanNode* demoPlan = planNamed(scene, "Z-plasty 1");
+  ASSERT_NE(demoPlan, nullptr);
+
+  // The skin point of the demo's Z-plasty: θ = -40°, z = -47 mm.
+  const double theta = -40.0 * kDegree, z = -47.0;
+  const double r = skin.sample(theta, z);
+  ASSERT_TRUE(std::isfinite(r));
+  const Eigen::Vector3d target = skin.frame().toWorld(r, theta, z);
+  // Looked at from straight outside, so the point is in view.
+  SnapshotNode::Camera camera;
+  const Eigen::Vector3d eye = target + 180.0 * skin.frame().radialDirection(theta);
+  camera.position = {eye.x(), eye.y(), eye.z()};
+  camera.focalPoint = {target.x(), target.y(), target.z()};
+  const Eigen::Vector3d up = skin.frame().direction();
+  camera.viewUp = {up.x(), up.y(), up.z()};
+  workstation.window().setThreeDViewCamera(camera);
+  // The demo's predicted skin covers the cheek where the new plan goes: hidden,
+  // as a surgeon hides it to draw there (the click then lands on the skin).
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
+      static_cast<SurfaceNode*>(n)->setVisible(false);
+
+  workstation.selectModule("incision");
+  auto* procedure = workstation.widget<QComboBox>("incision.procedure");
+  ASSERT_NE(procedure, nullptr);
+  const int zIndex = procedure->findData("z-plasty");
+  ASSERT_GE(zIndex, 0);
+  procedure->setCurrentIndex(zIndex);
+  workstation.settle(100);
+  auto* limbAngle = workstation.widget<QDoubleSpinBox>("incision.param.limb_angle");
+  ASSERT_NE(limbAngle, nullptr);
+  EXPECT_NEAR(limbAngle->value(), 60.0, 1e-9);
+  EXPECT_EQ(limbAngle->suffix().trimmed().toStdString(), "°");
+  EXPECT_NEAR(limbAngle->minimum(), 30.0, 1e-9);
+  EXPECT_NEAR(limbAngle->maximum(), 90.0, 1e-9);
+
+  const std::size_t plansBefore = scene.nodesOfType(NodeType::Plan).size();
+  click(workstation.widget<QPushButton>("incision.place"));
+  workstation.clickThreeDView(workstation.threeDViewPointOf({target.x(), target.y(), target.z()}));
+  ASSERT_TRUE(workstation.waitUntil(
+    [&] { return scene.nodesOfType(NodeType::Plan).size() == plansBefore + 1; }, 10))
+    << workstation.errors();
+  PlanNode* planNode = planNamed(scene, "Z-plasty 2");
+  ASSERT_NE(planNode, nullptr) << "the new plan is not named Z-plasty 2";
+  const NodeId planId = planNode->id();
+  EXPECT_EQ(planNode->rangeMapId(), skinNode->id());
+  const incision::IncisionPlan placed = IncisionLogic::readPlan(*planNode);
+  EXPECT_EQ(placed.procedure(), "z-plasty");
+  {
+    const double rc = skin.sample(placed.centre().theta, placed.centre().z);
+    const Eigen::Vector3d centre = skin.frame().toWorld(rc, placed.centre().theta, placed.centre().z);
+    EXPECT_LT((centre - target).norm(), 1.5) << "centre at theta " << placed.centre().theta / kDegree << " deg, z "
+                                             << placed.centre().z;
+  }
+  // The recipe replays to the very same plan, on the CT the demo plan names.
+  {
+    IncisionLogic logic(scene);
+    const auto recipe = IncisionLogic::readRecipe(*planNode);
+    ASSERT_TRUE(recipe.has_value());
+    EXPECT_EQ(recipe->ctSha256, demoPlan->ctSha256());
+    EXPECT_FALSE(recipe->ctSha256.empty());
+    ASSERT_EQ(recipe->operations.size(), 1u);
+    const incision::IncisionPlan replayed = logic.applyRecipe(*recipe, skin);
+    PlanNode a, b;
+    IncisionLogic::writePlan(placed, a);
+    IncisionLogic::writePlan(replayed, b);
+    EXPECT_EQ(a.toJson(), b.toJson());
+  }
+
+  // Its lines on the skin.
+  SurfaceNode* lines = surfaceNamed(scene, "Z-plasty 2 incision");
+  ASSERT_NE(lines, nullptr);
+  EXPECT_DOUBLE_EQ(lines->lineWidth(), 3.0);
+  expectLinesOnSkin(lines->polyData(), placed, skin);
+
+  // The new plan is selected; its measurements are the logic's.
+  auto* list = workstation.widget<QListWidget>("incision.plans");
+  ASSERT_NE(list, nullptr);
+  ASSERT_EQ(list->selectedItems().size(), 1);
+  EXPECT_EQ(list->selectedItems().front()->text().toStdString(), "Z-plasty 2");
+  auto* table = workstation.widget<QTableWidget>("incision.measurements");
+  ASSERT_NE(table, nullptr);
+  {
+    const incision::PlanMeasurements m = incision::measurePlan(placed, skin);
+    ASSERT_EQ(m.limbs.size(), 3u);
+    for (const auto& l : m.limbs)
+      EXPECT_NEAR(tableValue(table, QString("Limb p%1–p%2").arg(l.from).arg(l.to)), l.skin, 0.05);
+    for (const auto& a : m.limbAngles)
+      EXPECT_NEAR(tableValue(table, QString("Angle at p%1").arg(a.point)), a.skin / kDegree, 0.05);
+    EXPECT_NEAR(tableValue(table, "Theoretical gain in length (Fig. 2.2)"), 75.0, 0.5); // Fig. 2.2: 60° → 75 %
+  }
+  workstation.screenshot("incision-placed");
+
+  // Limb angle 60° → 45°: the plan is placed again, and undo gives it back exactly.
+  const nlohmann::json before = planNode->toJson();
+  limbAngle->setValue(45.0);
+  ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() != before; }, 5)) << workstation.errors();
+  const nlohmann::json after = planNode->toJson();
+  const incision::IncisionPlan changed = IncisionLogic::readPlan(*planNode);
+  EXPECT_NEAR(changed.parameters().at("limb_angle"), 45.0 * kDegree, 1e-12);
+  EXPECT_NEAR(changed.centre().theta, placed.centre().theta, 1e-12);
+  EXPECT_NE(changed.cutPath(), placed.cutPath());
+  {
+    IncisionLogic logic(scene);
+    const auto recipe = IncisionLogic::readRecipe(*planNode);
+    ASSERT_TRUE(recipe.has_value());
+    EXPECT_EQ(recipe->operations.size(), 2u);
+    PlanNode replayed;
+    IncisionLogic::writePlan(logic.applyRecipe(*recipe, skin), replayed);
+    PlanNode direct;
+    IncisionLogic::writePlan(changed, direct);
+    EXPECT_EQ(replayed.toJson(), direct.toJson());
+    const incision::PlanMeasurements m = incision::measurePlan(changed, skin);
+    for (const auto& l : m.limbs)
+      EXPECT_NEAR(tableValue(table, QString("Limb p%1–p%2").arg(l.from).arg(l.to)), l.skin, 0.05);
+    for (const auto& a : m.limbAngles)
+      EXPECT_NEAR(tableValue(table, QString("Angle at p%1").arg(a.point)), a.skin / kDegree, 0.05);
+  }
+  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
+
+  click(workstation.widget<QPushButton>("incision.undo"));
+  ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == before; }, 5));
+  EXPECT_NEAR(limbAngle->value(), 60.0, 1e-9);
+  workstation.settle(100);
+  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), placed, skin);
+  click(workstation.widget<QPushButton>("incision.redo"));
+  ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == after; }, 5));
+  // The keys do the same while the panel has focus.
+  workstation.window().activateWindow();
+  QApplication::setActiveWindow(&workstation.window());
+  list->setFocus();
+  workstation.settle(100);
+  EXPECT_TRUE(list->hasFocus());
+  QTest::keyClick(list, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == before; }, 5)) << "Ctrl+Z did not undo";
+  QTest::keyClick(list, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
+  EXPECT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == after; }, 5)) << "Ctrl+Shift+Z did not redo";
+  workstation.settle(100);
+  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
+  workstation.screenshot("incision-editor");
+
+  // Move: its centre re-picked 8° further round the face.
+  {
+    const double theta2 = theta + 8.0 * kDegree;
+    const Eigen::Vector3d to = skin.frame().toWorld(skin.sample(theta2, z), theta2, z);
+    click(workstation.widget<QPushButton>("incision.move"));
+    workstation.clickThreeDView(workstation.threeDViewPointOf({to.x(), to.y(), to.z()}));
+    ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() != after; }, 5)) << workstation.errors();
+    const incision::IncisionPlan moved = IncisionLogic::readPlan(*planNode);
+    const Eigen::Vector3d centre =
+      skin.frame().toWorld(skin.sample(moved.centre().theta, moved.centre().z), moved.centre().theta, moved.centre().z);
+    EXPECT_LT((centre - to).norm(), 1.5);
+    EXPECT_NEAR(moved.parameters().at("limb_angle"), 45.0 * kDegree, 1e-12) << "a move keeps the parameters";
+    click(workstation.widget<QPushButton>("incision.undo"));
+    ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == after; }, 5));
+  }
+
+  // A click on the background places nothing.
+  click(workstation.widget<QPushButton>("incision.place"));
+  {
+    // From further out, a corner or an edge of the view shows no surface.
+    SnapshotNode::Camera far = camera;
+    const Eigen::Vector3d farEye = target + 900.0 * skin.frame().radialDirection(theta);
+    far.position = {farEye.x(), farEye.y(), farEye.z()};
+    workstation.window().setThreeDViewCamera(far);
+    workstation.settle(100);
+    std::optional<QPoint> background;
+    const QSize size = workstation.threeDView().size();
+    for (const QPoint& p : {QPoint(3, 3), QPoint(size.width() - 4, 3), QPoint(3, size.height() - 4),
+                            QPoint(size.width() - 4, size.height() - 4), QPoint(3, size.height() / 2)})
+    {
+      std::string key;
+      std::array<double, 3> at{};
+      if (!workstation.threeDView().pickSurface(p.x(), p.y(), key, at))
+      {
+        background = p;
+        break;
+      }
+    }
+    ASSERT_TRUE(background.has_value()) << "the surfaces fill the whole 3D view";
+    workstation.clickThreeDView(*background);
+  }
+  workstation.settle(300);
+  EXPECT_EQ(scene.nodesOfType(NodeType::Plan).size(), plansBefore + 1);
+
+  // Editing a predicted plan keeps its prediction, marked out of date.
+  auto* status = workstation.widget<QLabel>("incision.predictionStatus");
+  ASSERT_NE(status, nullptr);
+  selectPlan(list, "Z-plasty 1");
+  workstation.settle(100);
+  EXPECT_TRUE(status->text().isEmpty()) << status->text().toStdString();
+  auto* length = workstation.widget<QDoubleSpinBox>("incision.param.central_length");
+  ASSERT_NE(length, nullptr);
+  const nlohmann::json demoBefore = demoPlan->toJson();
+  length->setValue(length->value() - 2.0);
+  ASSERT_TRUE(workstation.waitUntil([&] { return demoPlan->toJson() != demoBefore; }, 5)) << workstation.errors();
+  EXPECT_NE(surfaceNamed(scene, "Z-plasty 1 skin after"), nullptr);
+  EXPECT_NE(status->text().indexOf("out of date"), -1) << status->text().toStdString();
+  workstation.screenshot("incision-prediction-out-of-date");
+  click(workstation.widget<QPushButton>("incision.undo"));
+  ASSERT_TRUE(workstation.waitUntil([&] { return demoPlan->toJson() == demoBefore; }, 5));
+  EXPECT_TRUE(status->text().isEmpty()) << status->text().toStdString();
+
+  // An excision selected: drawn with its hole border; its excised area is the logic's.
+  {
+    PlanNode* ellipse = planNamed(scene, "Elliptical excision 2");
+    ASSERT_NE(ellipse, nullptr);
+    selectPlan(list, ellipse->name());
+    workstation.settle(200);
+    const incision::IncisionPlan plan = IncisionLogic::readPlan(*ellipse);
+    ASSERT_TRUE(plan.isExcision());
+    SurfaceNode* ellipseLines = surfaceNamed(scene, "Elliptical excision 2 incision");
+    ASSERT_NE(ellipseLines, nullptr);
+    EXPECT_EQ(ellipseLines->polyData()->GetNumberOfLines(), 2) << "the cut and the hole border";
+    expectLinesOnSkin(ellipseLines->polyData(), plan, skin);
+    const double area = incision::excisedArea(plan, skin);
+    EXPECT_GT(area, 10.0);
+    EXPECT_NEAR(tableValue(table, "Excised area"), area, 0.05);
+  }
+
+  // Delete: the plan and its lines go.
+  selectPlan(list, "Z-plasty 2");
+  workstation.settle(100);
+  click(workstation.widget<QPushButton>("incision.delete"));
+  ASSERT_TRUE(workstation.waitUntil([&] { return scene.node(planId) == nullptr; }, 5));
+  workstation.settle(100);
+  EXPECT_EQ(surfaceNamed(scene, "Z-plasty 2 incision"), nullptr);
+  EXPECT_EQ(list->findItems("Z-plasty 2", Qt::MatchExactly).size(), 0);
+  EXPECT_NE(planNamed(scene, "Z-plasty 1"), nullptr);
+}
+
+TEST(IncisionPanel, NoSkinMapSaysWhatToDo)
+{
+  test::Workstation workstation;
+  workstation.selectModule("incision");
+  const std::size_t errors = workstation.window().reportedErrors().size();
+  click(workstation.widget<QPushButton>("incision.place"));
+  workstation.settle(100);
+  ASSERT_EQ(workstation.window().reportedErrors().size(), errors + 1);
+  EXPECT_NE(workstation.errors().find("Build the range maps in the Range maps module first"), std::string::npos)
+    << workstation.errors();
+  EXPECT_TRUE(workstation.scene().nodesOfType(NodeType::Plan).empty());
+}
+
+} // namespace caps

@@ -1,0 +1,162 @@
+#pragma once
+// The real workstation in the test process: the plugins of the build, one
+// Session and its MainWindow, shown on the X display the test runs under
+// (ctest runs these tests inside xvfb-run). Tests drive it as a user does:
+// they pick modules, press the panels' buttons (found by object name), click
+// on the 3D view, and wait for background work; screenshots of each step go
+// to build/test-artifacts/workstation/.
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include <QApplication>
+#include <QComboBox>
+#include <QTest>
+#include <QThread>
+#include <gtest/gtest.h>
+
+#include <vtkCamera.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+
+#include "app/MainWindow.h"
+#include "app/ModuleManager.h"
+#include "app/Session.h"
+#include "scene/Scene.h"
+#include "ui/ThreeDView.h"
+
+namespace caps::test {
+
+/// Folder of this suite's screenshots.
+inline std::filesystem::path workstationArtifacts()
+{
+  const std::filesystem::path folder = std::filesystem::path(CAPS_TEST_ARTIFACTS_DIR) / "workstation";
+  std::filesystem::create_directories(folder);
+  return folder;
+}
+
+class Workstation
+{
+public:
+  Workstation()
+  {
+    modules_.loadFolder(CAPS_MODULE_DIR);
+    session_ = std::make_unique<Session>(modules_);
+    window_ = std::make_unique<MainWindow>(*session_);
+    window_->setUnattended(true);
+    window_->resize(1500, 950);
+    window_->show();
+    settle(200);
+  }
+  ~Workstation()
+  {
+    window_.reset();
+    session_.reset();
+  }
+
+  MainWindow& window() { return *window_; }
+  Session& session() { return *session_; }
+  Scene& scene() { return session_->scene(); }
+  ui::ThreeDView& threeDView() { return *window_->threeDView(); }
+
+  /// Processes events for @a ms milliseconds.
+  void settle(int ms = 300)
+  {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
+    while (std::chrono::steady_clock::now() < end)
+    {
+      QApplication::processEvents(QEventLoop::AllEvents, 20);
+      QThread::msleep(5);
+    }
+  }
+
+  /// Processes events until @a done or @a seconds pass; false on timeout.
+  bool waitUntil(const std::function<bool()>& done, double seconds)
+  {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (!done())
+    {
+      if (std::chrono::steady_clock::now() > end)
+        return false;
+      QApplication::processEvents(QEventLoop::AllEvents, 20);
+      QThread::msleep(10);
+    }
+    settle(100);
+    return true;
+  }
+
+  /// Waits until no background work runs (runTask); false on timeout.
+  bool waitUntilIdle(double seconds) { return waitUntil([this] { return !window_->busy(); }, seconds); }
+
+  /// Shows module @a name's panel, as choosing it in the selector does.
+  void selectModule(const std::string& name)
+  {
+    auto* selector = widget<QComboBox>("ModuleSelector");
+    ASSERT_NE(selector, nullptr);
+    const int index = selector->findData(QString::fromStdString(name));
+    ASSERT_GE(index, 0) << "no module " << name;
+    selector->setCurrentIndex(index);
+    settle(100);
+  }
+
+  /// The window's child widget of that object name and type; nullptr (and a
+  /// test failure) when there is none.
+  template <class T>
+  T* widget(const std::string& objectName)
+  {
+    T* found = window_->findChild<T*>(QString::fromStdString(objectName));
+    if (!found)
+      ADD_FAILURE() << "no widget '" << objectName << "' in the workstation";
+    return found;
+  }
+
+  /// Where world point @a p (LPS mm) is in the 3D view, in widget pixels.
+  QPoint threeDViewPointOf(const std::array<double, 3>& p)
+  {
+    vtkRenderer* renderer = threeDView().renderer();
+    threeDView().renderWindow()->Render();
+    renderer->SetWorldPoint(p[0], p[1], p[2], 1.0);
+    renderer->WorldToDisplay();
+    double display[3];
+    renderer->GetDisplayPoint(display);
+    const double ratio = threeDView().devicePixelRatioF();
+    const int height = threeDView().renderWindow()->GetSize()[1];
+    return QPoint(static_cast<int>(display[0] / ratio), static_cast<int>((height - 1 - display[1]) / ratio));
+  }
+
+  /// A left click at @a at on the 3D view, as the mouse makes it.
+  void clickThreeDView(const QPoint& at)
+  {
+    QTest::mouseClick(&threeDView(), Qt::LeftButton, Qt::NoModifier, at);
+    settle(100);
+  }
+
+  /// Saves the window as build/test-artifacts/workstation/NAME.png.
+  std::filesystem::path screenshot(const std::string& name)
+  {
+    settle(300);
+    threeDView().renderWindow()->Render();
+    const std::filesystem::path file = workstationArtifacts() / (name + ".png");
+    EXPECT_TRUE(window_->grab().save(QString::fromStdString(file.string()))) << file;
+    return file;
+  }
+
+  /// What the workstation reported as errors, one per line (for messages).
+  std::string errors() const
+  {
+    std::string all;
+    for (const auto& e : window_->reportedErrors())
+      all += e + "\n";
+    return all;
+  }
+
+private:
+  ModuleManager modules_;
+  std::unique_ptr<Session> session_;
+  std::unique_ptr<MainWindow> window_;
+};
+
+} // namespace caps::test
