@@ -10,6 +10,7 @@
 #include <QDoubleSpinBox>
 #include <QFormLayout>
 #include <QGroupBox>
+#include <QGridLayout>
 #include <QHBoxLayout>
 #include <QHeaderView>
 #include <QKeySequence>
@@ -18,6 +19,7 @@
 #include <QPointer>
 #include <QPushButton>
 #include <QShortcut>
+#include <QSpinBox>
 #include <QTableWidget>
 #include <QTimer>
 #include <QVBoxLayout>
@@ -141,6 +143,63 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   redo_ = button(tr("Redo"), "incision.redo", tr("Redo the edit undone (Ctrl+Shift+Z)"));
   delete_ = button(tr("Delete"), "incision.delete", tr("Remove the selected plan and its lines"));
   layout->addLayout(buttons);
+
+  // Editing the selected plan point by point (the recipe's operations).
+  editBox_ = new QGroupBox(tr("Edit the selected plan"), this);
+  auto* edit = new QGridLayout(editBox_);
+  point_ = new QSpinBox(editBox_);
+  point_->setObjectName("incision.point");
+  point_->setPrefix(tr("cut point p"));
+  movePoint_ = new QPushButton(tr("Move point"), editBox_);
+  movePoint_->setObjectName("incision.movePoint");
+  movePoint_->setToolTip(tr("Then click on the skin where the point goes"));
+  edit->addWidget(point_, 0, 0);
+  edit->addWidget(movePoint_, 0, 1, 1, 3);
+  borderPoint_ = new QSpinBox(editBox_);
+  borderPoint_->setObjectName("incision.borderPoint");
+  borderPoint_->setPrefix(tr("border point "));
+  borderPoint_->setToolTip(tr("Hole-loop numbering (thesis Fig. 4.11): a cut point's two sides are two border points"));
+  offsetU_ = new QDoubleSpinBox(editBox_);
+  offsetU_->setObjectName("incision.offsetU");
+  offsetV_ = new QDoubleSpinBox(editBox_);
+  offsetV_->setObjectName("incision.offsetV");
+  for (QDoubleSpinBox* box : {offsetU_, offsetV_})
+  {
+    box->setRange(-30.0, 30.0);
+    box->setDecimals(1);
+    box->setSingleStep(0.5);
+    box->setSuffix(" mm");
+  }
+  offsetU_->setToolTip(tr("Offset across the face (chart u, mm)"));
+  offsetV_->setToolTip(tr("Offset up the face (chart v, mm)"));
+  offset_ = new QPushButton(tr("Offset"), editBox_);
+  offset_->setObjectName("incision.offset");
+  offset_->setToolTip(tr("Moves the border point away from its twin: the gap is skin excised (thesis 4.4.4)"));
+  edit->addWidget(borderPoint_, 1, 0);
+  edit->addWidget(offsetU_, 1, 1);
+  edit->addWidget(offsetV_, 1, 2);
+  edit->addWidget(offset_, 1, 3);
+  undermine_ = new QPushButton(tr("Undermine a region"), editBox_);
+  undermine_->setObjectName("incision.undermine");
+  undermine_->setToolTip(tr("Click the corners of the region on the skin, then Finish"));
+  finishRegion_ = new QPushButton(tr("Finish"), editBox_);
+  finishRegion_->setObjectName("incision.finishRegion");
+  clearRegions_ = new QPushButton(tr("Clear"), editBox_);
+  clearRegions_->setObjectName("incision.clearUndermining");
+  clearRegions_->setToolTip(tr("Removes the plan's undermined regions"));
+  edit->addWidget(undermine_, 2, 0, 1, 2);
+  edit->addWidget(finishRegion_, 2, 2);
+  edit->addWidget(clearRegions_, 2, 3);
+  regionStatus_ = new QLabel(editBox_);
+  regionStatus_->setObjectName("incision.regionStatus");
+  regionStatus_->setWordWrap(true);
+  edit->addWidget(regionStatus_, 3, 0, 1, 4);
+  layout->addWidget(editBox_);
+  connect(movePoint_, &QPushButton::clicked, this, &IncisionPanel::armMovePoint);
+  connect(offset_, &QPushButton::clicked, this, &IncisionPanel::offsetBorderPoint);
+  connect(undermine_, &QPushButton::clicked, this, &IncisionPanel::armUndermine);
+  connect(finishRegion_, &QPushButton::clicked, this, &IncisionPanel::finishUndermining);
+  connect(clearRegions_, &QPushButton::clicked, this, &IncisionPanel::clearUndermining);
 
   predictionStatus_ = new QLabel(this);
   predictionStatus_->setObjectName("incision.predictionStatus");
@@ -437,6 +496,129 @@ void IncisionPanel::parameterChanged(const std::string& name)
     showSelection(); // the form shows the plan as it stayed
 }
 
+void IncisionPanel::armMovePoint()
+{
+  PlanNode* plan = selectedPlan();
+  if (!plan)
+    return;
+  const NodeId id = plan->id();
+  const int point = point_->value();
+  QPointer<IncisionPanel> self(this);
+  host_.pickInThreeDView("Click on the skin where cut point p" + std::to_string(point) + " of " + plan->name() + " goes",
+                         [self, id, point](const SurfacePick& pick) {
+                           if (!self)
+                             return;
+                           auto* node = self->logic_.scene().nodeAs<PlanNode>(id);
+                           if (!node)
+                             return;
+                           self->editPlan(id, "Move point p" + std::to_string(point) + " of " + node->name(),
+                                          [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe,
+                                              const seg::RangeMap& skin) {
+                                            const seg::CylindricalFrame& frame = skin.frame();
+                                            const seg::NormalizedCylindricalPoint n = frame.toNormalized(
+                                              frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1],
+                                                                                  pick.position[2])));
+                                            const incision::PlanOperation op =
+                                              incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)};
+                                            plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1,
+                                                                            skin, self->logic_.procedures());
+                                            recipe.operations.push_back(op);
+                                          });
+                         });
+}
+
+void IncisionPanel::offsetBorderPoint()
+{
+  PlanNode* node = selectedPlan();
+  if (!node)
+    return;
+  const int vertex = borderPoint_->value();
+  const incision::ChartPoint offset(offsetU_->value(), offsetV_->value());
+  editPlan(node->id(), "Offset border point " + std::to_string(vertex) + " of " + node->name(),
+           [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
+             const incision::PlanOperation op = incision::OffsetBorderPoint{vertex, offset};
+             plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
+             recipe.operations.push_back(op);
+           });
+}
+
+void IncisionPanel::armUndermine()
+{
+  PlanNode* node = selectedPlan();
+  if (!node)
+    return;
+  const RangeMapNode* skinNode = skinOf(*node);
+  if (!skinNode)
+  {
+    host_.showError("Undermine a region", "Build the range maps in the Range maps module first.");
+    return;
+  }
+  if (regionPlan_ != node->id())
+    region_.clear();
+  regionPlan_ = node->id();
+  const NodeId skinId = skinNode->id();
+  QPointer<IncisionPanel> self(this);
+  // One corner per click; each click arms the next until Finish.
+  std::function<void(const SurfacePick&)> corner;
+  corner = [self, skinId](const SurfacePick& pick) {
+    if (!self)
+      return;
+    const auto* skin = self->logic_.scene().nodeAs<RangeMapNode>(skinId);
+    if (!skin)
+      return;
+    const seg::CylindricalFrame& frame = self->rangeMap(*skin).frame();
+    const seg::NormalizedCylindricalPoint n =
+      frame.toNormalized(frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
+    self->region_.push_back({n.thetaN, n.zN});
+    self->regionStatus_->setText(
+      tr("%1 corners: click the next, or Finish (at least 3).").arg(self->region_.size()));
+    self->armUndermine();
+  };
+  regionStatus_->setText(region_.empty() ? tr("Click the first corner of the region on the skin.")
+                                         : tr("%1 corners: click the next, or Finish (at least 3).").arg(region_.size()));
+  host_.pickInThreeDView("Click a corner of the region to undermine (Finish in the panel when done)", corner);
+}
+
+void IncisionPanel::finishUndermining()
+{
+  host_.cancelPick();
+  auto* node = logic_.scene().nodeAs<PlanNode>(regionPlan_);
+  const std::vector<std::array<double, 2>> corners = std::move(region_);
+  region_.clear();
+  regionPlan_.clear();
+  if (!node || corners.size() < 3)
+  {
+    regionStatus_->setText(corners.empty() ? QString() : tr("A region needs at least 3 corners: start again."));
+    return;
+  }
+  incision::UnderminedRegion region;
+  for (const auto& c : corners)
+    region.emplace_back(c[0], c[1]);
+  if (editPlan(node->id(), "Undermine a region of " + node->name(),
+               [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
+                 const incision::PlanOperation op = incision::UndermineRegion{region};
+                 plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin,
+                                                 logic_.procedures());
+                 recipe.operations.push_back(op);
+               }))
+    regionStatus_->setText(tr("%1 undermined region(s): simulate the plan again to see their effect.")
+                             .arg(IncisionLogic::readPlan(*node).underminedRegions().size()));
+}
+
+void IncisionPanel::clearUndermining()
+{
+  PlanNode* node = selectedPlan();
+  if (!node)
+    return;
+  editPlan(node->id(), "Clear the undermining of " + node->name(),
+           [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
+             const incision::PlanOperation op = incision::ClearUndermining{};
+             plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
+             recipe.operations.push_back(op);
+           });
+  regionStatus_->clear();
+}
+
 bool IncisionPanel::editPlan(
   const NodeId& planId, const std::string& label,
   const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit)
@@ -613,6 +795,7 @@ void IncisionPanel::drawLines(const NodeId& planId, bool create)
     lines->setName(linesName(plan->name()));
     lines->setColor(kLineColour);
     lines->setLineWidth(kLineWidth);
+    lines->setColourArray("line_colour"); // the cut blue, undermined regions in their tint
   }
   lines->setPolyData(data);
   writing_ = false;
@@ -819,9 +1002,18 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
 
 void IncisionPanel::refreshButtons()
 {
-  const bool selected = selectedPlan() != nullptr;
+  PlanNode* node = selectedPlan();
+  const bool selected = node != nullptr;
   move_->setEnabled(selected);
   delete_->setEnabled(selected);
+  editBox_->setEnabled(selected);
+  if (node)
+  {
+    // The points the plan has: p0 .. p(n-1) on the cut, 0 .. loop size - 1 on the border.
+    const int points = int(node->cutPath().size());
+    point_->setRange(0, std::max(0, points - 1));
+    borderPoint_->setRange(0, std::max(0, incision::holeLoopSize(points) - 1));
+  }
   const UndoStack& stack = logic_.scene().undoStack();
   undo_->setEnabled(stack.canUndo());
   redo_->setEnabled(stack.canRedo());

@@ -3,12 +3,14 @@
 /// @brief The incision editor (issue 6 item 4): a procedure placed by a
 /// click on the 3D skin, drawn on it, measured on it, and edited with undo.
 
+#include <array>
 #include <functional>
 #include <map>
 #include <memory>
 #include <optional>
 #include <set>
 #include <string>
+#include <vector>
 
 #include <QWidget>
 #include <nlohmann/json.hpp>
@@ -22,6 +24,7 @@ class QGroupBox;
 class QLabel;
 class QListWidget;
 class QPushButton;
+class QSpinBox;
 class QTableWidget;
 
 namespace caps {
@@ -71,6 +74,14 @@ private:
   void armMove();
   void moveTo(const NodeId& planId, const SurfacePick& pick);
   void parameterChanged(const std::string& name);
+  /// Moves cut point n (the spin box) to the next point clicked on the skin.
+  void armMovePoint();
+  /// Offsets border point n (hole loop, Fig. 4.11) by the chart offset typed (§4.4.4).
+  void offsetBorderPoint();
+  /// Collects the corners of an undermined region clicked on the skin (§3.2.4).
+  void armUndermine();
+  void finishUndermining();
+  void clearUndermining();
   /// Applies a recipe operation to plan @a planId and records it as one undoable edit.
   bool editPlan(const NodeId& planId, const std::string& label,
                 const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit);
@@ -133,6 +144,19 @@ private:
   QPushButton* redo_ = nullptr;
   QPushButton* delete_ = nullptr;
   QLabel* predictionStatus_ = nullptr;
+  QGroupBox* editBox_ = nullptr;
+  QSpinBox* point_ = nullptr;
+  QPushButton* movePoint_ = nullptr;
+  QSpinBox* borderPoint_ = nullptr;
+  QDoubleSpinBox* offsetU_ = nullptr;
+  QDoubleSpinBox* offsetV_ = nullptr;
+  QPushButton* offset_ = nullptr;
+  QPushButton* undermine_ = nullptr;
+  QPushButton* finishRegion_ = nullptr;
+  QPushButton* clearRegions_ = nullptr;
+  QLabel* regionStatus_ = nullptr;
+  NodeId regionPlan_;                     ///< the plan the region being clicked is for
+  std::vector<std::array<double, 2>> region_; ///< its corners so far (θn, zn)
   QTableWidget* table_ = nullptr;
 };
 

@@ -1,6 +1,7 @@
 #include "modules/incision/PlanLines.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <vtkCellArray.h>
@@ -8,6 +9,9 @@
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
+#include <vtkUnsignedCharArray.h>
+
+#include "modules/incision/PlanDisplay.h"
 
 namespace caps::incision {
 namespace {
@@ -19,7 +23,11 @@ public:
   LineBuilder(const SkinChart& chart, double lift) : chart_(chart), lift_(lift)
   {
     numbers_->SetName("cut_point");
+    colours_->SetName("line_colour");
+    colours_->SetNumberOfComponents(3);
   }
+  /// The colour of the points added from now on.
+  void setColour(const std::array<unsigned char, 3>& rgb) { colour_ = rgb; }
 
   /// The world point lift mm outside the skin above chart point p; -1 where there is no skin.
   vtkIdType add(const ChartPoint& p, int number)
@@ -30,6 +38,7 @@ public:
       return -1;
     const Eigen::Vector3d w = chart_.skin().frame().toWorld(r + lift_, s.theta, s.z);
     numbers_->InsertNextValue(number);
+    colours_->InsertNextTypedTuple(colour_.data());
     return points_->InsertNextPoint(w.x(), w.y(), w.z());
   }
 
@@ -76,6 +85,7 @@ public:
     data->SetLines(lines_);
     data->SetVerts(vertices_);
     data->GetPointData()->AddArray(numbers_);
+    data->GetPointData()->AddArray(colours_);
     return data;
   }
 
@@ -86,6 +96,8 @@ private:
   vtkNew<vtkCellArray> lines_;
   vtkNew<vtkCellArray> vertices_;
   vtkNew<vtkIntArray> numbers_;
+  vtkNew<vtkUnsignedCharArray> colours_;
+  std::array<unsigned char, 3> colour_ = kIncisionLineColour;
 };
 
 } // namespace
@@ -108,6 +120,20 @@ vtkSmartPointer<vtkPolyData> incisionLinesPolyData(const IncisionPlan& plan, con
   }
   for (std::size_t i = 0; i < path.size(); ++i)
     lines.vertex(path[i], int(i));
+  // The undermined regions' outlines, in the undermined skin's tint.
+  lines.setColour({kUnderminedTint[0], kUnderminedTint[1], kUnderminedTint[2]});
+  const seg::CylindricalFrame& frame = skin.frame();
+  for (const UnderminedRegion& region : plan.underminedRegions())
+  {
+    std::vector<ChartPoint> outline;
+    for (const Eigen::Vector2d& n : region)
+    {
+      const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
+      outline.push_back(chart.toChart({c.theta, c.z}));
+    }
+    if (outline.size() >= 3)
+      lines.polyline(outline, true, step);
+  }
   return lines.polyData();
 }
 

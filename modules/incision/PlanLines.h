@@ -5,6 +5,8 @@
 /// excision and the numbered cut points, lifted from the plan's chart to
 /// the skin in world coordinates.
 
+#include <array>
+
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 
@@ -16,6 +18,8 @@ namespace caps::incision {
 /// How far (mm) the lines sit outside the skin by default: enough that the
 /// skin surface, drawn from its own triangles, does not hide them.
 inline constexpr double kIncisionLineLift = 0.5;
+/// The incision lines' colour (dark blue, as the panel draws them; RGB 0–255).
+inline constexpr std::array<unsigned char, 3> kIncisionLineColour = {13, 26, 115};
 
 /// @brief The plan's lines on the skin as polydata, in world coordinates (LPS mm).
 ///
@@ -23,7 +27,9 @@ inline constexpr double kIncisionLineLift = 0.5;
 /// length so it follows the skin between cut points) and, for an excision,
 /// the hole border as a closed polyline. Vertices: one per cut point, with
 /// the point array "cut_point" holding its number (scalpel order, from 0;
-/// -1 on line samples). Every point is the skin point of its chart point
+/// -1 on line samples); "line_colour" (RGB) is kIncisionLineColour on the
+/// cut and the hole border and kUnderminedTint on the outlines of the
+/// plan's undermined regions (closed polylines). Every point is the skin point of its chart point
 /// moved `lift` mm along the outward radial direction of the map's frame.
 /// Chart points where the map has no skin are left out (the plan was
 /// checked on this map, so that happens only on a map edited since).

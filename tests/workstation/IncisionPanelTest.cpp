@@ -11,10 +11,13 @@
 #include <QLabel>
 #include <QListWidget>
 #include <QPushButton>
+#include <QSpinBox>
 #include <QTableWidget>
 
 #include <vtkCellArray.h>
+#include <vtkPointData.h>
 #include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
 
 #include "Workstation.h"
 #include "modules/incision/IncisionLogic.h"
@@ -359,6 +362,148 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   EXPECT_EQ(surfaceNamed(scene, "Z-plasty 2 incision"), nullptr);
   EXPECT_EQ(list->findItems("Z-plasty 2", Qt::MatchExactly).size(), 0);
   EXPECT_NE(planNamed(scene, "Z-plasty 1"), nullptr);
+}
+
+// Editing a plan by hand (the recipe's operations from the panel): a cut
+// point moved by a click on the skin, a border point offset into an
+// excision, a region undermined by clicking its corners; each undoable, and
+// the recipe replays to the plan shown.
+TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
+{
+  test::Workstation workstation;
+  Scene& scene = workstation.scene();
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
+  const seg::CylindricalFrame& frame = skin.frame();
+  PlanNode* node = planNamed(scene, "Z-plasty 1");
+  ASSERT_NE(node, nullptr);
+  const NodeId planId = node->id();
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
+      static_cast<SurfaceNode*>(n)->setVisible(false);
+  auto skinPoint = [&](double theta, double z) { return frame.toWorld(skin.sample(theta, z), theta, z); };
+  auto chartOf = [&](const Eigen::Vector2d& n) {
+    const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
+    return std::pair{c.theta, c.z};
+  };
+  const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
+  const auto [t1, z1] = chartOf(original.cutPath()[1]);
+  SnapshotNode::Camera camera;
+  const Eigen::Vector3d focus = skinPoint(t1, z1);
+  const Eigen::Vector3d eye = focus + 180.0 * frame.radialDirection(t1);
+  camera.position = {eye.x(), eye.y(), eye.z()};
+  camera.focalPoint = {focus.x(), focus.y(), focus.z()};
+  camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
+  workstation.window().setThreeDViewCamera(camera);
+  workstation.selectModule("incision");
+  auto* list = workstation.widget<QListWidget>("incision.plans");
+  ASSERT_NE(list, nullptr);
+  selectPlan(list, "Z-plasty 1");
+  workstation.settle(100);
+  auto click3d = [&](const Eigen::Vector3d& p) {
+    workstation.clickThreeDView(workstation.threeDViewPointOf({p.x(), p.y(), p.z()}));
+  };
+
+  // Cut point p1 moved 3 mm up the face by a click there.
+  auto* point = workstation.widget<QSpinBox>("incision.point");
+  ASSERT_NE(point, nullptr);
+  point->setValue(1);
+  const Eigen::Vector3d moveTo = skinPoint(t1, z1 + 3.0);
+  click(workstation.widget<QPushButton>("incision.movePoint"));
+  click3d(moveTo);
+  workstation.settle(200);
+  ASSERT_TRUE(workstation.errors().empty()) << workstation.errors();
+  node = scene.nodeAs<PlanNode>(planId);
+  const incision::IncisionPlan moved = IncisionLogic::readPlan(*node);
+  {
+    const auto [t, z] = chartOf(moved.cutPath()[1]);
+    EXPECT_LT((skinPoint(t, z) - moveTo).norm(), 1.5);
+    EXPECT_EQ(moved.cutPath()[0], original.cutPath()[0]);
+  }
+  click(workstation.widget<QPushButton>("incision.undo"));
+  workstation.settle(100);
+  EXPECT_EQ(IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId)).cutPath(), original.cutPath());
+  click(workstation.widget<QPushButton>("incision.redo"));
+  workstation.settle(100);
+
+  // Border point 1 (a side of p1) offset 1 mm along the bisector of the
+  // corner at p1: an excision. Which side of the cut the vertex is on
+  // depends on the loop's turn; the offset across the cut is refused with a message.
+  auto* border = workstation.widget<QSpinBox>("incision.borderPoint");
+  auto* u = workstation.widget<QDoubleSpinBox>("incision.offsetU");
+  auto* v = workstation.widget<QDoubleSpinBox>("incision.offsetV");
+  ASSERT_TRUE(border && u && v);
+  border->setValue(1);
+  const incision::IncisionPlan current = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const std::vector<incision::ChartPoint> path = current.chartPath(current.chart(skin));
+  const incision::ChartPoint across =
+    ((path[0] - path[1]).normalized() + (path[2] - path[1]).normalized()).normalized();
+  incision::ChartPoint applied = incision::ChartPoint::Zero();
+  for (double side : {1.0, -1.0})
+  {
+    const std::size_t errorsBefore = workstation.window().reportedErrors().size();
+    u->setValue(side * across.x());
+    v->setValue(side * across.y());
+    click(workstation.widget<QPushButton>("incision.offset"));
+    workstation.settle(100);
+    if (workstation.window().reportedErrors().size() == errorsBefore)
+    {
+      applied = incision::ChartPoint(u->value(), v->value());
+      break;
+    }
+  }
+  ASSERT_GT(applied.norm(), 0.5) << workstation.errors();
+  const incision::IncisionPlan excised = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  EXPECT_TRUE(excised.isExcision());
+  EXPECT_NEAR((excised.borderOffsets()[1] - applied).norm(), 0.0, 1e-12);
+  EXPECT_GT(tableValue(workstation.widget<QTableWidget>("incision.measurements"), "Excised area"), 1.0);
+
+  // A region undermined by three corners clicked around p0.
+  const auto [t0, z0] = chartOf(original.cutPath()[0]);
+  const std::vector<Eigen::Vector3d> corners{skinPoint(t0 - 0.05, z0 - 4.0), skinPoint(t0 + 0.05, z0 - 4.0),
+                                             skinPoint(t0, z0 + 4.0)};
+  const std::size_t errorsBeforeRegion = workstation.window().reportedErrors().size();
+  click(workstation.widget<QPushButton>("incision.undermine"));
+  for (const Eigen::Vector3d& c : corners)
+    click3d(c);
+  click(workstation.widget<QPushButton>("incision.finishRegion"));
+  workstation.settle(200);
+  ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBeforeRegion) << workstation.errors();
+  node = scene.nodeAs<PlanNode>(planId);
+  const incision::IncisionPlan undermined = IncisionLogic::readPlan(*node);
+  ASSERT_EQ(undermined.underminedRegions().size(), 1u);
+  ASSERT_EQ(undermined.underminedRegions()[0].size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k)
+  {
+    const auto [t, z] = chartOf(undermined.underminedRegions()[0][k]);
+    EXPECT_LT((skinPoint(t, z) - corners[k]).norm(), 1.5) << "corner " << k;
+  }
+  // The recipe holds the edits and replays to this plan.
+  IncisionLogic logic(scene);
+  const auto recipe = IncisionLogic::readRecipe(*node);
+  ASSERT_TRUE(recipe.has_value());
+  PlanNode a, b;
+  IncisionLogic::writePlan(undermined, a);
+  IncisionLogic::writePlan(logic.applyRecipe(*recipe, skin), b);
+  EXPECT_EQ(a.toJson(), b.toJson());
+  // The region's outline is drawn on the skin in the undermining tint.
+  {
+    auto* lines = surfaceNamed(scene, "Z-plasty 1 incision");
+    ASSERT_NE(lines, nullptr);
+    auto* colours = vtkUnsignedCharArray::SafeDownCast(lines->polyData()->GetPointData()->GetArray("line_colour"));
+    ASSERT_NE(colours, nullptr);
+    int tinted = 0;
+    for (vtkIdType i = 0; i < colours->GetNumberOfTuples(); ++i)
+      tinted += colours->GetTypedComponent(i, 0) == incision::kUnderminedTint[0] &&
+                colours->GetTypedComponent(i, 2) == incision::kUnderminedTint[2];
+    EXPECT_GT(tinted, 10);
+  }
+  workstation.screenshot("incision-edited-by-hand");
+  // Clear takes the regions away again.
+  click(workstation.widget<QPushButton>("incision.clearUndermining"));
+  workstation.settle(100);
+  EXPECT_TRUE(IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId)).underminedRegions().empty());
 }
 
 TEST(IncisionPanel, NoSkinMapSaysWhatToDo)
