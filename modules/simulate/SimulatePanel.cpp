@@ -475,7 +475,10 @@ void SimulatePanel::run()
       simulate::addPlanRun(scene, *input, *result, show);
       if (panel)
       {
-        panel->summary_->setText(QString::fromStdString(input->name + "\n" + simulate::summaryText(*result)));
+        // The predicted skin lies on the head's: the Results module shows it
+        // without the head in the way, with the deformation slider.
+        panel->summary_->setText(QString::fromStdString(input->name + "\n" + simulate::summaryText(*result)) +
+                                 tr("\nSee the predicted face in the Results module."));
       }
       std::ostringstream status;
       status << "Prediction of '" << input->name << "' done (" << std::fixed << std::setprecision(1) << workSeconds
