@@ -122,6 +122,22 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   place_->setObjectName("incision.place");
   place_->setToolTip(tr("Then click on the skin in the 3D view where the centre of the cut goes"));
   layout->addWidget(place_);
+  // Or a cut of the surgeon's own, point by point.
+  auto* drawRow = new QHBoxLayout();
+  draw_ = new QPushButton(tr("Draw a cut point by point"), this);
+  draw_->setObjectName("incision.draw");
+  draw_->setToolTip(tr("Then click the points of the cut on the skin in order, and Finish"));
+  finishDraw_ = new QPushButton(tr("Finish the cut"), this);
+  finishDraw_->setObjectName("incision.finishDraw");
+  drawRow->addWidget(draw_, 1);
+  drawRow->addWidget(finishDraw_);
+  layout->addLayout(drawRow);
+  drawStatus_ = new QLabel(this);
+  drawStatus_->setObjectName("incision.drawStatus");
+  drawStatus_->setWordWrap(true);
+  layout->addWidget(drawStatus_);
+  connect(draw_, &QPushButton::clicked, this, &IncisionPanel::armDraw);
+  connect(finishDraw_, &QPushButton::clicked, this, &IncisionPanel::finishDraw);
 
   layout->addWidget(new QLabel(tr("Plans in the scene:"), this));
   plans_ = new QListWidget(this);
@@ -407,11 +423,19 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
                       "\nClick nearer the middle of the measured skin, or make the cut smaller.");
     return;
   }
-  // "<Procedure title> <n>", n the first number no node uses.
+  const std::string name = addPlan(procedure->title(), plan, recipe, skinId);
+  host_.showStatus(name + " placed at θ " + std::to_string(int(std::lround(at.theta / kDegree))) + "°, z " +
+                   std::to_string(int(std::lround(at.z))) + " mm");
+}
+
+std::string IncisionPanel::addPlan(const std::string& title, const incision::IncisionPlan& plan,
+                                   const incision::PlanRecipe& recipe, const NodeId& skinId)
+{
+  // "<title> <n>", n the first number no node uses.
   std::string name;
   for (int n = 1;; ++n)
   {
-    name = procedure->title();
+    name = title;
     name += " ";
     name += std::to_string(n);
     bool used = false;
@@ -436,8 +460,77 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
   for (int row = 0; row < plans_->count(); ++row)
     if (plans_->item(row)->data(Qt::UserRole).toString().toStdString() == planId)
       plans_->setCurrentRow(row);
-  host_.showStatus(name + " placed at θ " + std::to_string(int(std::lround(at.theta / kDegree))) + "°, z " +
-                   std::to_string(int(std::lround(at.z))) + " mm");
+  return name;
+}
+
+void IncisionPanel::armDraw()
+{
+  const RangeMapNode* skinNode = newestSkin();
+  if (!skinNode)
+  {
+    host_.showError("Draw a cut", "Build the range maps in the Range maps module first: the cut is drawn on the "
+                                  "skin range map.");
+    return;
+  }
+  const NodeId skinId = skinNode->id();
+  if (drawSkin_ != skinId)
+    drawn_.clear();
+  drawSkin_ = skinId;
+  QPointer<IncisionPanel> self(this);
+  // One point per click, in scalpel order; each click arms the next until Finish.
+  host_.pickInThreeDView("Click the next point of the cut on the skin (Finish in the panel when done)",
+                         [self, skinId](const SurfacePick& pick) {
+                           if (!self)
+                             return;
+                           const auto* skin = self->logic_.scene().nodeAs<RangeMapNode>(skinId);
+                           if (!skin)
+                             return;
+                           const seg::CylindricalFrame& frame = self->rangeMap(*skin).frame();
+                           const seg::NormalizedCylindricalPoint n = frame.toNormalized(frame.toCylindrical(
+                             Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
+                           self->drawn_.emplace_back(n.thetaN, n.zN);
+                           self->armDraw();
+                         });
+  drawStatus_->setText(drawn_.empty() ? tr("Click the first point of the cut on the skin.")
+                                      : tr("%1 points: click the next, or Finish (at least 2).").arg(drawn_.size()));
+}
+
+void IncisionPanel::finishDraw()
+{
+  host_.cancelPick();
+  const std::vector<Eigen::Vector2d> points = std::move(drawn_);
+  drawn_.clear();
+  const NodeId skinId = drawSkin_;
+  drawSkin_.clear();
+  const auto* skinNode = logic_.scene().nodeAs<RangeMapNode>(skinId);
+  if (!skinNode || points.size() < 2)
+  {
+    drawStatus_->setText(points.empty() ? QString() : tr("A cut needs at least 2 points: start again."));
+    return;
+  }
+  const seg::RangeMap& skin = rangeMap(*skinNode);
+  incision::PlanRecipe recipe;
+  incision::IncisionPlan plan;
+  try
+  {
+    const incision::PlanOperation op = incision::DrawCut{points};
+    plan = incision::applyOperation(plan, op, 1, skin, logic_.procedures());
+    recipe.ctSha256 = ctHash(skinId);
+    recipe.softwareVersion = incision::softwareVersion();
+    recipe.operations.push_back(op);
+  }
+  catch (const std::exception& e)
+  {
+    host_.showError("Draw a cut", std::string(e.what()) + "\nDraw it again with points further apart, and "
+                                                          "without crossing itself.");
+    drawStatus_->clear();
+    return;
+  }
+  const std::string name = addPlan("Cut", plan, recipe, skinId);
+  drawStatus_->setText(tr("%1 drawn with %2 points; its lips are sewn straight back together. Offset border "
+                          "points below to make an excision.")
+                         .arg(QString::fromStdString(name))
+                         .arg(points.size()));
 }
 
 void IncisionPanel::armMove()
@@ -1004,7 +1097,8 @@ void IncisionPanel::refreshButtons()
 {
   PlanNode* node = selectedPlan();
   const bool selected = node != nullptr;
-  move_->setEnabled(selected);
+  // Move places the procedure afresh: a cut drawn by hand has none (move its points instead).
+  move_->setEnabled(selected && !node->procedure().empty());
   delete_->setEnabled(selected);
   editBox_->setEnabled(selected);
   if (node)

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <QWidget>
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include "scene/Node.h"
@@ -71,6 +72,13 @@ private:
   ///@{
   void armPlace();
   void placeAt(const SurfacePick& pick);
+  /// Collects the points of a cut drawn by hand, one click each, in scalpel order.
+  void armDraw();
+  /// Makes the drawn points a plan "Cut n" (incision::DrawCut).
+  void finishDraw();
+  /// Adds a plan "<title> n" (n the first number free) with its recipe and lines, and selects it; returns its name.
+  std::string addPlan(const std::string& title, const incision::IncisionPlan& plan, const incision::PlanRecipe& recipe,
+                      const NodeId& skinId);
   void armMove();
   void moveTo(const NodeId& planId, const SurfacePick& pick);
   void parameterChanged(const std::string& name);
@@ -138,6 +146,11 @@ private:
   std::map<std::string, QDoubleSpinBox*> spins_;
   std::string formProcedure_; ///< the procedure the form is of
   QPushButton* place_ = nullptr;
+  QPushButton* draw_ = nullptr;
+  QPushButton* finishDraw_ = nullptr;
+  QLabel* drawStatus_ = nullptr;
+  NodeId drawSkin_;                    ///< the skin map the cut being drawn is on
+  std::vector<Eigen::Vector2d> drawn_; ///< its points so far (θn, zn)
   QListWidget* plans_ = nullptr;
   QPushButton* move_ = nullptr;
   QPushButton* undo_ = nullptr;

@@ -30,7 +30,7 @@ namespace {
 using json = nlohmann::json;
 
 const char* const formatName = "caps-plan";
-const char* const operationKinds = "place, move, offset, set-parameter, undermine, clear-undermining";
+const char* const operationKinds = "place, move, offset, set-parameter, undermine, clear-undermining, draw";
 
 template <class... F>
 struct Overloaded : F...
@@ -174,8 +174,19 @@ std::string describe(const PlanOperation& operation)
                         return "undermine a region of " + std::to_string(o.region.size()) + " points";
                       },
                       [](const ClearUndermining&) { return std::string("clear undermining"); },
+                      [](const DrawCut& o) { return "draw a cut of " + std::to_string(o.points.size()) + " points"; },
                     },
                     operation);
+}
+
+std::vector<SutureEdges> straightClosureSutures(int pathPoints)
+{
+  const int n = pathPoints;
+  const auto twin = [n](int i) { return i == 0 || i == n - 1 ? i : 2 * n - 2 - i; };
+  std::vector<SutureEdges> sutures;
+  for (int i = 0; i + 1 < n; ++i)
+    sutures.push_back({{i, i + 1}, {twin(i), twin(i + 1)}});
+  return sutures;
 }
 
 const ProcedureTemplate& findProcedure(const ProcedureLibrary& library, const std::string& id)
@@ -207,7 +218,7 @@ IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& opera
   const std::string label = operationLabel(number, describe(operation));
   const auto needCut = [&]() {
     if (plan.pointCount() == 0)
-      throw RecipeError(number, label + ": there is no cut yet; a plan starts by placing a procedure");
+      throw RecipeError(number, label + ": there is no cut yet; a plan starts by placing a procedure or drawing a cut");
   };
   const auto needFinite = [&](const Eigen::Vector2d& v, const char* what) {
     if (!v.allFinite())
@@ -257,6 +268,27 @@ IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& opera
           IncisionPlan next = plan;
           next.addUnderminedRegion(o.region);
           return next;
+        },
+        [&](const DrawCut& o) {
+          if (o.points.size() < 2)
+            throw RecipeError(number, label + ": a cut needs at least 2 points");
+          for (const Eigen::Vector2d& p : o.points)
+            needFinite(p, "point");
+          // The chart's centre: the middle of the points, θ unwrapped about
+          // the first so a cut across the back of the head stays one piece.
+          const seg::CylindricalFrame& frame = skin.frame();
+          const seg::CylindricalPoint first = frame.fromNormalized({1.0, o.points[0].x(), o.points[0].y()});
+          double theta = 0.0, z = 0.0;
+          for (const Eigen::Vector2d& p : o.points)
+          {
+            const seg::CylindricalPoint c = frame.fromNormalized({1.0, p.x(), p.y()});
+            theta += first.theta + seg::CylindricalFrame::wrapTheta(c.theta - first.theta);
+            z += c.z;
+          }
+          const double count = double(o.points.size());
+          IncisionPlan next(o.points, {seg::CylindricalFrame::wrapTheta(theta / count), z / count});
+          next.setSutures(straightClosureSutures(int(o.points.size())));
+          return checked(std::move(next), skin);
         },
         [&](const ClearUndermining&) {
           needCut();
@@ -327,6 +359,12 @@ json operationToJson(const PlanOperation& operation)
                         return json{{"operation", "undermine"}, {"region", std::move(points)}};
                       },
                       [](const ClearUndermining&) { return json{{"operation", "clear-undermining"}}; },
+                      [](const DrawCut& o) {
+                        json points = json::array();
+                        for (const auto& p : o.points)
+                          points.push_back({p.x(), p.y()});
+                        return json{{"operation", "draw"}, {"points", std::move(points)}};
+                      },
                     },
                     operation);
 }
@@ -364,6 +402,8 @@ PlanOperation operationFromJson(const json& j, int number)
     return UndermineRegion{r.pairs("region")};
   if (r.kind == "clear-undermining")
     return ClearUndermining{};
+  if (r.kind == "draw")
+    return DrawCut{r.pairs("points")};
   throw RecipeError(number, "operation " + std::to_string(number) + " is '" + r.kind +
                               "', which this CAPS does not know; the operations are " + operationKinds +
                               " (a newer CAPS may have written the file)");

@@ -79,14 +79,31 @@ struct UndermineRegion
   UnderminedRegion region;
 };
 
+/// Draws a cut by hand (issue 6: points clicked one by one on the skin),
+/// (θn, zn) in scalpel order, at least 2. It starts the plan afresh like
+/// PlaceProcedure, with no procedure: the chart is centred on the middle of
+/// the points, and the two lips of the cut are sewn back together edge to
+/// edge (straightClosureSutures()); offsetting border points afterwards
+/// (OffsetBorderPoint) makes it an excision closed the same way.
+struct DrawCut
+{
+  std::vector<Eigen::Vector2d> points;
+};
+
+/// The sutures that close a cut of @a pathPoints points straight: each
+/// edge (i, i+1) of the hole loop's first side onto its twin on the other
+/// (Fig. 4.11 numbering: vertex i's twin is 2n − 2 − i, the ends are their
+/// own), as simple-excision.procedure writes them for 4 points.
+std::vector<SutureEdges> straightClosureSutures(int pathPoints);
+
 /// Removes every undermined region of the plan (the band along the sutured
 /// edges is a simulation option and stays).
 struct ClearUndermining
 {
 };
 
-using PlanOperation =
-  std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter, UndermineRegion, ClearUndermining>;
+using PlanOperation = std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter, UndermineRegion,
+                                   ClearUndermining, DrawCut>;
 
 /// What an operation does, for messages: "place z-plasty", "move cut point 2",
 /// "offset border point 4", "set parameter limb_angle", "undermine a region

@@ -567,6 +567,51 @@ TEST(PlanRecipe, UnderminedRegionsGoThroughPlanJsonTheSceneAndAReplayBitForBit)
   EXPECT_THROW(recipeFromJson(bad), RecipeError);
 }
 
+// A cut drawn by hand along the points a simple excision's template makes is
+// sewn exactly as the template's procedure file writes it (its sutures are
+// the straight closure), and goes through the plan file unchanged.
+TEST(PlanRecipe, ACutDrawnByHandIsSewnStraightBackTogether)
+{
+  const ProcedureTemplate* simple = library().find("simple-excision");
+  ASSERT_NE(simple, nullptr);
+  const IncisionPlan templated = simple->place(phantom().skin, zCentre, {{"length", 16.0}});
+  ASSERT_EQ(templated.pointCount(), 4);
+  PlanRecipe recipe;
+  recipe.softwareVersion = softwareVersion();
+  recipe.operations.push_back(DrawCut{templated.cutPath()});
+  const IncisionPlan drawn = applyRecipe(recipe, phantom().skin, library());
+  EXPECT_TRUE(drawn.procedure().empty());
+  EXPECT_EQ(drawn.cutPath(), templated.cutPath());
+  EXPECT_EQ(drawn.writtenSutures(), templated.writtenSutures());
+  EXPECT_EQ(drawn.sutures().size(), templated.sutures().size());
+  EXPECT_EQ(describe(recipe.operations[0]), "draw a cut of 4 points");
+  // The chart is centred on the middle of the points: the template's centre
+  // is the middle of its symmetric cut.
+  EXPECT_NEAR(drawn.centre().theta, templated.centre().theta, 1e-9);
+  EXPECT_NEAR(drawn.centre().z, templated.centre().z, 1e-9);
+  // Offsets make it an excision like the template's.
+  PlanRecipe excision = recipe;
+  const std::vector<ChartPoint> offsets = templated.borderOffsets();
+  for (int v = 0; v < int(offsets.size()); ++v)
+    if (offsets[std::size_t(v)].norm() > 0.0)
+      excision.operations.push_back(OffsetBorderPoint{v, offsets[std::size_t(v)]});
+  EXPECT_TRUE(applyRecipe(excision, phantom().skin, library()).isExcision() || !templated.isExcision());
+  // Through JSON and back: the same operations, the same plan.
+  const PlanRecipe read = recipeFromJson(recipeToJson(excision));
+  ASSERT_EQ(read.operations.size(), excision.operations.size());
+  EXPECT_EQ(operationToJson(read.operations[0]), operationToJson(excision.operations[0]));
+  expectSamePlan(applyRecipe(read, phantom().skin, library()), applyRecipe(excision, phantom().skin, library()));
+  // Too few points, or a point that is not a number, are refused.
+  EXPECT_TRUE(contains(refusal(IncisionPlan(), DrawCut{{templated.cutPath()[0]}}, 1), "at least 2 points"));
+  EXPECT_TRUE(contains(
+    refusal(IncisionPlan(), DrawCut{{templated.cutPath()[0], Eigen::Vector2d(std::nan(""), 0.0)}}, 1), "not a number"));
+  // Straight closure of 3 points: ((0,1),(0,3)) and ((1,2),(3,2)).
+  const std::vector<SutureEdges> three = straightClosureSutures(3);
+  ASSERT_EQ(three.size(), 2u);
+  EXPECT_EQ(three[0], (SutureEdges{{0, 1}, {0, 3}}));
+  EXPECT_EQ(three[1], (SutureEdges{{1, 2}, {3, 2}}));
+}
+
 TEST(CtContentHash, TheSameScanReadTwiceUnderOtherNamesHashesTheSame)
 {
   // The sample series copied under other names, listed in the opposite order.

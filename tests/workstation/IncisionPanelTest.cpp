@@ -500,6 +500,29 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
     EXPECT_GT(tinted, 10);
   }
   workstation.screenshot("incision-edited-by-hand");
+  // A cut of the surgeon's own: three points clicked one by one become a
+  // plan "Cut 1" whose points are where the clicks landed.
+  const std::vector<Eigen::Vector3d> cutPoints{skinPoint(t0 - 0.06, z0 + 8.0), skinPoint(t0 - 0.03, z0 + 12.0),
+                                               skinPoint(t0 + 0.01, z0 + 14.0)};
+  click(workstation.widget<QPushButton>("incision.draw"));
+  for (const Eigen::Vector3d& c : cutPoints)
+    click3d(c);
+  click(workstation.widget<QPushButton>("incision.finishDraw"));
+  workstation.settle(200);
+  ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBeforeRegion) << workstation.errors();
+  PlanNode* drawnNode = planNamed(scene, "Cut 1");
+  ASSERT_NE(drawnNode, nullptr);
+  const incision::IncisionPlan drawn = IncisionLogic::readPlan(*drawnNode);
+  ASSERT_EQ(drawn.pointCount(), 3);
+  for (int k = 0; k < 3; ++k)
+  {
+    const auto [t, z] = chartOf(drawn.cutPath()[std::size_t(k)]);
+    EXPECT_LT((skinPoint(t, z) - cutPoints[std::size_t(k)]).norm(), 1.5) << "cut point " << k;
+  }
+  EXPECT_EQ(drawn.writtenSutures(), incision::straightClosureSutures(3));
+  EXPECT_NE(surfaceNamed(scene, "Cut 1 incision"), nullptr);
+  selectPlan(list, "Z-plasty 1");
+  workstation.settle(100);
   // Clear takes the regions away again.
   click(workstation.widget<QPushButton>("incision.clearUndermining"));
   workstation.settle(100);
