@@ -552,16 +552,12 @@ void IncisionPanel::moveTo(const NodeId& planId, const SurfacePick& pick)
   auto* node = logic_.scene().nodeAs<PlanNode>(planId);
   if (!node)
     return;
-  editPlan(planId, "Move " + node->name(),
-           [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-             const seg::CylindricalPoint c =
-               skin.frame().toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2]));
-             // Placed afresh at the new centre with the values it has.
-             const incision::PlanOperation op =
-               incision::PlaceProcedure{plan.procedure(), {c.theta, c.z}, plan.parameters()};
-             plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
-             recipe.operations.push_back(op);
-           });
+  recordOperation(planId, "Move " + node->name(), [&](const incision::IncisionPlan& plan, const seg::RangeMap& skin) {
+    const seg::CylindricalPoint c =
+      skin.frame().toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2]));
+    // Placed afresh at the new centre with the values it has.
+    return incision::PlanOperation(incision::PlaceProcedure{plan.procedure(), {c.theta, c.z}, plan.parameters()});
+  });
 }
 
 void IncisionPanel::parameterChanged(const std::string& name)
@@ -578,13 +574,10 @@ void IncisionPanel::parameterChanged(const std::string& name)
   if (value == values.end() || (old != node->parameters().end() && old->second == value->second))
     return;
   const bool done =
-    editPlan(node->id(), "Set " + readable(name).toLower().toStdString() + " of " + node->name(),
-             [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-               const incision::PlanOperation op = incision::SetParameter{name, value->second};
-               plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin,
-                                               logic_.procedures());
-               recipe.operations.push_back(op);
-             });
+    recordOperation(node->id(), "Set " + readable(name).toLower().toStdString() + " of " + node->name(),
+                    [&](const incision::IncisionPlan&, const seg::RangeMap&) {
+                      return incision::PlanOperation(incision::SetParameter{name, value->second});
+                    });
   if (!done)
     showSelection(); // the form shows the plan as it stayed
 }
@@ -604,19 +597,15 @@ void IncisionPanel::armMovePoint()
                            auto* node = self->logic_.scene().nodeAs<PlanNode>(id);
                            if (!node)
                              return;
-                           self->editPlan(id, "Move point p" + std::to_string(point) + " of " + node->name(),
-                                          [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe,
-                                              const seg::RangeMap& skin) {
-                                            const seg::CylindricalFrame& frame = skin.frame();
-                                            const seg::NormalizedCylindricalPoint n = frame.toNormalized(
-                                              frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1],
-                                                                                  pick.position[2])));
-                                            const incision::PlanOperation op =
-                                              incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)};
-                                            plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1,
-                                                                            skin, self->logic_.procedures());
-                                            recipe.operations.push_back(op);
-                                          });
+                           self->recordOperation(
+                             id, "Move point p" + std::to_string(point) + " of " + node->name(),
+                             [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
+                               const seg::CylindricalFrame& frame = skin.frame();
+                               const seg::NormalizedCylindricalPoint n = frame.toNormalized(frame.toCylindrical(
+                                 Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
+                               return incision::PlanOperation(
+                                 incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)});
+                             });
                          });
 }
 
@@ -627,12 +616,10 @@ void IncisionPanel::offsetBorderPoint()
     return;
   const int vertex = borderPoint_->value();
   const incision::ChartPoint offset(offsetU_->value(), offsetV_->value());
-  editPlan(node->id(), "Offset border point " + std::to_string(vertex) + " of " + node->name(),
-           [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-             const incision::PlanOperation op = incision::OffsetBorderPoint{vertex, offset};
-             plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
-             recipe.operations.push_back(op);
-           });
+  recordOperation(node->id(), "Offset border point " + std::to_string(vertex) + " of " + node->name(),
+                  [&](const incision::IncisionPlan&, const seg::RangeMap&) {
+                    return incision::PlanOperation(incision::OffsetBorderPoint{vertex, offset});
+                  });
 }
 
 void IncisionPanel::armUndermine()
@@ -687,13 +674,10 @@ void IncisionPanel::finishUndermining()
   incision::UnderminedRegion region;
   for (const auto& c : corners)
     region.emplace_back(c[0], c[1]);
-  if (editPlan(node->id(), "Undermine a region of " + node->name(),
-               [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-                 const incision::PlanOperation op = incision::UndermineRegion{region};
-                 plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin,
-                                                 logic_.procedures());
-                 recipe.operations.push_back(op);
-               }))
+  if (recordOperation(node->id(), "Undermine a region of " + node->name(),
+                      [&](const incision::IncisionPlan&, const seg::RangeMap&) {
+                        return incision::PlanOperation(incision::UndermineRegion{region});
+                      }))
     regionStatus_->setText(tr("%1 undermined region(s): simulate the plan again to see their effect.")
                              .arg(IncisionLogic::readPlan(*node).underminedRegions().size()));
 }
@@ -703,13 +687,22 @@ void IncisionPanel::clearUndermining()
   PlanNode* node = selectedPlan();
   if (!node)
     return;
-  editPlan(node->id(), "Clear the undermining of " + node->name(),
-           [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-             const incision::PlanOperation op = incision::ClearUndermining{};
-             plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
-             recipe.operations.push_back(op);
-           });
+  recordOperation(node->id(), "Clear the undermining of " + node->name(),
+                  [&](const incision::IncisionPlan&, const seg::RangeMap&) {
+                    return incision::PlanOperation(incision::ClearUndermining{});
+                  });
   regionStatus_->clear();
+}
+
+bool IncisionPanel::recordOperation(
+  const NodeId& planId, const std::string& label,
+  const std::function<incision::PlanOperation(const incision::IncisionPlan&, const seg::RangeMap&)>& operation)
+{
+  return editPlan(planId, label, [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
+    const incision::PlanOperation op = operation(plan, skin);
+    plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
+    recipe.operations.push_back(op);
+  });
 }
 
 bool IncisionPanel::editPlan(

@@ -16,6 +16,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
+#include "modules/incision/PlanRecipe.h"
 #include "scene/Node.h"
 
 class QComboBox;
@@ -90,7 +91,12 @@ private:
   void armUndermine();
   void finishUndermining();
   void clearUndermining();
-  /// Applies a recipe operation to plan @a planId and records it as one undoable edit.
+  /// Applies the recipe operation @a operation makes of the plan as it is to
+  /// plan @a planId, and records it in its recipe as one undoable edit.
+  bool recordOperation(
+    const NodeId& planId, const std::string& label,
+    const std::function<incision::PlanOperation(const incision::IncisionPlan&, const seg::RangeMap&)>& operation);
+  /// Runs @a edit on plan @a planId and its recipe as one undoable edit.
   bool editPlan(const NodeId& planId, const std::string& label,
                 const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit);
   void undo();
