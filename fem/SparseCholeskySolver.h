@@ -106,6 +106,21 @@ public:
   /// fills badly).
   void setColumnGroups(std::vector<int> group);
 
+  /// A group ordered beside its neighbours instead of by nested dissection:
+  /// placed right before whichever of groups @a first and @a second comes
+  /// first in the order (-1: none). For a mid-edge node beside the ends of
+  /// its edge: its neighbours are all neighbours of either end, so this adds
+  /// no fill, and the graph left to dissect holds the element vertices only.
+  struct AttachedGroup {
+    int group = -1;
+    int first = -1;
+    int second = -1;
+  };
+  /// setColumnGroups() with some groups attached to others (ids as in
+  /// @a group). An attached group whose ends have no column is ordered by
+  /// itself; so is one attached to another attached group.
+  void setColumnGroups(std::vector<int> group, std::vector<AttachedGroup> attached);
+
   /// @name Statistics of the last successful factorization (CHOLMOD's counts)
   ///@{
   /// Floating-point operations of the numeric factorization.

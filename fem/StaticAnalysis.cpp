@@ -1,6 +1,7 @@
 #include "fem/StaticAnalysis.h"
 
 #include <algorithm>
+#include <array>
 #include <exception>
 #include <thread>
 
@@ -16,6 +17,46 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Mid-edge slots of each element kind with the two corner slots of their
+// edge: the corners whose natural coordinates average to the mid-edge node's.
+struct EdgeSlots {
+  int middle, first, second;
+};
+std::vector<EdgeSlots> edgeSlots(ElementKind kind) {
+  const bool hex = kind == ElementKind::Hex20;
+  const int corners = hex ? kHex20CornerCount : kWedge15CornerCount;
+  const int all = hex ? kHex20NodeCount : kWedge15NodeCount;
+  auto at = [hex](int slot) { return hex ? batheNaturalCoordinates(slot) : wedge15NaturalCoordinates(slot); };
+  std::vector<EdgeSlots> edges;
+  for (int m = corners; m < all; ++m)
+    for (int a = 0; a < corners; ++a)
+      for (int b = a + 1; b < corners; ++b)
+        if (((at(a) + at(b)) / 2.0 - at(m)).norm() < 1e-12) edges.push_back({m, a, b});
+  return edges;
+}
+
+// For each mid-edge node the two ends of its edge (the first element that
+// has it as a mid-edge node decides); {-1, -1} for element vertices and for
+// nodes in no element.
+std::vector<std::array<int, 2>> edgeEndsOf(const Mesh& mesh) {
+  const std::size_t n = std::size_t(mesh.nodeCount());
+  std::vector<std::array<int, 2>> ends(n, {-1, -1});
+  std::vector<char> isVertex(n, 0);
+  for (const Element& el : mesh.elements) {
+    const int corners = el.kind == ElementKind::Hex20 ? kHex20CornerCount : kWedge15CornerCount;
+    for (int k = 0; k < corners; ++k) isVertex[std::size_t(el.nodes[std::size_t(k)])] = 1;
+  }
+  const std::vector<EdgeSlots> hexEdges = edgeSlots(ElementKind::Hex20);
+  const std::vector<EdgeSlots> wedgeEdges = edgeSlots(ElementKind::Wedge15);
+  for (const Element& el : mesh.elements)
+    for (const EdgeSlots& e : el.kind == ElementKind::Hex20 ? hexEdges : wedgeEdges) {
+      const int m = el.nodes[std::size_t(e.middle)];
+      if (m < 0 || isVertex[std::size_t(m)] || ends[std::size_t(m)][0] >= 0) continue;
+      ends[std::size_t(m)] = {el.nodes[std::size_t(e.first)], el.nodes[std::size_t(e.second)]};
+    }
+  return ends;
 }
 
 }  // namespace
@@ -61,10 +102,26 @@ SolverStatus LinearStaticAnalysis::prepareStages() {
     analysis = std::thread([this, &analysisError]() {
       try {
         const auto start = Clock::now();
-        // Order by nodes: the graph of nodes is ~9x smaller than the DOF graph.
+        // Order by nodes (a node's DOFs together), and only the element
+        // vertices by nested dissection: each mid-edge node goes right before
+        // the first end of its edge. The vertex graph is ~30x smaller than
+        // the DOF graph, with the same fill (measured on the 100k-DOF skin
+        // patch of caps_bench_fem: METIS 0.42 s -> 0.05 s, same flops).
         std::vector<int> nodeOfDof(map_.masterOf.size());
         for (std::size_t d = 0; d < nodeOfDof.size(); ++d) nodeOfDof[d] = map_.masterOf[d] / 3;
-        solver_.setColumnGroups(std::move(nodeOfDof));
+        std::vector<SparseCholeskySolver::AttachedGroup> midEdges;
+        const std::vector<std::array<int, 2>> ends = edgeEndsOf(mesh_);
+        // The group of a node: the node its free DOFs stand for (a sutured
+        // node's are its target's), -1 if it has none.
+        auto masterNode = [this](int node) {
+          for (int c = 0; c < 3; ++c)
+            if (const int r = map_.reduced[std::size_t(3 * node + c)]; r >= 0) return map_.masterOf[std::size_t(r)] / 3;
+          return -1;
+        };
+        for (std::size_t i = 0; i < ends.size(); ++i)
+          if (ends[i][0] >= 0 && masterNode(int(i)) == int(i))
+            midEdges.push_back({int(i), masterNode(ends[i][0]), masterNode(ends[i][1])});
+        solver_.setColumnGroups(std::move(nodeOfDof), std::move(midEdges));
         solver_.analyzePattern(kbar_);
         times_.analyse = secondsSince(start);
       } catch (...) {
