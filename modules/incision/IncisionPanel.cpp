@@ -6,6 +6,7 @@
 #include <utility>
 
 #include <QAbstractItemView>
+#include <QCheckBox>
 #include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QFormLayout>
@@ -19,6 +20,7 @@
 #include <QPointer>
 #include <QPushButton>
 #include <QShortcut>
+#include <QSignalBlocker>
 #include <QSpinBox>
 #include <QTableWidget>
 #include <QTimer>
@@ -26,6 +28,8 @@
 
 #include "modules/incision/IncisionLogic.h"
 #include "modules/incision/PlanLines.h"
+#include "modules/incision/SkinTensionLines.h"
+#include "segmentation/LandmarkPlacement.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"
@@ -41,6 +45,10 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 /// §3.3.1: incision lines solid, dark blue so they stand out on the skin.
 constexpr std::array<double, 3> kLineColour{0.05, 0.10, 0.45};
 constexpr double kLineWidth = 3.0;
+// The skin tension lines: a guide, quieter than the plan's own lines.
+constexpr std::array<double, 3> kTensionLineColour{0.55, 0.50, 0.20};
+constexpr double kTensionLineWidth = 1.5;
+constexpr const char* kTensionLinesName = "Skin tension lines";
 
 std::string linesName(const std::string& planName)
 {
@@ -216,6 +224,14 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   connect(undermine_, &QPushButton::clicked, this, &IncisionPanel::armUndermine);
   connect(finishRegion_, &QPushButton::clicked, this, &IncisionPanel::finishUndermining);
   connect(clearRegions_, &QPushButton::clicked, this, &IncisionPanel::clearUndermining);
+
+  showTension_ = new QCheckBox(tr("Skin tension lines (guide)"), this);
+  showTension_->setObjectName("incision.tensionLines");
+  showTension_->setToolTip(tr("Overlay the relaxed skin tension lines of the face (schematic, after Borges 1984),\n"
+                              "placed by the facial landmarks of the skin map. Incisions along them heal with\n"
+                              "the finest scars; the table gives the angle of the plan's axis to them."));
+  layout->addWidget(showTension_);
+  connect(showTension_, &QCheckBox::toggled, this, &IncisionPanel::showTensionLines);
 
   predictionStatus_ = new QLabel(this);
   predictionStatus_->setObjectName("incision.predictionStatus");
@@ -941,6 +957,11 @@ void IncisionPanel::refresh()
   for (Node* n : logic_.scene().nodesOfType(NodeType::Plan))
     if (!predicted_.count(n->id()) && hasPrediction(logic_.scene(), n->name()))
       predicted_[n->id()] = planState(*static_cast<PlanNode*>(n));
+  {
+    // The guide is shown when the scene has its lines (a scene saved with them, or undo).
+    const QSignalBlocker block(showTension_);
+    showTension_->setChecked(nodeNamed(logic_.scene(), kTensionLinesName, NodeType::Surface) != nullptr);
+  }
   refreshPlans();
   showSelection();
   refreshButtons();
@@ -1064,6 +1085,20 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
     for (const auto& a : m.limbAngles)
       row(tr("Angle at p%1").arg(a.point), a.skin / kDegree, 1, QString::fromUtf8("°"));
     row(tr("Excised area"), m.excisedArea, 1, QString::fromUtf8("mm²"));
+    const incision::SkinTensionLines* guide = showTension_->isChecked() ? tensionLines(*skinNode) : nullptr;
+    if (guide)
+    {
+      try
+      {
+        const incision::AxisToTensionLines axis = incision::axisToTensionLines(plan, *guide);
+        row(tr("Axis %1 to skin tension lines").arg(QString::fromStdString(axis.axis)), axis.degrees, 0,
+            QString::fromUtf8("°"));
+      }
+      catch (const std::invalid_argument&)
+      {
+        // off the part of the face the guide covers: no row
+      }
+    }
     const auto angle = plan.parameters().find("limb_angle");
     if ((plan.generator() == "z" || plan.generator() == "multiple-z") && angle != plan.parameters().end())
     {
@@ -1084,6 +1119,63 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
     table_->insertRow(r);
     table_->setItem(r, 0, new QTableWidgetItem(tr("Cannot measure: %1").arg(e.what())));
   }
+}
+
+const incision::SkinTensionLines* IncisionPanel::tensionLines(const RangeMapNode& skinNode, std::string* why)
+{
+  const seg::RangeMap& skin = rangeMap(skinNode);
+  TensionLinesOnMap& entry = tension_[skinNode.id()];
+  const std::shared_ptr<seg::RangeMap>& map = maps_[skinNode.id()];
+  if (entry.map != map)
+  {
+    entry = {map, nullptr, {}};
+    try
+    {
+      const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
+      entry.lines = std::make_unique<incision::SkinTensionLines>(
+        skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
+    }
+    catch (const std::exception& e)
+    {
+      entry.why = e.what();
+    }
+  }
+  if (why)
+    *why = entry.why;
+  return entry.lines.get();
+}
+
+void IncisionPanel::showTensionLines(bool show)
+{
+  Node* existing = nodeNamed(logic_.scene(), kTensionLinesName, NodeType::Surface);
+  if (!show)
+  {
+    if (existing)
+      logic_.scene().removeNode(existing->id());
+    fillMeasurements(selectedPlan());
+    return;
+  }
+  const RangeMapNode* skinNode = newestSkin();
+  std::string why = "there is no skin range map yet: make one in the Range maps module first.";
+  const incision::SkinTensionLines* guide = skinNode ? tensionLines(*skinNode, &why) : nullptr;
+  if (!guide)
+  {
+    host_.showWarning("Skin tension lines", "The skin tension lines cannot be shown: " + why);
+    const QSignalBlocker block(showTension_);
+    showTension_->setChecked(false);
+    return;
+  }
+  auto* node = static_cast<SurfaceNode*>(existing);
+  if (!node)
+  {
+    node = logic_.scene().add<SurfaceNode>();
+    node->setName(kTensionLinesName);
+    node->setColor(kTensionLineColour);
+    node->setLineWidth(kTensionLineWidth);
+  }
+  node->setPolyData(incision::skinTensionLinesPolyData(*guide));
+  host_.showStatus("Skin tension lines shown (a schematic guide placed by the facial landmarks)");
+  fillMeasurements(selectedPlan());
 }
 
 void IncisionPanel::refreshButtons()

@@ -19,6 +19,7 @@
 #include "modules/incision/PlanRecipe.h"
 #include "scene/Node.h"
 
+class QCheckBox;
 class QComboBox;
 class QDoubleSpinBox;
 class QFormLayout;
@@ -44,6 +45,7 @@ namespace incision {
 class IncisionPlan;
 struct PlanRecipe;
 class ProcedureTemplate;
+class SkinTensionLines;
 } // namespace incision
 
 /// @class IncisionPanel
@@ -129,6 +131,11 @@ private:
   void showSelection();
   void fillMeasurements(const PlanNode* plan);
   void refreshButtons();
+  /// The skin tension lines on a skin map, placed by the landmarks found on
+  /// it; nullptr (and @a why) when they cannot be placed.
+  const incision::SkinTensionLines* tensionLines(const RangeMapNode& skin, std::string* why = nullptr);
+  /// Shows or hides the skin tension lines on the newest skin map.
+  void showTensionLines(bool show);
   /// Whether a plan has prediction nodes made for another state of it.
   bool predictionOutOfDate(const PlanNode& plan) const;
   ///@}
@@ -143,6 +150,14 @@ private:
   std::set<NodeId> dirtyMaps_;
   std::map<NodeId, std::shared_ptr<seg::RangeMap>> maps_;
   std::map<NodeId, std::string> hashes_; ///< volume id → content hash
+  struct TensionLinesOnMap
+  {
+    std::shared_ptr<seg::RangeMap> map; ///< the map they were placed on (they point into it)
+    std::unique_ptr<incision::SkinTensionLines> lines;
+    std::string why;                    ///< why there are none
+  };
+  std::map<NodeId, TensionLinesOnMap> tension_;
+  QCheckBox* showTension_ = nullptr;
   /// Plan state (toJson without its name) when its prediction was made, or first seen with one.
   std::map<NodeId, nlohmann::json> predicted_;
 

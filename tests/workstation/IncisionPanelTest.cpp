@@ -7,6 +7,7 @@
 #include <numbers>
 #include <optional>
 
+#include <QCheckBox>
 #include <QDoubleSpinBox>
 #include <QLabel>
 #include <QListWidget>
@@ -22,6 +23,8 @@
 #include "Workstation.h"
 #include "modules/incision/IncisionLogic.h"
 #include "modules/incision/PlanLines.h"
+#include "modules/incision/SkinTensionLines.h"
+#include "segmentation/LandmarkPlacement.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "report/DemoScene.h"
 #include "scene/PlanNode.h"
@@ -527,6 +530,78 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   click(workstation.widget<QPushButton>("incision.clearUndermining"));
   workstation.settle(100);
   EXPECT_TRUE(IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId)).underminedRegions().empty());
+}
+
+// The relaxed skin tension lines as a guide (issue 6 item 4): shown over the
+// face from the landmarks found on the skin map, on the skin, and the angle
+// of the selected plan's axis to them in the measurements.
+TEST(IncisionPanel, SkinTensionLinesGuide)
+{
+  test::Workstation workstation;
+  Scene& scene = workstation.scene();
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
+      static_cast<SurfaceNode*>(n)->setVisible(false);
+  workstation.selectModule("incision");
+  selectPlan(workstation.widget<QListWidget>("incision.plans"), "Z-plasty 1");
+  workstation.settle(100);
+  auto* table = workstation.widget<QTableWidget>("incision.measurements");
+  const QString axisRow = QString::fromUtf8("Axis p1–p2 to skin tension lines");
+  EXPECT_TRUE(std::isnan(tableValue(table, axisRow))) << "the angle is shown before the guide";
+
+  auto* guide = workstation.widget<QCheckBox>("incision.tensionLines");
+  guide->setChecked(true);
+  workstation.settle(200);
+  ASSERT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
+  SurfaceNode* lines = surfaceNamed(scene, "Skin tension lines");
+  ASSERT_NE(lines, nullptr);
+  vtkPolyData* data = lines->polyData();
+  ASSERT_NE(data, nullptr);
+  EXPECT_GT(data->GetNumberOfLines(), 30);
+  double worst = 0.0;
+  for (vtkIdType i = 0; i < data->GetNumberOfPoints(); ++i)
+  {
+    double p[3];
+    data->GetPoint(i, p);
+    const seg::CylindricalPoint c = skin.frame().toCylindrical(Eigen::Vector3d(p[0], p[1], p[2]));
+    worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - incision::kIncisionLineLift));
+  }
+  EXPECT_LT(worst, 0.05) << "a guide line leaves the skin";
+
+  // The plan's axis against the lines, as the logic measures it on the same landmarks.
+  const double shown = tableValue(table, axisRow);
+  ASSERT_FALSE(std::isnan(shown)) << "no angle to the skin tension lines in the measurements";
+  const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
+  const incision::SkinTensionLines logic(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
+  const double expected =
+    incision::axisToTensionLines(IncisionLogic::readPlan(*planNamed(scene, "Z-plasty 1")), logic).degrees;
+  EXPECT_NEAR(shown, expected, 0.5);
+  EXPECT_GE(shown, 0.0);
+  EXPECT_LE(shown, 90.0);
+  {
+    // Face on, the whole face in view, for the screenshot.
+    const seg::CylindricalFrame& frame = skin.frame();
+    const seg::Landmark* nose = found.find("pronasale");
+    ASSERT_NE(nose, nullptr);
+    const Eigen::Vector3d focus = frame.toWorld(skin.sample(nose->theta, nose->z) - 30.0, nose->theta, nose->z);
+    const Eigen::Vector3d eye = focus + 420.0 * frame.radialDirection(nose->theta);
+    SnapshotNode::Camera camera;
+    camera.position = {eye.x(), eye.y(), eye.z()};
+    camera.focalPoint = {focus.x(), focus.y(), focus.z()};
+    camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
+    workstation.window().setThreeDViewCamera(camera);
+    table->scrollToBottom();
+    workstation.settle(200);
+  }
+  workstation.screenshot("incision-tension-lines");
+
+  guide->setChecked(false);
+  workstation.settle(100);
+  EXPECT_EQ(surfaceNamed(scene, "Skin tension lines"), nullptr);
+  EXPECT_TRUE(std::isnan(tableValue(table, axisRow)));
 }
 
 TEST(IncisionPanel, NoSkinMapSaysWhatToDo)
