@@ -125,6 +125,7 @@ void MainWindow::buildViews()
             // One click, one pick: the handler may arm the next one itself.
             auto handler = std::move(pick_handler_);
             pick_handler_ = nullptr;
+            view3d_->setHandlesGrabbable(true);
             view3d_->unsetCursor();
             statusBar()->clearMessage();
             try
@@ -134,6 +135,21 @@ void MainWindow::buildViews()
             catch (const std::exception& e)
             {
               showError("Pick", e.what());
+            }
+          });
+
+  connect(view3d_, &ui::ThreeDView::handleDropped, this,
+          [this](int index, const QString& key, double x, double y, double z) {
+            if (!handle_handler_)
+              return;
+            auto handler = handle_handler_; // the handler may replace the handles (and itself)
+            try
+            {
+              handler(index, SurfacePick{{x, y, z}, key.toStdString()});
+            }
+            catch (const std::exception& e)
+            {
+              showError("Drag", e.what());
             }
           });
 
@@ -227,6 +243,7 @@ void MainWindow::buildModulePanels()
   connect(module_selector_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int index) {
     // A pick or a marker belongs to the panel that asked for it.
     cancelPick();
+    setThreeDViewHandles({}, nullptr);
     view3d_->hideMarker();
     panels_->setCurrentIndex(index);
   });
@@ -681,14 +698,23 @@ void MainWindow::dropEvent(QDropEvent* event)
 void MainWindow::pickInThreeDView(const std::string& prompt, std::function<void(const SurfacePick&)> picked)
 {
   pick_handler_ = std::move(picked);
+  view3d_->setHandlesGrabbable(false); // the click asked for, even on a handle
   statusBar()->showMessage(QString::fromStdString(prompt + "  (Esc cancels)"));
   view3d_->setCursor(Qt::CrossCursor);
   view3d_->setFocus();
 }
 
+void MainWindow::setThreeDViewHandles(const std::vector<std::array<double, 3>>& points,
+                                      std::function<void(int, const SurfacePick&)> dropped)
+{
+  handle_handler_ = points.empty() ? nullptr : std::move(dropped);
+  view3d_->setHandles(points);
+}
+
 void MainWindow::cancelPick()
 {
   pick_handler_ = nullptr;
+  view3d_->setHandlesGrabbable(true);
   view3d_->unsetCursor();
   statusBar()->clearMessage();
 }

@@ -68,6 +68,8 @@ public:
   QWidget* window() override { return this; }
   void pickInThreeDView(const std::string& prompt, std::function<void(const SurfacePick&)> picked) override;
   void cancelPick() override;
+  void setThreeDViewHandles(const std::vector<std::array<double, 3>>& points,
+                            std::function<void(int, const SurfacePick&)> dropped) override;
   ViewCapture captureThreeDView() override;
   void setThreeDViewCamera(const SnapshotNode::Camera& camera) override;
   void setCursorPosition(const std::array<double, 3>& position) override;
@@ -124,6 +126,7 @@ private:
   std::filesystem::path scene_path_;
   std::filesystem::path screenshot_file_;
   std::function<void(const SurfacePick&)> pick_handler_;
+  std::function<void(int, const SurfacePick&)> handle_handler_;
   bool unattended_ = false;
   bool error_reported_ = false;
   std::vector<std::string> reported_errors_;

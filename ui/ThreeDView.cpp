@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include <QMouseEvent>
 #include <QTimer>
@@ -13,6 +14,8 @@
 #include <vtkPointData.h>
 #include <vtkScalarBarActor.h>
 #include <vtkSphereSource.h>
+#include <vtkGlyph3D.h>
+#include <vtkPoints.h>
 #include <vtkScalarsToColors.h>
 #include <vtkUnsignedCharArray.h>
 #include <vtkAxesActor.h>
@@ -283,17 +286,28 @@ void ThreeDView::updateColourBar()
     renderer_->AddViewProp(colour_bar_);
   }
   colour_bar_->SetLookupTable(table);
-  // A long title ("von Mises stress (kPa)") goes on two lines so it stays
-  // inside the view above the narrow bar.
-  if (title.size() > 14)
+  // A long title ("Soft-tissue thickness (mm)") goes on lines of at most
+  // about 12 characters, so it stays inside the view above the narrow bar.
   {
-    const auto middle = title.size() / 2;
-    const auto before = title.rfind(' ', middle), after = title.find(' ', middle);
-    const auto split = before == std::string::npos ? after
-                       : after == std::string::npos ? before
-                       : (middle - before <= after - middle ? before : after);
-    if (split != std::string::npos)
-      title[split] = '\n';
+    std::string wrapped, line, word;
+    std::istringstream words(title);
+    while (words >> word)
+    {
+      if (!line.empty() && line.size() + 1 + word.size() > 12)
+      {
+        wrapped += wrapped.empty() ? "" : "\n";
+        wrapped += line;
+        line.clear();
+      }
+      line += line.empty() ? "" : " ";
+      line += word;
+    }
+    if (!line.empty())
+    {
+      wrapped += wrapped.empty() ? "" : "\n";
+      wrapped += line;
+    }
+    title = wrapped;
   }
   colour_bar_->SetTitle(title.c_str());
   colour_bar_->SetVisibility(true);
@@ -324,15 +338,161 @@ bool ThreeDView::pickSurface(int x, int y, std::string& key, std::array<double, 
   return false;
 }
 
+void ThreeDView::setHandles(const std::vector<std::array<double, 3>>& points)
+{
+  handles_ = points;
+  if (dragging_ >= int(handles_.size()))
+    dragging_ = -1;
+  updateHandles();
+}
+
+void ThreeDView::updateHandles()
+{
+  if (!handle_actor_)
+  {
+    handle_points_ = vtkSmartPointer<vtkPoints>::New();
+    auto cloud = vtkSmartPointer<vtkPolyData>::New();
+    cloud->SetPoints(handle_points_);
+    auto sphere = vtkSmartPointer<vtkSphereSource>::New();
+    sphere->SetRadius(1.3); // mm: a grip the size of a fingertip on the screen at face scale
+    sphere->SetThetaResolution(16);
+    sphere->SetPhiResolution(12);
+    auto glyphs = vtkSmartPointer<vtkGlyph3D>::New();
+    glyphs->SetInputData(cloud);
+    glyphs->SetSourceConnection(sphere->GetOutputPort());
+    glyphs->ScalingOff();
+    auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
+    mapper->SetInputConnection(glyphs->GetOutputPort());
+    handle_actor_ = vtkSmartPointer<vtkActor>::New();
+    handle_actor_->SetMapper(mapper);
+    handle_actor_->GetProperty()->SetColor(1.0, 1.0, 1.0);
+    handle_actor_->GetProperty()->SetAmbient(0.3);
+    handle_actor_->PickableOff(); // picks find the skin under a handle, not the handle
+    renderer_->AddActor(handle_actor_);
+  }
+  handle_points_->Reset();
+  for (const auto& p : handles_)
+    handle_points_->InsertNextPoint(p.data());
+  handle_points_->Modified();
+  handle_actor_->SetVisibility(!handles_.empty());
+  requestRender();
+}
+
+QPoint ThreeDView::handleOnScreen(std::size_t index) const
+{
+  const auto& p = handles_.at(index);
+  renderer_->SetWorldPoint(p[0], p[1], p[2], 1.0);
+  renderer_->WorldToDisplay();
+  double display[3];
+  renderer_->GetDisplayPoint(display);
+  const double ratio = devicePixelRatioF();
+  const int* size = const_cast<ThreeDView*>(this)->renderWindow()->GetSize();
+  return QPoint(int(std::lround(display[0] / ratio)), int(std::lround((size[1] - 1 - display[1]) / ratio)));
+}
+
+int ThreeDView::handleNear(const QPoint& at) const
+{
+  int best = -1;
+  if (!handles_grabbable_)
+    return best;
+  double bestDistance = 9.0; // pixels
+  for (std::size_t i = 0; i < handles_.size(); ++i)
+  {
+    const QPoint d = handleOnScreen(i) - at;
+    const double distance = std::hypot(double(d.x()), double(d.y()));
+    if (distance <= bestDistance)
+    {
+      bestDistance = distance;
+      best = int(i);
+    }
+  }
+  return best;
+}
+
+bool ThreeDView::event(QEvent* event)
+{
+  const auto type = event->type();
+  if (type == QEvent::MouseButtonPress || type == QEvent::MouseMove || type == QEvent::MouseButtonRelease ||
+      type == QEvent::MouseButtonDblClick)
+  {
+    auto* mouse = static_cast<QMouseEvent*>(event);
+    const bool grab = type == QEvent::MouseButtonPress && mouse->button() == Qt::LeftButton &&
+                      handleNear(mouse->pos()) >= 0;
+    if (dragging_ >= 0 || grab)
+    {
+      if (type == QEvent::MouseButtonPress)
+        mousePressEvent(mouse);
+      else if (type == QEvent::MouseMove)
+        mouseMoveEvent(mouse);
+      else if (type == QEvent::MouseButtonRelease)
+        mouseReleaseEvent(mouse);
+      event->accept();
+      return true;
+    }
+  }
+  return QVTKOpenGLNativeWidget::event(event);
+}
+
 void ThreeDView::mousePressEvent(QMouseEvent* event)
 {
   press_valid_ = event->button() == Qt::LeftButton;
   press_position_ = event->pos();
+  if (press_valid_)
+    if (const int handle = handleNear(event->pos()); handle >= 0)
+    {
+      // A drag of the handle: the camera does not see this press.
+      dragging_ = handle;
+      drag_over_surface_ = false;
+      press_valid_ = false;
+      setCursor(Qt::ClosedHandCursor);
+      return;
+    }
   QVTKOpenGLNativeWidget::mousePressEvent(event);
+}
+
+void ThreeDView::mouseMoveEvent(QMouseEvent* event)
+{
+  if (dragging_ < 0)
+  {
+    // An open hand over a handle says it can be taken.
+    if (!handles_.empty() && !(event->buttons() & Qt::LeftButton))
+    {
+      if (handleNear(event->pos()) >= 0)
+        setCursor(Qt::OpenHandCursor);
+      else
+        unsetCursor();
+    }
+    QVTKOpenGLNativeWidget::mouseMoveEvent(event);
+    return;
+  }
+  std::string key;
+  std::array<double, 3> position{};
+  drag_over_surface_ = pickSurface(event->pos().x(), event->pos().y(), key, position);
+  if (drag_over_surface_)
+  {
+    drag_key_ = key;
+    drag_position_ = position;
+    // The handle follows the skin under the cursor; the plan changes on release.
+    handle_points_->SetPoint(vtkIdType(dragging_), position.data());
+    handle_points_->Modified();
+    requestRender();
+  }
 }
 
 void ThreeDView::mouseReleaseEvent(QMouseEvent* event)
 {
+  if (dragging_ >= 0)
+  {
+    const int handle = dragging_;
+    dragging_ = -1;
+    setCursor(Qt::OpenHandCursor);
+    if (event->button() == Qt::LeftButton && drag_over_surface_)
+      emit handleDropped(handle, QString::fromStdString(drag_key_), drag_position_[0], drag_position_[1],
+                         drag_position_[2]);
+    else
+      updateHandles(); // let go over the background: back where it was
+    return;
+  }
   QVTKOpenGLNativeWidget::mouseReleaseEvent(event);
   if (!press_valid_ || event->button() != Qt::LeftButton)
     return;

@@ -7,12 +7,14 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <QPoint>
 #include <QVTKOpenGLNativeWidget.h>
 #include <vtkSmartPointer.h>
 
 class vtkActor;
+class vtkPoints;
 class vtkImageData;
 class vtkImageProperty;
 class vtkImageSlice;
@@ -61,6 +63,18 @@ public:
   void setMarker(const std::array<double, 3>& position);
   void hideMarker();
 
+  /// Points the user moves by dragging them along the surfaces (a plan's
+  /// cut points, §3.2.4): drawn as small spheres; a left press within a few
+  /// pixels of one drags it instead of turning the view. Replaces any
+  /// handles shown; an empty list takes them away.
+  void setHandles(const std::vector<std::array<double, 3>>& points);
+  std::size_t handleCount() const { return handles_.size(); }
+  /// While false, a press near a handle is an ordinary press (a click the
+  /// workstation is waiting for, say); the handles stay drawn.
+  void setHandlesGrabbable(bool grabbable) { handles_grabbable_ = grabbable; }
+  /// Where handle @a index is drawn in widget pixels (Qt's origin top left).
+  QPoint handleOnScreen(std::size_t index) const;
+
   /// Adds or replaces the surface @a key (a node id, say).
   void setSurface(const std::string& key, vtkPolyData* surface, const SurfaceStyle& style);
   void removeSurface(const std::string& key);
@@ -84,17 +98,36 @@ signals:
   /// A left click (press and release within a few pixels, so not a turn of
   /// the view) on surface @a key at world @a position.
   void surfaceClicked(const QString& key, double x, double y, double z);
+  /// A handle was dragged and let go over surface @a key at world @a x, y, z
+  /// (not sent when it was let go over the background: it goes back).
+  void handleDropped(int index, const QString& key, double x, double y, double z);
 
 protected:
   void mousePressEvent(QMouseEvent* event) override;
   void mouseReleaseEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+  /// QVTKOpenGLNativeWidget hands every event to the VTK interactor before
+  /// the mouse handlers run; a handle's drag is kept from it here, so the
+  /// view does not turn while a point is dragged.
+  bool event(QEvent* event) override;
 
 private:
   void updateColourBar();
+  /// The handle within a few pixels of @a at (the nearest), or -1.
+  int handleNear(const QPoint& at) const;
+  void updateHandles();
 
   vtkSmartPointer<vtkRenderer> renderer_;
   vtkSmartPointer<vtkScalarBarActor> colour_bar_;
   vtkSmartPointer<vtkActor> marker_;
+  std::vector<std::array<double, 3>> handles_;
+  vtkSmartPointer<vtkPoints> handle_points_;
+  vtkSmartPointer<vtkActor> handle_actor_;
+  bool handles_grabbable_ = true;
+  int dragging_ = -1;                 ///< the handle being dragged, or -1
+  bool drag_over_surface_ = false;
+  std::string drag_key_;
+  std::array<double, 3> drag_position_{};
   std::map<std::string, SurfaceStyle> styles_;
   QPoint press_position_;
   bool press_valid_ = false;

@@ -33,7 +33,7 @@ class ModuleHost;
 
 /// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
 /// in a way that breaks plugins built against the old headers.
-inline constexpr int kModuleApiVersion = 3;
+inline constexpr int kModuleApiVersion = 4;
 
 /// The module's algorithmic side, bound to the scene. Subclasses add the
 /// module's operations; it never includes a widget header.
@@ -124,6 +124,12 @@ public:
   virtual void pickInThreeDView(const std::string& prompt, std::function<void(const SurfacePick&)> picked) = 0;
   /// Disarms a pick requested with pickInThreeDView(); nothing if none.
   virtual void cancelPick() = 0;
+  /// Shows points the user can drag along the surfaces in the 3D view (a
+  /// plan's cut points); @a dropped gets the handle's index and where on a
+  /// surface it was let go. Replaces the handles shown before; an empty list
+  /// (or choosing another module) takes them away.
+  virtual void setThreeDViewHandles(const std::vector<std::array<double, 3>>& points,
+                                    std::function<void(int, const SurfacePick&)> dropped) = 0;
   /// The 3D view as shown now, at its size on screen.
   virtual ViewCapture captureThreeDView() = 0;
   /// Moves the 3D view's camera.

@@ -176,7 +176,7 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   point_->setPrefix(tr("cut point p"));
   movePoint_ = new QPushButton(tr("Move point"), editBox_);
   movePoint_->setObjectName("incision.movePoint");
-  movePoint_->setToolTip(tr("Then click on the skin where the point goes"));
+  movePoint_->setToolTip(tr("Then click on the skin where the point goes (or drag its white handle in the 3D view)"));
   edit->addWidget(point_, 0, 0);
   edit->addWidget(movePoint_, 0, 1, 1, 3);
   borderPoint_ = new QSpinBox(editBox_);
@@ -606,23 +606,72 @@ void IncisionPanel::armMovePoint()
   const NodeId id = plan->id();
   const int point = point_->value();
   QPointer<IncisionPanel> self(this);
-  host_.pickInThreeDView("Click on the skin where cut point p" + std::to_string(point) + " of " + plan->name() + " goes",
+  host_.pickInThreeDView("Click on the skin where cut point p" + std::to_string(point) + " of " + plan->name() +
+                           " goes (or drag the point)",
                          [self, id, point](const SurfacePick& pick) {
-                           if (!self)
-                             return;
-                           auto* node = self->logic_.scene().nodeAs<PlanNode>(id);
-                           if (!node)
-                             return;
-                           self->recordOperation(
-                             id, "Move point p" + std::to_string(point) + " of " + node->name(),
-                             [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
-                               const seg::CylindricalFrame& frame = skin.frame();
-                               const seg::NormalizedCylindricalPoint n = frame.toNormalized(frame.toCylindrical(
-                                 Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
-                               return incision::PlanOperation(
-                                 incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)});
-                             });
+                           if (self)
+                             self->movePointTo(id, point, pick);
                          });
+}
+
+void IncisionPanel::movePointTo(const NodeId& planId, int point, const SurfacePick& pick)
+{
+  auto* node = logic_.scene().nodeAs<PlanNode>(planId);
+  if (!node)
+    return;
+  const bool moved = recordOperation(
+    planId, "Move point p" + std::to_string(point) + " of " + node->name(),
+    [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
+      const seg::CylindricalFrame& frame = skin.frame();
+      const seg::NormalizedCylindricalPoint n =
+        frame.toNormalized(frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
+      return incision::PlanOperation(incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)});
+    });
+  if (!moved)
+    updateHandles(); // refused: the handle goes back to the point
+}
+
+void IncisionPanel::updateHandles()
+{
+  const PlanNode* node = isVisible() ? selectedPlan() : nullptr;
+  const RangeMapNode* skinNode = node ? skinOf(*node) : nullptr;
+  if (!skinNode)
+  {
+    host_.setThreeDViewHandles({}, nullptr);
+    return;
+  }
+  const seg::RangeMap& skin = rangeMap(*skinNode);
+  const seg::CylindricalFrame& frame = skin.frame();
+  std::vector<std::array<double, 3>> points;
+  for (const Eigen::Vector2d& p : node->cutPath())
+  {
+    const seg::CylindricalPoint c = frame.fromNormalized({1.0, p.x(), p.y()});
+    const Eigen::Vector3d x = frame.toWorld(skin.sample(c.theta, c.z) + incision::kIncisionLineLift, c.theta, c.z);
+    if (!x.allFinite())
+    {
+      points.clear(); // a point off the skin map: no handles rather than some
+      break;
+    }
+    points.push_back({x.x(), x.y(), x.z()});
+  }
+  const NodeId id = node->id();
+  QPointer<IncisionPanel> self(this);
+  host_.setThreeDViewHandles(points, [self, id](int point, const SurfacePick& pick) {
+    if (self)
+      self->movePointTo(id, point, pick);
+  });
+}
+
+void IncisionPanel::showEvent(QShowEvent* event)
+{
+  QWidget::showEvent(event);
+  updateHandles();
+}
+
+void IncisionPanel::hideEvent(QHideEvent* event)
+{
+  QWidget::hideEvent(event);
+  host_.setThreeDViewHandles({}, nullptr);
 }
 
 void IncisionPanel::offsetBorderPoint()
@@ -1050,6 +1099,7 @@ void IncisionPanel::showSelection()
   else
     predictionStatus_->clear();
   fillMeasurements(plan);
+  updateHandles();
 }
 
 bool IncisionPanel::predictionOutOfDate(const PlanNode& plan) const

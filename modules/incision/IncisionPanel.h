@@ -87,6 +87,11 @@ private:
   void parameterChanged(const std::string& name);
   /// Moves cut point n (the spin box) to the next point clicked on the skin.
   void armMovePoint();
+  /// Moves cut point @a point of plan @a planId to a point on the skin (one undoable edit).
+  void movePointTo(const NodeId& planId, int point, const SurfacePick& pick);
+  /// Shows the selected plan's cut points as handles to drag along the skin
+  /// in the 3D view (none while the panel is hidden or nothing is selected).
+  void updateHandles();
   /// Offsets border point n (hole loop, Fig. 4.11) by the chart offset typed (§4.4.4).
   void offsetBorderPoint();
   /// Collects the corners of an undermined region clicked on the skin (§3.2.4).
@@ -131,6 +136,8 @@ private:
   void showSelection();
   void fillMeasurements(const PlanNode* plan);
   void refreshButtons();
+  void showEvent(QShowEvent* event) override;
+  void hideEvent(QHideEvent* event) override;
   /// The skin tension lines on a skin map, placed by the landmarks found on
   /// it; nullptr (and @a why) when they cannot be placed.
   const incision::SkinTensionLines* tensionLines(const RangeMapNode& skin, std::string* why = nullptr);

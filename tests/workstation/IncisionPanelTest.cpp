@@ -15,7 +15,9 @@
 #include <QSpinBox>
 #include <QTableWidget>
 
+#include <vtkCamera.h>
 #include <vtkCellArray.h>
+#include <vtkRenderer.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
@@ -530,6 +532,105 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   click(workstation.widget<QPushButton>("incision.clearUndermining"));
   workstation.settle(100);
   EXPECT_TRUE(IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId)).underminedRegions().empty());
+}
+
+// Cut points dragged along the skin (issue 6 item 4, §3.2.4): the selected
+// plan's points are handles in the 3D view; a press on one and a drag moves
+// that point to where the mouse lets go, as one undoable edit, and the view
+// does not turn meanwhile. Let go over the background, nothing changes.
+TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
+{
+  test::Workstation workstation;
+  Scene& scene = workstation.scene();
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
+  const seg::CylindricalFrame& frame = skin.frame();
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
+      static_cast<SurfaceNode*>(n)->setVisible(false);
+  PlanNode* node = planNamed(scene, "Z-plasty 1");
+  ASSERT_NE(node, nullptr);
+  const NodeId planId = node->id();
+  auto skinPoint = [&](double theta, double z) { return frame.toWorld(skin.sample(theta, z), theta, z); };
+  auto chartOf = [&](const Eigen::Vector2d& n) {
+    const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
+    return std::pair{c.theta, c.z};
+  };
+  const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
+  const auto [t0, z0] = chartOf(original.cutPath()[0]);
+  {
+    SnapshotNode::Camera camera;
+    const Eigen::Vector3d focus = skinPoint(t0, z0 - 10.0);
+    const Eigen::Vector3d eye = focus + 180.0 * frame.radialDirection(t0);
+    camera.position = {eye.x(), eye.y(), eye.z()};
+    camera.focalPoint = {focus.x(), focus.y(), focus.z()};
+    camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
+    workstation.window().setThreeDViewCamera(camera);
+  }
+  ui::ThreeDView* view = workstation.window().threeDView();
+  EXPECT_EQ(view->handleCount(), 0U) << "handles before the Incision panel is shown";
+  workstation.selectModule("incision");
+  selectPlan(workstation.widget<QListWidget>("incision.plans"), "Z-plasty 1");
+  workstation.settle(200);
+  ASSERT_EQ(view->handleCount(), original.cutPath().size());
+  const Eigen::Vector3d lifted0 =
+    frame.toWorld(skin.sample(t0, z0) + incision::kIncisionLineLift, t0, z0);
+  const QPoint grip = view->handleOnScreen(0);
+  EXPECT_LE((grip - workstation.threeDViewPointOf({lifted0.x(), lifted0.y(), lifted0.z()})).manhattanLength(), 2);
+
+  // p0 dragged about 5 mm along the skin.
+  const double t = t0 + 0.04, z = z0 + 3.0;
+  const Eigen::Vector3d target = skinPoint(t, z);
+  const QPoint drop = workstation.threeDViewPointOf({target.x(), target.y(), target.z()});
+  ASSERT_GT((drop - grip).manhattanLength(), 15) << "the drag is too short to tell from a click";
+  const double cameraBefore[3] = {view->renderer()->GetActiveCamera()->GetPosition()[0],
+                                  view->renderer()->GetActiveCamera()->GetPosition()[1],
+                                  view->renderer()->GetActiveCamera()->GetPosition()[2]};
+  workstation.dragThreeDView(grip, drop);
+  workstation.settle(200);
+  ASSERT_TRUE(workstation.errors().empty()) << workstation.errors();
+  const double* cameraAfter = view->renderer()->GetActiveCamera()->GetPosition();
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(cameraAfter[k], cameraBefore[k]) << "the view turned during the drag";
+  const incision::IncisionPlan moved = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const auto [tm, zm] = chartOf(moved.cutPath()[0]);
+  EXPECT_LT((skinPoint(tm, zm) - target).norm(), 1.5) << "p0 is not where it was let go";
+  for (std::size_t k = 1; k < original.cutPath().size(); ++k)
+    EXPECT_LT((moved.cutPath()[k] - original.cutPath()[k]).norm(), 1e-12) << "point " << k << " moved too";
+  EXPECT_EQ(scene.undoStack().undoLabel(), "Move point p0 of Z-plasty 1");
+  EXPECT_LE((view->handleOnScreen(0) - drop).manhattanLength(), 4) << "the handle did not follow the point";
+  workstation.screenshot("incision-dragged-point");
+
+  // Let go over the background (seen from further away): the plan stays as it is.
+  {
+    SnapshotNode::Camera far;
+    const Eigen::Vector3d focus = skinPoint(t0, z0);
+    const Eigen::Vector3d eye = focus + 900.0 * frame.radialDirection(t0);
+    far.position = {eye.x(), eye.y(), eye.z()};
+    far.focalPoint = {focus.x(), focus.y(), focus.z()};
+    far.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
+    workstation.window().setThreeDViewCamera(far);
+    workstation.settle(100);
+    std::string key;
+    std::array<double, 3> hit{};
+    ASSERT_FALSE(view->pickSurface(3, 3, key, hit)) << "the corner of the view is on " << key;
+  }
+  workstation.dragThreeDView(view->handleOnScreen(1), QPoint(3, 3));
+  workstation.settle(100);
+  EXPECT_TRUE(workstation.errors().empty()) << workstation.errors();
+  const incision::IncisionPlan after = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  for (std::size_t k = 0; k < after.cutPath().size(); ++k)
+    EXPECT_LT((after.cutPath()[k] - moved.cutPath()[k]).norm(), 1e-12) << "point " << k;
+
+  // Undo takes p0 back.
+  click(workstation.widget<QPushButton>("incision.undo"));
+  workstation.settle(200);
+  EXPECT_LT((IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId)).cutPath()[0] - original.cutPath()[0]).norm(),
+            1e-12);
+  // Another module: no handles.
+  workstation.selectModule("results");
+  EXPECT_EQ(view->handleCount(), 0U);
 }
 
 // The relaxed skin tension lines as a guide (issue 6 item 4): shown over the

@@ -134,6 +134,25 @@ public:
     settle(100);
   }
 
+  /// A left-button drag on the 3D view from @a from to @a to, moving the
+  /// mouse through @a steps points on the way, as a hand makes it.
+  void dragThreeDView(const QPoint& from, const QPoint& to, int steps = 8)
+  {
+    QWidget* view = &threeDView();
+    auto send = [view](QEvent::Type type, const QPoint& at, Qt::MouseButton button, Qt::MouseButtons buttons) {
+      QMouseEvent event(type, QPointF(at), QPointF(view->mapToGlobal(at)), button, buttons, Qt::NoModifier);
+      QApplication::sendEvent(view, &event);
+    };
+    send(QEvent::MouseButtonPress, from, Qt::LeftButton, Qt::LeftButton);
+    for (int k = 1; k <= steps; ++k)
+    {
+      send(QEvent::MouseMove, from + (to - from) * k / steps, Qt::NoButton, Qt::LeftButton);
+      settle(20);
+    }
+    send(QEvent::MouseButtonRelease, to, Qt::LeftButton, Qt::NoButton);
+    settle(100);
+  }
+
   /// Saves the window as build/test-artifacts/workstation/NAME.png.
   std::filesystem::path screenshot(const std::string& name)
   {

@@ -227,6 +227,19 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
     << "the click placed no plan. " << ws.errors();
   // The node itself is replaced when the plan is simulated: keep its name.
   const std::string planName = nodesOf<caps::PlanNode>(scene, caps::NodeType::Plan).back()->name();
+  {
+    // Closer, as the surgeon looks at what was placed: the cheek face on.
+    const caps::seg::CylindricalFrame frame(skin->axisOrigin(), skin->axisDirection(), skin->zMin(), skin->zMax(),
+                                            int(skin->values().rows()), int(skin->values().cols()));
+    const double theta = -40.0 * std::numbers::pi / 180.0;
+    const Eigen::Vector3d focus(cheek[0], cheek[1], cheek[2]);
+    const Eigen::Vector3d eye = focus + 260.0 * frame.radialDirection(theta);
+    caps::SnapshotNode::Camera camera;
+    camera.position = {eye.x(), eye.y(), eye.z()};
+    camera.focalPoint = {focus.x(), focus.y(), focus.z()};
+    camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
+    ws.window().setThreeDViewCamera(camera);
+  }
   ws.screenshot("flow-04-incision");
 
   // 5. Simulate it (a coarser mesh than the default keeps the test short).
