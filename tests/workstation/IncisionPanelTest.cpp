@@ -89,12 +89,9 @@ std::vector<Eigen::Vector3d> vertexPositions(vtkPolyData* lines)
   return points;
 }
 
-/// Checks the plan's lines against the plan and the skin: every point lift
-/// mm outside the skin, one vertex per cut point at its lifted skin point.
-void expectLinesOnSkin(vtkPolyData* lines, const incision::IncisionPlan& plan, const seg::RangeMap& skin)
+/// The largest distance of a line point from kIncisionLineLift above the skin map.
+double worstLiftError(vtkPolyData* lines, const seg::RangeMap& skin)
 {
-  ASSERT_NE(lines, nullptr);
-  ASSERT_GT(lines->GetNumberOfLines(), 0);
   double worst = 0.0;
   for (vtkIdType i = 0; i < lines->GetNumberOfPoints(); ++i)
   {
@@ -103,7 +100,39 @@ void expectLinesOnSkin(vtkPolyData* lines, const incision::IncisionPlan& plan, c
     const seg::CylindricalPoint c = skin.frame().toCylindrical(Eigen::Vector3d(p[0], p[1], p[2]));
     worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - incision::kIncisionLineLift));
   }
-  EXPECT_LT(worst, 1.0) << "a line point is not lifted 0.5 mm off the skin map";
+  return worst;
+}
+
+/// A camera @a distance mm straight out from @a focus (on the skin at θ
+/// @a theta), the head's axis up: the skin there seen face on.
+SnapshotNode::Camera cameraFacing(const seg::CylindricalFrame& frame, const Eigen::Vector3d& focus, double theta,
+                                  double distance)
+{
+  SnapshotNode::Camera camera;
+  const Eigen::Vector3d eye = focus + distance * frame.radialDirection(theta);
+  const Eigen::Vector3d up = frame.direction();
+  camera.position = {eye.x(), eye.y(), eye.z()};
+  camera.focalPoint = {focus.x(), focus.y(), focus.z()};
+  camera.viewUp = {up.x(), up.y(), up.z()};
+  return camera;
+}
+
+/// Hides the demo's predicted skins ("NAME skin after"), as a surgeon hides
+/// them to draw on the skin beneath.
+void hidePredictedSkins(Scene& scene)
+{
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
+      static_cast<SurfaceNode*>(n)->setVisible(false);
+}
+
+/// Checks the plan's lines against the plan and the skin: every point lift
+/// mm outside the skin, one vertex per cut point at its lifted skin point.
+void expectLinesOnSkin(vtkPolyData* lines, const incision::IncisionPlan& plan, const seg::RangeMap& skin)
+{
+  ASSERT_NE(lines, nullptr);
+  ASSERT_GT(lines->GetNumberOfLines(), 0);
+  EXPECT_LT(worstLiftError(lines, skin), 1.0) << "a line point is not lifted 0.5 mm off the skin map";
   const std::vector<Eigen::Vector3d> vertices = vertexPositions(lines);
   const incision::SkinChart chart = plan.chart(skin);
   const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
@@ -147,18 +176,10 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   ASSERT_TRUE(std::isfinite(r));
   const Eigen::Vector3d target = skin.frame().toWorld(r, theta, z);
   // Looked at from straight outside, so the point is in view.
-  SnapshotNode::Camera camera;
-  const Eigen::Vector3d eye = target + 180.0 * skin.frame().radialDirection(theta);
-  camera.position = {eye.x(), eye.y(), eye.z()};
-  camera.focalPoint = {target.x(), target.y(), target.z()};
-  const Eigen::Vector3d up = skin.frame().direction();
-  camera.viewUp = {up.x(), up.y(), up.z()};
-  workstation.window().setThreeDViewCamera(camera);
+  workstation.window().setThreeDViewCamera(cameraFacing(skin.frame(), target, theta, 180.0));
   // The demo's predicted skin covers the cheek where the new plan goes: hidden,
   // as a surgeon hides it to draw there (the click then lands on the skin).
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
-      static_cast<SurfaceNode*>(n)->setVisible(false);
+  hidePredictedSkins(scene);
 
   workstation.selectModule("incision");
   auto* procedure = workstation.widget<QComboBox>("incision.procedure");
@@ -299,10 +320,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   click(workstation.widget<QPushButton>("incision.place"));
   {
     // From further out, a corner or an edge of the view shows no surface.
-    SnapshotNode::Camera far = camera;
-    const Eigen::Vector3d farEye = target + 900.0 * skin.frame().radialDirection(theta);
-    far.position = {farEye.x(), farEye.y(), farEye.z()};
-    workstation.window().setThreeDViewCamera(far);
+    workstation.window().setThreeDViewCamera(cameraFacing(skin.frame(), target, theta, 900.0));
     workstation.settle(100);
     std::optional<QPoint> background;
     const QSize size = workstation.threeDView().size();
@@ -384,9 +402,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   PlanNode* node = planNamed(scene, "Z-plasty 1");
   ASSERT_NE(node, nullptr);
   const NodeId planId = node->id();
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
-      static_cast<SurfaceNode*>(n)->setVisible(false);
+  hidePredictedSkins(scene);
   auto skinPoint = [&](double theta, double z) { return frame.toWorld(skin.sample(theta, z), theta, z); };
   auto chartOf = [&](const Eigen::Vector2d& n) {
     const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
@@ -394,13 +410,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   };
   const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
   const auto [t1, z1] = chartOf(original.cutPath()[1]);
-  SnapshotNode::Camera camera;
-  const Eigen::Vector3d focus = skinPoint(t1, z1);
-  const Eigen::Vector3d eye = focus + 180.0 * frame.radialDirection(t1);
-  camera.position = {eye.x(), eye.y(), eye.z()};
-  camera.focalPoint = {focus.x(), focus.y(), focus.z()};
-  camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
-  workstation.window().setThreeDViewCamera(camera);
+  workstation.window().setThreeDViewCamera(cameraFacing(frame, skinPoint(t1, z1), t1, 180.0));
   workstation.selectModule("incision");
   auto* list = workstation.widget<QListWidget>("incision.plans");
   ASSERT_NE(list, nullptr);
@@ -546,9 +556,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
   const seg::CylindricalFrame& frame = skin.frame();
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
-      static_cast<SurfaceNode*>(n)->setVisible(false);
+  hidePredictedSkins(scene);
   PlanNode* node = planNamed(scene, "Z-plasty 1");
   ASSERT_NE(node, nullptr);
   const NodeId planId = node->id();
@@ -559,15 +567,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   };
   const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
   const auto [t0, z0] = chartOf(original.cutPath()[0]);
-  {
-    SnapshotNode::Camera camera;
-    const Eigen::Vector3d focus = skinPoint(t0, z0 - 10.0);
-    const Eigen::Vector3d eye = focus + 180.0 * frame.radialDirection(t0);
-    camera.position = {eye.x(), eye.y(), eye.z()};
-    camera.focalPoint = {focus.x(), focus.y(), focus.z()};
-    camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
-    workstation.window().setThreeDViewCamera(camera);
-  }
+  workstation.window().setThreeDViewCamera(cameraFacing(frame, skinPoint(t0, z0 - 10.0), t0, 180.0));
   ui::ThreeDView* view = workstation.window().threeDView();
   EXPECT_EQ(view->handleCount(), 0U) << "handles before the Incision panel is shown";
   workstation.selectModule("incision");
@@ -604,13 +604,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
 
   // Let go over the background (seen from further away): the plan stays as it is.
   {
-    SnapshotNode::Camera far;
-    const Eigen::Vector3d focus = skinPoint(t0, z0);
-    const Eigen::Vector3d eye = focus + 900.0 * frame.radialDirection(t0);
-    far.position = {eye.x(), eye.y(), eye.z()};
-    far.focalPoint = {focus.x(), focus.y(), focus.z()};
-    far.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
-    workstation.window().setThreeDViewCamera(far);
+    workstation.window().setThreeDViewCamera(cameraFacing(frame, skinPoint(t0, z0), t0, 900.0));
     workstation.settle(100);
     std::string key;
     std::array<double, 3> hit{};
@@ -643,9 +637,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
   ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name().size() > 11 && n->name().substr(n->name().size() - 11) == " skin after")
-      static_cast<SurfaceNode*>(n)->setVisible(false);
+  hidePredictedSkins(scene);
   workstation.selectModule("incision");
   selectPlan(workstation.widget<QListWidget>("incision.plans"), "Z-plasty 1");
   workstation.settle(100);
@@ -662,15 +654,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   vtkPolyData* data = lines->polyData();
   ASSERT_NE(data, nullptr);
   EXPECT_GT(data->GetNumberOfLines(), 30);
-  double worst = 0.0;
-  for (vtkIdType i = 0; i < data->GetNumberOfPoints(); ++i)
-  {
-    double p[3];
-    data->GetPoint(i, p);
-    const seg::CylindricalPoint c = skin.frame().toCylindrical(Eigen::Vector3d(p[0], p[1], p[2]));
-    worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - incision::kIncisionLineLift));
-  }
-  EXPECT_LT(worst, 0.05) << "a guide line leaves the skin";
+  EXPECT_LT(worstLiftError(data, skin), 0.05) << "a guide line leaves the skin";
 
   // The plan's axis against the lines, as the logic measures it on the same landmarks.
   const double shown = tableValue(table, axisRow);
@@ -688,12 +672,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
     const seg::Landmark* nose = found.find("pronasale");
     ASSERT_NE(nose, nullptr);
     const Eigen::Vector3d focus = frame.toWorld(skin.sample(nose->theta, nose->z) - 30.0, nose->theta, nose->z);
-    const Eigen::Vector3d eye = focus + 420.0 * frame.radialDirection(nose->theta);
-    SnapshotNode::Camera camera;
-    camera.position = {eye.x(), eye.y(), eye.z()};
-    camera.focalPoint = {focus.x(), focus.y(), focus.z()};
-    camera.viewUp = {frame.direction().x(), frame.direction().y(), frame.direction().z()};
-    workstation.window().setThreeDViewCamera(camera);
+    workstation.window().setThreeDViewCamera(cameraFacing(frame, focus, nose->theta, 420.0));
     table->scrollToBottom();
     workstation.settle(200);
   }
