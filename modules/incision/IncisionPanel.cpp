@@ -109,6 +109,15 @@ QString readable(const std::string& name)
   return s;
 }
 
+// The normalised cylindrical point (θn, zn) of a picked skin point on a skin map's frame (§4.2.2).
+Eigen::Vector2d normalizedOf(const seg::RangeMap& skin, const SurfacePick& pick)
+{
+  const seg::CylindricalFrame& frame = skin.frame();
+  const seg::NormalizedCylindricalPoint n =
+    frame.toNormalized(frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
+  return {n.thetaN, n.zN};
+}
+
 } // namespace
 
 IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* parent)
@@ -501,10 +510,7 @@ void IncisionPanel::armDraw()
                            const auto* skin = self->logic_.scene().nodeAs<RangeMapNode>(skinId);
                            if (!skin)
                              return;
-                           const seg::CylindricalFrame& frame = self->rangeMap(*skin).frame();
-                           const seg::NormalizedCylindricalPoint n = frame.toNormalized(frame.toCylindrical(
-                             Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
-                           self->drawn_.emplace_back(n.thetaN, n.zN);
+                           self->drawn_.push_back(normalizedOf(self->rangeMap(*skin), pick));
                            self->armDraw();
                          });
   drawStatus_->setText(drawn_.empty() ? tr("Click the first point of the cut on the skin.")
@@ -622,10 +628,7 @@ void IncisionPanel::movePointTo(const NodeId& planId, int point, const SurfacePi
   const bool moved = recordOperation(
     planId, "Move point p" + std::to_string(point) + " of " + node->name(),
     [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
-      const seg::CylindricalFrame& frame = skin.frame();
-      const seg::NormalizedCylindricalPoint n =
-        frame.toNormalized(frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
-      return incision::PlanOperation(incision::MoveCutPoint{point, Eigen::Vector2d(n.thetaN, n.zN)});
+      return incision::PlanOperation(incision::MoveCutPoint{point, normalizedOf(skin, pick)});
     });
   if (!moved)
     updateHandles(); // refused: the handle goes back to the point
@@ -711,10 +714,8 @@ void IncisionPanel::armUndermine()
     const auto* skin = self->logic_.scene().nodeAs<RangeMapNode>(skinId);
     if (!skin)
       return;
-    const seg::CylindricalFrame& frame = self->rangeMap(*skin).frame();
-    const seg::NormalizedCylindricalPoint n =
-      frame.toNormalized(frame.toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2])));
-    self->region_.push_back({n.thetaN, n.zN});
+    const Eigen::Vector2d n = normalizedOf(self->rangeMap(*skin), pick);
+    self->region_.push_back({n.x(), n.y()});
     self->regionStatus_->setText(
       tr("%1 corners: click the next, or Finish (at least 3).").arg(self->region_.size()));
     self->armUndermine();
