@@ -3,7 +3,8 @@
 // skin after from the same camera, and move away from the start step by
 // step; the turntable starts at the face and is at the back half way round;
 // sizes are even; `caps animate` writes the frames and, without ffmpeg, says
-// how to make the videos; with a real ffmpeg the MP4s are written.
+// how to make the videos; with a real ffmpeg (scripts/setup installs it) the MP4s
+// are H.264 with one video frame per PNG, each decoded frame close to its PNG.
 
 #include <gtest/gtest.h>
 
@@ -344,11 +345,49 @@ TEST(PlanAnimation, WithFfmpegTheVideosAreWritten)
   const auto r = runCaps("animate " + quoted(sceneBundle().string()) + " --out " + quoted(out.string()) +
                          " --plan 'Elliptical excision 2' --frames 4 --turntable-frames 6 --size 161x121");
   ASSERT_EQ(r.exitCode, 0) << r.output;
-  for (const char* video : {"pre-post.mp4", "turntable.mp4"})
+  // What the videos hold, read back by ffprobe and decoded by ffmpeg itself:
+  // H.264 in yuv420p at the frames' size, one video frame per PNG frame, and
+  // each decoded frame close to its PNG (lossy, so not equal).
+  const struct
   {
-    ASSERT_TRUE(fs::exists(out / video)) << video << "\n" << r.output;
-    EXPECT_GT(fs::file_size(out / video), 0u) << video;
-    EXPECT_NE(r.output.find(video), std::string::npos) << r.output;
+    const char* video;
+    const char* frames;
+    int count;
+  } videos[] = {{"pre-post.mp4", "pre-post", 4}, {"turntable.mp4", "turntable", 6}};
+  for (const auto& v : videos)
+  {
+    const fs::path video = out / v.video;
+    ASSERT_TRUE(fs::exists(video)) << v.video << "\n" << r.output;
+    EXPECT_NE(r.output.find(v.video), std::string::npos) << r.output;
+    const auto probe = caps::test::runProcess(
+      "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+      "stream=codec_name,pix_fmt,width,height,nb_read_frames -of default=noprint_wrappers=1 " +
+      quoted(video.string()));
+    ASSERT_EQ(probe.exitCode, 0) << probe.output;
+    std::string frameCount = "nb_read_frames=";
+    frameCount += std::to_string(v.count);
+    for (const std::string& expected :
+         std::vector<std::string>{"codec_name=h264", "pix_fmt=yuv420p", "width=160", "height=120", frameCount})
+      EXPECT_NE(probe.output.find(expected), std::string::npos) << expected << " in\n" << probe.output;
+    const fs::path decoded = out / (std::string(v.frames) + "-decoded");
+    fs::create_directories(decoded);
+    const auto decode = caps::test::runProcess("ffmpeg -v error -y -i " + quoted(video.string()) + " " +
+                                               quoted((decoded / "frame-%04d.png").string()));
+    ASSERT_EQ(decode.exitCode, 0) << decode.output;
+    for (int k = 0; k < v.count; ++k)
+    {
+      // ffmpeg numbers its output from 1, our frames from 0.
+      const auto original = readPng(out / v.frames / frameName(k));
+      const auto back = readPng(decoded / frameName(k + 1));
+      const double loss = meanDifference(original, back);
+      std::cout << "[" << v.video << " frame " << k << "] decoded differs from its PNG by " << loss << "/255\n";
+      EXPECT_LT(loss, 6.0) << v.video << " frame " << k;
+      if (k > 0) // and it is that frame, not a neighbour: the sequence moves more than the codec loses
+      {
+        EXPECT_LT(meanDifference(original, back),
+                  meanDifference(readPng(out / v.frames / frameName(k - 1)), back)) << v.video << " frame " << k;
+      }
+    }
   }
 }
 
