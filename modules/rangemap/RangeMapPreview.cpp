@@ -147,8 +147,12 @@ vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& value
   if (nTheta < 1 || nZ < 2 || !(zMax > zMin) || !(style.high > style.low))
     throw std::invalid_argument("Cannot draw an empty range map or an empty value range.");
   const int s = std::max(1, style.pixelsPerSample);
+  // Text, margins and ticks grow with textScale, so a map drawn large for
+  // print keeps labels of a readable printed size.
+  const double scale = std::max(0.25, style.textScale);
+  const auto px = [scale](double pixels) { return static_cast<int>(std::lround(pixels * scale)); };
   const int mapW = nTheta * s, mapH = nZ * s;
-  const int left = 70, right = 110, bottom = 56, top = 46;
+  const int left = px(70), right = px(110), bottom = px(56), top = px(46);
   Canvas canvas(left + mapW + right, bottom + mapH + top);
   const unsigned char black[3] = {0, 0, 0};
   const unsigned char grey[3] = {150, 150, 150};
@@ -178,26 +182,26 @@ vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& value
   for (int q = 0; q <= 4; ++q)
   {
     const int x = left + q * mapW / 4;
-    canvas.fill(x, bottom - 6, x + 1, bottom - 1, black);
-    canvas.text(directions[q], x, bottom - 8, 14, 1, 2);
+    canvas.fill(x, bottom - px(6), x + 1, bottom - 1, black);
+    canvas.text(directions[q], x, bottom - px(8), px(14), 1, 2);
   }
-  canvas.text("around the head (theta)", left + mapW / 2, 6, 13, 1, 0);
+  canvas.text("around the head (theta)", left + mapW / 2, px(6), px(13), 1, 0);
 
   // z ticks on the left.
   const double zStep = niceStep(zMax - zMin, 6);
   for (double z = std::ceil(zMin / zStep) * zStep; z <= zMax + 1e-9; z += zStep)
   {
     const int y = bottom + static_cast<int>(std::lround((z - zMin) / (zMax - zMin) * (mapH - 1)));
-    canvas.fill(left - 6, y, left - 1, y + 1, black);
-    canvas.text(formatTick(z, zStep), left - 9, y, 13, 2, 1);
+    canvas.fill(left - px(6), y, left - 1, y + std::max(1, px(1)), black);
+    canvas.text(formatTick(z, zStep), left - px(9), y, px(13), 2, 1);
   }
-  canvas.text("z (mm)", 4, bottom + mapH + 8, 13, 0, 0);
+  canvas.text("z (mm)", px(4), bottom + mapH + px(8), px(13), 0, 0);
 
   // Title.
-  canvas.text(style.title, left, bottom + mapH + 12, 18, 0, 0, true);
+  canvas.text(style.title, left, bottom + mapH + px(12), px(18), 0, 0, true);
 
   // Colour bar on the right.
-  const int barX = left + mapW + 24, barW = 22, barH = mapH;
+  const int barX = left + mapW + px(24), barW = px(22), barH = mapH;
   for (int y = 0; y < barH; ++y)
   {
     unsigned char c[3];
@@ -210,14 +214,14 @@ vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& value
   {
     const int y = bottom + static_cast<int>(
                              std::lround((v - style.low) / (style.high - style.low) * (barH - 1)));
-    canvas.fill(barX + barW, y, barX + barW + 5, y + 1, black);
-    canvas.text(formatTick(v, step), barX + barW + 8, y, 13, 0, 1);
+    canvas.fill(barX + barW, y, barX + barW + px(5), y + std::max(1, px(1)), black);
+    canvas.text(formatTick(v, step), barX + barW + px(8), y, px(13), 0, 1);
   }
-  canvas.text(style.unit, barX + barW / 2, bottom + barH + 8, 14, 1, 0, true);
+  canvas.text(style.unit, barX + barW / 2, bottom + barH + px(8), px(14), 1, 0, true);
   // The grey of "no surface found".
-  canvas.fill(barX, bottom - 40, barX + barW, bottom - 26, grey);
-  canvas.frame(barX, bottom - 40, barX + barW, bottom - 26, black);
-  canvas.text("none", barX + barW + 6, bottom - 33, 12, 0, 1);
+  canvas.fill(barX, bottom - px(40), barX + barW, bottom - px(26), grey);
+  canvas.frame(barX, bottom - px(40), barX + barW, bottom - px(26), black);
+  canvas.text("none", barX + barW + px(6), bottom - px(33), px(12), 0, 1);
   return canvas.toImage();
 }
 

@@ -20,6 +20,9 @@ struct PreviewStyle
   double low = 0.0;         ///< value at the bottom of the colour bar
   double high = 30.0;       ///< value at the top; values beyond are clamped
   int pixelsPerSample = 2;  ///< the map's samples as squares of this many pixels
+  /// Size of the text, margins and ticks against the defaults (13-18 px
+  /// text): a map drawn large for print scales them with it.
+  double textScale = 1.0;
 };
 
 /// The style for a map of distances from the axis (skin, scan): its 2nd..98th

@@ -131,6 +131,12 @@ void PlanFigures::addThicknessViews(ReportDocument& doc, const PlanFacts& plan) 
   style.title = "Soft-tissue thickness, radial (r_skin - r_bone)";
   style.pixelsPerSample = std::max(
     1, int(std::ceil(widthMm / 25.4 * dpi_ / std::max<Eigen::Index>(1, thickness->values().rows()) * 0.8)));
+  {
+    // Its 13 px labels about 2.5 mm (7 pt) high on paper: the picture is
+    // mapW + 180 k pixels wide for text scale k and printed widthMm wide.
+    const double mapWidth = double(thickness->values().rows() * style.pixelsPerSample);
+    style.textScale = std::max(1.0, 2.5 * mapWidth / (widthMm * 13.0 - 2.5 * 180.0));
+  }
   const QImage unwrapped = toQImage(renderRangeMapPreview(thickness->values(), thickness->zMin(),
                                                           thickness->zMax(), style)
                                       .GetPointer());

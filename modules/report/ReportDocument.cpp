@@ -11,6 +11,8 @@
 #include <QPagedPaintDevice>
 #include <QPainter>
 #include <QPdfWriter>
+#include <QTextBlock>
+#include <QTextLayout>
 #include <QTextDocument>
 #include <QUrl>
 
@@ -34,6 +36,47 @@ bool looksNumeric(const std::string& text)
       return false;
   }
   return digits > 0;
+}
+
+/// The first heading left alone at the foot of a page, its text on the next
+/// one: its index among the document's headings, or -1. Qt's rich text keeps
+/// lines together but not a heading with what follows it.
+int orphanHeading(const QTextDocument& document, double pageHeight)
+{
+  QAbstractTextDocumentLayout* layout = document.documentLayout();
+  const auto pageOf = [&](double y) { return int(std::floor(y / pageHeight)); };
+  int index = -1;
+  for (QTextBlock block = document.begin(); block.isValid(); block = block.next())
+  {
+    if (block.blockFormat().headingLevel() == 0)
+      continue;
+    ++index;
+    const QTextBlock next = block.next();
+    if (!next.isValid())
+      continue;
+    // A block that does not fit keeps its top on this page and moves its
+    // first line down to the next: compare where that line is.
+    double nextTop = layout->blockBoundingRect(next).top();
+    if (next.layout() && next.layout()->lineCount() > 0)
+      nextTop += next.layout()->lineAt(0).y();
+    if (pageOf(layout->blockBoundingRect(block).top()) < pageOf(nextTop + 1.0))
+      return index;
+  }
+  return -1;
+}
+
+/// @a html with the @a index-th heading (<h1> to <h3>) starting a new page.
+std::string breakBeforeHeading(std::string html, int index)
+{
+  std::size_t at = 0;
+  for (int seen = -1; (at = html.find("<h", at)) != std::string::npos; at += 2)
+    if (at + 2 < html.size() && html[at + 2] >= '1' && html[at + 2] <= '3' && ++seen == index)
+    {
+      if (html.compare(at + 3, 7, " style=") != 0)
+        html.insert(at + 3, " style=\"page-break-before: always\"");
+      break;
+    }
+  return html;
 }
 
 /// The token a figure's width is written as until the device's resolution is known.
@@ -172,6 +215,13 @@ int ReportDocument::render(QPagedPaintDevice& device) const
       html.replace(at, token.size(), pixels);
   }
   document.setHtml(QString::fromStdString(html));
+  // Headings are moved from the top down, laying out again after each: a move
+  // pushes what follows down and may mend or make a later orphan.
+  for (int moves = 0, heading; moves < 20 && (heading = orphanHeading(document, body.height())) >= 0; ++moves)
+  {
+    html = breakBeforeHeading(html, heading);
+    document.setHtml(QString::fromStdString(html));
+  }
   const int pages = std::max(1, document.pageCount());
 
   QPainter painter;

@@ -335,6 +335,39 @@ bool unoccluded(const Figure& figure, const std::vector<vtkSmartPointer<vtkCellL
   return true;
 }
 
+/// Moves labels whose boxes overlap apart (a small face in a whole-head view
+/// puts the points of a cut a few pixels apart): each overlapping pair is
+/// pushed apart, half each, along the axis where they overlap least, until
+/// none overlap or enough passes have run.
+void spreadLabels(std::vector<PendingLabel>& labels)
+{
+  const auto halfSize = [](const PendingLabel& l) {
+    // Bold Arial: about 0.62 em per character, plus the background's margin.
+    return Eigen::Vector2d(0.5 * (0.62 * double(l.text.size()) + 0.5) * l.fontPx, 0.5 * 1.3 * l.fontPx);
+  };
+  for (int pass = 0; pass < 200; ++pass) {
+    bool moved = false;
+    for (std::size_t i = 0; i < labels.size(); ++i)
+      for (std::size_t j = i + 1; j < labels.size(); ++j) {
+        const Eigen::Vector2d d = labels[j].at - labels[i].at;
+        const Eigen::Vector2d reach = halfSize(labels[i]) + halfSize(labels[j]);
+        const double overlapX = reach.x() - std::abs(d.x()), overlapY = reach.y() - std::abs(d.y());
+        if (overlapX <= 0.0 || overlapY <= 0.0)
+          continue;
+        Eigen::Vector2d push = Eigen::Vector2d::Zero();
+        if (overlapX < overlapY)
+          push.x() = (d.x() < 0.0 ? -1.0 : 1.0) * (0.5 * overlapX + 0.5);
+        else
+          push.y() = (d.y() < 0.0 ? -1.0 : 1.0) * (0.5 * overlapY + 0.5);
+        labels[i].at -= push;
+        labels[j].at += push;
+        moved = true;
+      }
+    if (!moved)
+      return;
+  }
+}
+
 void addLabel(vtkRenderer* overlay, const PendingLabel& label)
 {
   vtkNew<vtkTextActor> text;
@@ -794,9 +827,13 @@ vtkSmartPointer<vtkImageData> renderFigure(const Figure& figure)
         locator->BuildLocator();
         locators.push_back(locator);
       }
+    std::vector<PendingLabel> shown;
     for (const PendingLabel& label : labels)
       if (unoccluded(figure, locators, label.probe))
-        addLabel(overlay, label);
+        shown.push_back(label);
+    spreadLabels(shown);
+    for (const PendingLabel& label : shown)
+      addLabel(overlay, label);
   }
 
   window->Render();
