@@ -4,10 +4,15 @@
 #include <QFileDialog>
 #include <QPrintDialog>
 #include <QPrinter>
+#include <QProgressDialog>
+
+#include <algorithm>
+#include <cmath>
 
 #include "modules/core/Module.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/ReportCommands.h"
+#include "segmentation/Progress.h"
 
 #ifndef CAPS_VERSION
 #define CAPS_VERSION "unknown"
@@ -22,23 +27,36 @@ public:
   using ModuleLogic::ModuleLogic;
 };
 
-/// The report of the workstation's scene, built on the GUI thread with a
-/// busy cursor (its renders share the display with the views).
+/// The report of the workstation's scene, built on the GUI thread (its
+/// renders share the display with the views) under a modal progress dialog:
+/// the user sees which plan is being predicted and rendered and may cancel
+/// between steps (seg::Cancelled), and cannot change the scene meanwhile.
 report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool deidentify)
 {
   host.showStatus("Writing the plan report...");
-  QApplication::setOverrideCursor(Qt::WaitCursor);
+  QProgressDialog dialog("Writing the plan report...", "Cancel", 0, 1000, host.window());
+  dialog.setObjectName("report.progress");
+  dialog.setWindowTitle("Plan report");
+  dialog.setWindowModality(Qt::WindowModal);
+  dialog.setMinimumDuration(0);
+  dialog.setValue(0);
+  QApplication::processEvents();
+  const TaskProgress progress = [&dialog](double fraction, const std::string& step) {
+    dialog.setLabelText(QString::fromStdString(step));
+    dialog.setValue(int(std::lround(1000.0 * std::clamp(fraction, 0.0, 1.0))));
+    QApplication::processEvents();
+    return !dialog.wasCanceled();
+  };
   try
   {
     report::ReportOptions options;
     options.deidentify = deidentify;
-    report::ReportDocument doc = report::buildPlanReport(logic.scene(), options);
-    QApplication::restoreOverrideCursor();
+    report::ReportDocument doc = report::buildPlanReport(logic.scene(), options, progress);
+    dialog.setValue(1000);
     return doc;
   }
   catch (...)
   {
-    QApplication::restoreOverrideCursor();
     host.showStatus("");
     throw;
   }
@@ -51,7 +69,16 @@ void exportPdf(ModuleLogic& logic, ModuleHost& host, bool deidentify)
                                                     "PDF (*.pdf)");
   if (file.isEmpty())
     return;
-  const report::ReportDocument doc = reportOfScene(logic, host, deidentify);
+  report::ReportDocument doc("");
+  try
+  {
+    doc = reportOfScene(logic, host, deidentify);
+  }
+  catch (const seg::Cancelled&)
+  {
+    host.showStatus("The plan report was cancelled; nothing was written.");
+    return;
+  }
   report::PdfMetadata metadata{"CAPS surgical plan report", std::string("CAPS ") + CAPS_VERSION};
   const int pages = doc.writePdf(file.toStdString(), report::PaperSize::A4, metadata);
   host.showStatus("Wrote " + file.toStdString() + " (" + std::to_string(pages) + " pages)");
@@ -64,7 +91,16 @@ void printReport(ModuleLogic& logic, ModuleHost& host)
   QPrintDialog dialog(&printer, host.window());
   if (dialog.exec() != QDialog::Accepted)
     return;
-  const report::ReportDocument doc = reportOfScene(logic, host, false);
+  report::ReportDocument doc("");
+  try
+  {
+    doc = reportOfScene(logic, host, false);
+  }
+  catch (const seg::Cancelled&)
+  {
+    host.showStatus("The plan report was cancelled; nothing was printed.");
+    return;
+  }
   const int pages = doc.render(printer);
   host.showStatus("Sent the plan report to the printer (" + std::to_string(pages) + " pages)");
 }
