@@ -102,6 +102,46 @@ fem::MaterialTable defaultFacialTissueMaterials(int layerCount)
   return table;
 }
 
+seg::RangeMap boneForTissueDepth(const seg::RangeMap& skin, const seg::RangeMap& bone, double noBoneDepth,
+                                 int smoothingPasses)
+{
+  // Holes filled at the default depth under the skin, then smoothed so
+  // neighbouring columns do not jump (a jump of a centimetre between 2 mm
+  // columns folds the deep elements).
+  seg::RangeMap out = bone;
+  if (bone.empty() || smoothingPasses <= 0)
+    return out;
+  const seg::CylindricalFrame& bf = bone.frame();
+  for (int j = 0; j < bf.nZ(); ++j)
+    for (int i = 0; i < bf.nTheta(); ++i)
+      if (!std::isfinite(out.at(i, j)))
+      {
+        const double rSkin = skin.sample(bf.indexToTheta(i), bf.indexToZ(j));
+        if (std::isfinite(rSkin))
+          out.at(i, j) = float(rSkin - noBoneDepth);
+      }
+  for (int pass = 0; pass < smoothingPasses; ++pass)
+    out = seg::boxSmooth(out);
+  return out;
+}
+
+fem::TissueGeometry skinToBoneGeometry(const SkinChart& chart, const seg::RangeMap& skin,
+                                       const seg::RangeMap& boneForDepth)
+{
+  fem::TissueGeometry geometry;
+  geometry.skinPoint = [&chart](const ChartPoint& c) { return chart.lift(c); };
+  geometry.inwardDirection = [&chart, &skin](const ChartPoint& c) -> Eigen::Vector3d {
+    return -skin.frame().radialDirection(chart.fromChart(c).theta);
+  };
+  geometry.tissueDepth = [&chart, &skin, &boneForDepth](const ChartPoint& c) {
+    const SkinPoint s = chart.fromChart(c);
+    const double rSkin = skin.sample(s.theta, s.z);
+    const double rBone = boneForDepth.empty() ? std::nan("") : boneForDepth.sample(s.theta, s.z);
+    return rSkin - rBone; // NaN where there is no bone: noBoneDepth
+  };
+  return geometry;
+}
+
 Eigen::Vector3d PlanPrediction::displacedNode(int i) const
 {
   return continuum.mesh.nodes.col(i) + displacements.segment<3>(3 * Eigen::Index(i));
@@ -320,37 +360,10 @@ PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& b
       checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
 
   phase(0.1, "Continuum mesh from the skin to the bone");
-  // The bone surface for the depth: holes filled at the default depth under
-  // the skin, then smoothed so neighbouring columns do not jump (a jump of
-  // a centimetre between 2 mm columns folds the deep elements).
-  seg::RangeMap boneForDepth = bone;
-  if (haveBone && options.boneSmoothingPasses > 0)
-  {
-    const seg::CylindricalFrame& bf = bone.frame();
-    for (int j = 0; j < bf.nZ(); ++j)
-      for (int i = 0; i < bf.nTheta(); ++i)
-        if (!std::isfinite(boneForDepth.at(i, j)))
-        {
-          const double rSkin = skin.sample(bf.indexToTheta(i), bf.indexToZ(j));
-          if (std::isfinite(rSkin))
-            boneForDepth.at(i, j) = float(rSkin - options.noBoneDepth);
-        }
-    for (int pass = 0; pass < options.boneSmoothingPasses; ++pass)
-      boneForDepth = seg::boxSmooth(boneForDepth);
-  }
-
+  const seg::RangeMap boneForDepth =
+    haveBone ? boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses) : seg::RangeMap();
   // 3. Skin to bone (§4.5.2): along the ray towards the axis.
-  fem::TissueGeometry geometry;
-  geometry.skinPoint = [&chart](const ChartPoint& c) { return chart.lift(c); };
-  geometry.inwardDirection = [&chart, &frame](const ChartPoint& c) -> Eigen::Vector3d {
-    return -frame.radialDirection(chart.fromChart(c).theta);
-  };
-  geometry.tissueDepth = [&](const ChartPoint& c) {
-    const SkinPoint s = chart.fromChart(c);
-    const double rSkin = skin.sample(s.theta, s.z);
-    const double rBone = haveBone ? boneForDepth.sample(s.theta, s.z) : std::nan("");
-    return rSkin - rBone; // NaN where there is no bone: noBoneDepth
-  };
+  const fem::TissueGeometry geometry = skinToBoneGeometry(chart, skin, boneForDepth);
   fem::ContinuumMeshOptions continuumOptions;
   continuumOptions.layerCount = options.layerCount;
   continuumOptions.layerFractions = options.layerFractions;

@@ -18,6 +18,7 @@
 #include "fem/Mesh.h"
 #include "fem/SurfaceMesher.h"
 #include "modules/incision/IncisionPlan.h"
+#include "modules/incision/SkinChart.h"
 #include "modules/incision/SkinMeasurements.h"
 #include "segmentation/RangeMap.h"
 
@@ -233,6 +234,20 @@ PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone
 /// @throws as simulatePlan() does for its checks and meshing.
 PlanPrediction meshPlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                         const SimulationOptions& options = {});
+
+/// @brief The bone surface the soft-tissue depth is measured to: @a bone with
+/// its holes filled @a noBoneDepth under the skin, then box-smoothed
+/// (eq. 4.2) @a smoothingPasses times (SimulationOptions::boneSmoothingPasses).
+/// An empty @a bone gives an empty map; 0 passes the bone as it is.
+seg::RangeMap boneForTissueDepth(const seg::RangeMap& skin, const seg::RangeMap& bone, double noBoneDepth,
+                                 int smoothingPasses);
+
+/// @brief Where the tissue lies under the chart (§4.5.2): the skin lifted from
+/// @a chart, the depth to @a boneForDepth (from boneForTissueDepth(); empty:
+/// NaN, no bone) along the ray towards the axis.
+/// @warning Keeps references to all three: they must outlive the geometry.
+fem::TissueGeometry skinToBoneGeometry(const SkinChart& chart, const seg::RangeMap& skin,
+                                       const seg::RangeMap& boneForDepth);
 
 /// @name Pieces of the pipeline, exposed for tests
 ///@{

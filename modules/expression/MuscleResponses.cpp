@@ -1,0 +1,76 @@
+#include "modules/expression/MuscleResponses.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "fem/BodyCoordinates.h"
+
+namespace caps::expression {
+namespace {
+
+void checkActivations(const Eigen::VectorXd& activations, Eigen::Index muscles)
+{
+  if (activations.size() != muscles)
+  {
+    std::string message = "got ";
+    message += std::to_string(activations.size());
+    message += " activations for ";
+    message += std::to_string(muscles);
+    message += " muscles";
+    throw std::invalid_argument(message);
+  }
+}
+
+} // namespace
+
+MuscleResponses::MuscleResponses(fem::LinearStaticAnalysis& analysis,
+                                 const std::vector<std::vector<fem::Muscle>>& muscles)
+{
+  if (analysis.status() != fem::SolverStatus::Success)
+    throw std::logic_error("the muscle responses need a factored model: " + analysis.message());
+  const Eigen::Index dofs = analysis.mesh().dofCount();
+  loads_.resize(dofs, Eigen::Index(muscles.size()));
+  forces_.reserve(muscles.size());
+  for (std::size_t k = 0; k < muscles.size(); ++k)
+  {
+    // Each muscle's loads alone (eq. 4.42 over its functions): its column of R.
+    const fem::MuscleLoad load = fem::assembleMuscleLoad(analysis.mesh(), muscles[k]);
+    loads_.col(Eigen::Index(k)) = load.load;
+    forces_.push_back(load.muscles);
+  }
+  // One substitution with as many right-hand sides as muscles (§3.1.2).
+  displacements_ = muscles.empty() ? Eigen::MatrixXd(dofs, 0) : analysis.solve(loads_);
+}
+
+Eigen::VectorXd MuscleResponses::combined(const Eigen::VectorXd& activations) const
+{
+  checkActivations(activations, muscleCount());
+  return displacements_ * activations;
+}
+
+ExpressionSurface::ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface,
+                                     const MuscleResponses& responses)
+  : surface_(std::move(surface))
+{
+  const Eigen::Index vertices = surface_.vertexCount(), muscles = responses.muscleCount();
+  if (responses.displacements().rows() != mesh.dofCount())
+    throw std::invalid_argument("the muscle responses are of another mesh than the display surface's");
+  vertexResponses_.resize(3 * vertices, muscles);
+  for (Eigen::Index k = 0; k < muscles; ++k)
+  {
+    const Eigen::VectorXd u = responses.displacements().col(k);
+    for (Eigen::Index v = 0; v < vertices; ++v)
+      vertexResponses_.block<3, 1>(3 * v, k) = fem::displacementAt(mesh, u, surface_.bodyPoints()[std::size_t(v)]);
+  }
+}
+
+void ExpressionSurface::positions(const Eigen::VectorXd& activations, bool rangeDetail, Eigen::Matrix3Xd& out) const
+{
+  checkActivations(activations, muscleCount());
+  out = surface_.undeformedPositions();
+  if (rangeDetail && surface_.rangeDetail().cols() == out.cols())
+    out += surface_.rangeDetail();
+  Eigen::Map<Eigen::VectorXd>(out.data(), out.size()).noalias() += vertexResponses_ * activations;
+}
+
+} // namespace caps::expression
