@@ -217,6 +217,26 @@ Eigen::MatrixXd LinearStaticAnalysis::solve(const Eigen::MatrixXd& r) {
   return u;
 }
 
+Eigen::MatrixXd LinearStaticAnalysis::solveWithPrescribed(const Eigen::MatrixXd& r, const Constraints& constraints) {
+  if (status_ != SolverStatus::Success)
+    throw std::logic_error("LinearStaticAnalysis::solveWithPrescribed: the model was not prepared: " + message_);
+  if (r.rows() != mesh_.dofCount())
+    throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: load vectors must have 3N rows");
+  const ConstraintMap other = resolveConstraints(mesh_, constraints);
+  if (other.reduced != map_.reduced)
+    throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: the constraints fix or suture other "
+                                "degrees of freedom than the model was factored with");
+  const auto t0 = Clock::now();
+  const Eigen::VectorXd kg = k_.selfadjointView<Eigen::Upper>() * other.offset;
+  Eigen::MatrixXd rhs = r;
+  rhs.colwise() -= kg;
+  const Eigen::MatrixXd rbar = map_.reduceVector(rhs);
+  Eigen::MatrixXd ubar = map_.reducedCount() > 0 ? solver_.solve(rbar) : rbar;
+  Eigen::MatrixXd u = other.expand(ubar);
+  times_.solve = secondsSince(t0);
+  return u;
+}
+
 Eigen::VectorXd LinearStaticAnalysis::solve(const LoadCase& load) {
   const Eigen::VectorXd r = loadVector(load);
   return solve(Eigen::MatrixXd(r)).col(0);

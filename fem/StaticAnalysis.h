@@ -61,6 +61,14 @@ public:
   Eigen::MatrixXd solve(const Eigen::MatrixXd& r);
   /// Displacements (3N) of one load case.
   Eigen::VectorXd solve(const LoadCase& load);
+  /// Displacements (3N x cases) for full load vectors @a r under
+  /// @a constraints: the same DOFs prescribed and the same sutures as the
+  /// model was prepared with, other prescribed values (a submodel's boundary
+  /// moved by the model around it, a fingertip's travel). K̄ does not change,
+  /// so the factorization is reused: U = T Ū + g', K̄ Ū = T^T (R - K g').
+  /// Throws std::invalid_argument when @a constraints constrain other DOFs,
+  /// std::logic_error unless prepare() succeeded.
+  Eigen::MatrixXd solveWithPrescribed(const Eigen::MatrixXd& r, const Constraints& constraints);
 
   /// Internal nodal forces K U (N, 3N) of displacements @a u (3N). Where no
   /// load acts, they are the reactions of the constraints: at a fixed node
