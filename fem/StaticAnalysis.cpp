@@ -207,12 +207,17 @@ Eigen::MatrixXd LinearStaticAnalysis::solve(const Eigen::MatrixXd& r) {
     throw std::logic_error("LinearStaticAnalysis::solve: the model was not prepared: " + message_);
   if (r.rows() != mesh_.dofCount())
     throw std::invalid_argument("LinearStaticAnalysis::solve: load vectors must have 3N rows");
+  return substitute(r, kg_, map_);
+}
+
+Eigen::MatrixXd LinearStaticAnalysis::substitute(const Eigen::MatrixXd& r, const Eigen::VectorXd& kg,
+                                                 const ConstraintMap& prescribed) {
   const auto t0 = Clock::now();
   Eigen::MatrixXd rhs = r;
-  rhs.colwise() -= kg_;
+  rhs.colwise() -= kg;
   const Eigen::MatrixXd rbar = map_.reduceVector(rhs);
   Eigen::MatrixXd ubar = map_.reducedCount() > 0 ? solver_.solve(rbar) : rbar;
-  Eigen::MatrixXd u = map_.expand(ubar);
+  Eigen::MatrixXd u = prescribed.expand(ubar);
   times_.solve = secondsSince(t0);
   return u;
 }
@@ -226,15 +231,8 @@ Eigen::MatrixXd LinearStaticAnalysis::solveWithPrescribed(const Eigen::MatrixXd&
   if (other.reduced != map_.reduced)
     throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: the constraints fix or suture other "
                                 "degrees of freedom than the model was factored with");
-  const auto t0 = Clock::now();
   const Eigen::VectorXd kg = k_.selfadjointView<Eigen::Upper>() * other.offset;
-  Eigen::MatrixXd rhs = r;
-  rhs.colwise() -= kg;
-  const Eigen::MatrixXd rbar = map_.reduceVector(rhs);
-  Eigen::MatrixXd ubar = map_.reducedCount() > 0 ? solver_.solve(rbar) : rbar;
-  Eigen::MatrixXd u = other.expand(ubar);
-  times_.solve = secondsSince(t0);
-  return u;
+  return substitute(r, kg, other);
 }
 
 Eigen::VectorXd LinearStaticAnalysis::solve(const LoadCase& load) {

@@ -91,6 +91,8 @@ public:
 
 private:
   SolverStatus prepareStages();
+  /// U = T Ū + g with K̄ Ū = T^T (R − K g): @a kg = K g, g and T from @a prescribed.
+  Eigen::MatrixXd substitute(const Eigen::MatrixXd& r, const Eigen::VectorXd& kg, const ConstraintMap& prescribed);
 
   Mesh mesh_;
   MaterialTable materials_;
