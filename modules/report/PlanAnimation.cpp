@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -190,6 +191,105 @@ Camera turntableCamera(const seg::CylindricalFrame& frame, double rMax, double z
   return fitCamera(points, frame.radialDirection(theta), frame.direction(), aspect, 20.0, 1.04);
 }
 
+/// Renders @a frames frames from @a from to @a to (then back to @a from,
+/// without repeating the peak, when @a andBack) into @a sequence.folder with
+/// @a sequence.camera, coloured by the surfaces' skin shade when they have
+/// one, else in a skin tone; @a step is called before each frame.
+void renderMorph(vtkPolyData* from, vtkPolyData* to, const Figure& base, FrameSequence& sequence, int frames,
+                 bool andBack, const std::function<void(const char*)>& step)
+{
+  const char* shade = from->GetPointData()->GetArray("skin_shade")   ? "skin_shade"
+                      : from->GetPointData()->GetArray("skin_colour") ? "skin_colour"
+                                                                      : nullptr;
+  prepareFolder(sequence.folder);
+  const int total = andBack ? 2 * frames - 2 : frames;
+  for (int k = 0; k < total; ++k)
+  {
+    step("Rendering the animation");
+    const int along = k < frames ? k : 2 * (frames - 1) - k;
+    const double s = double(along) / (frames - 1);
+    Figure figure = base;
+    figure.camera = sequence.camera;
+    vtkSmartPointer<vtkPolyData> blended = blendSurfaces(from, to, s);
+    figure.surfaces.push_back(shade ? SurfaceLayer::pointColours(blended, shade)
+                                    : SurfaceLayer::solid(blended, {0.90, 0.76, 0.66}));
+    writePng(renderFigure(figure).GetPointer(), sequence.folder / frameName(k));
+    ++sequence.frames;
+  }
+}
+
+/// The MP4 of each sequence when ffmpeg is there and videos are asked for;
+/// otherwise the message saying how to make them.
+void encodeVideos(const std::vector<FrameSequence*>& sequences, const AnimationOptions& options,
+                  const TaskProgress& progress, AnimationResult& result)
+{
+  const std::optional<fs::path> ffmpeg = findFfmpeg();
+  result.ffmpegFound = ffmpeg.has_value();
+  for (FrameSequence* sequence : sequences)
+    sequence->ffmpegCommand = ffmpegCommandLine(ffmpeg.value_or("ffmpeg"), *sequence,
+                                                sequence->folder.parent_path() /
+                                                  (sequence->folder.filename().string() + ".mp4"),
+                                                options.framesPerSecond);
+  if (options.video && !ffmpeg)
+  {
+    const char* env = std::getenv("CAPS_FFMPEG");
+    std::string message = "no MP4 written: ";
+    if (env && *env)
+    {
+      message += "CAPS_FFMPEG is set to ";
+      message += env;
+      message += ", which is not an executable file";
+    }
+    else
+      message += "ffmpeg was not found on PATH";
+    message += ". Install it (Debian package ffmpeg: apt-get install ffmpeg) and run:";
+    for (const FrameSequence* sequence : sequences)
+    {
+      message += "\n  ";
+      message += sequence->ffmpegCommand;
+    }
+    result.videoMessage = message;
+  }
+  else if (options.video)
+  {
+    for (std::size_t i = 0; i < sequences.size(); ++i)
+    {
+      FrameSequence& sequence = *sequences[i];
+      const fs::path video = sequence.folder.parent_path() / (sequence.folder.filename().string() + ".mp4");
+      std::string step = "Encoding ";
+      step += video.filename().string();
+      report(progress, 0.95 + 0.05 * double(i) / double(sequences.size()), step);
+      const auto [status, output] = runCommand(sequence.ffmpegCommand);
+      if (status != 0 || !fs::exists(video) || fs::file_size(video) == 0)
+      {
+        std::string problem = "ffmpeg could not encode ";
+        problem += video.string();
+        problem += " (exit status ";
+        problem += std::to_string(status);
+        problem += "): ";
+        problem += output.empty() ? std::string("no message") : output;
+        problem += "\nThe frames are written; the command was:\n  ";
+        problem += sequence.ffmpegCommand;
+        throw std::runtime_error(problem);
+      }
+      sequence.video = video;
+    }
+  }
+}
+
+/// Checks and evens the frame size of @a options.
+std::pair<int, int> frameSize(const AnimationOptions& options)
+{
+  const int width = options.width - options.width % 2;
+  const int height = options.height - options.height % 2;
+  if (width < 16 || height < 16 || width > 8192 || height > 8192)
+    throw std::invalid_argument("the frame size must be within 16–8192 pixels a side (got " +
+                                std::to_string(options.width) + " × " + std::to_string(options.height) + ")");
+  if (!(options.framesPerSecond > 0.0))
+    throw std::invalid_argument("the frame rate must be positive");
+  return {width, height};
+}
+
 } // namespace
 
 vtkSmartPointer<vtkPolyData> blendSurfaces(vtkPolyData* before, vtkPolyData* after, double s)
@@ -269,17 +369,11 @@ std::optional<fs::path> findFfmpeg()
 AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, const fs::path& outDir,
                                    const AnimationOptions& options, const TaskProgress& progress)
 {
-  const int width = options.width - options.width % 2;
-  const int height = options.height - options.height % 2;
-  if (width < 16 || height < 16 || width > 8192 || height > 8192)
-    throw std::invalid_argument("the frame size must be within 16–8192 pixels a side (got " +
-                                std::to_string(options.width) + " × " + std::to_string(options.height) + ")");
+  const auto [width, height] = frameSize(options);
   if (options.prePostFrames < 2)
     throw std::invalid_argument("the pre → post animation needs at least 2 frames");
   if (options.turntable && options.turntableFrames < 2)
     throw std::invalid_argument("the turntable needs at least 2 frames");
-  if (!(options.framesPerSecond > 0.0))
-    throw std::invalid_argument("the frame rate must be positive");
 
   const PlanNode& planNode = findPlan(scene, planName);
   AnimationResult result;
@@ -318,19 +412,10 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   result.prePost.camera = fitCamera(std::vector<vtkPolyData*>{before, after},
                                     frame.radialDirection(plan.centre().theta), frame.direction(),
                                     base.sceneAspect(), 20.0, 1.05);
-  const std::string shade = before->GetPointData()->GetArray("skin_shade") ? "skin_shade" : "skin_colour";
-  prepareFolder(result.prePost.folder);
-  for (int k = 0; k < options.prePostFrames; ++k)
-  {
-    report(progress, 0.95 * done / total, "Rendering the pre → post animation");
-    const double s = double(k) / (options.prePostFrames - 1);
-    Figure figure = base;
-    figure.camera = result.prePost.camera;
-    figure.surfaces.push_back(SurfaceLayer::pointColours(blendSurfaces(before, after, s), shade));
-    writePng(renderFigure(figure).GetPointer(), result.prePost.folder / frameName(k));
-    ++result.prePost.frames;
+  renderMorph(before, after, base, result.prePost, options.prePostFrames, false, [&](const char* step) {
+    report(progress, 0.95 * done / total, step);
     ++done;
-  }
+  });
 
   // The turntable: the head skin with the incision, once round the axis from the front.
   if (options.turntable)
@@ -373,62 +458,50 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   result.framesRendered = done;
   result.renderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 
-  // The videos.
   std::vector<FrameSequence*> sequences{&result.prePost};
   if (result.turntable)
     sequences.push_back(&*result.turntable);
-  const std::optional<fs::path> ffmpeg = findFfmpeg();
-  result.ffmpegFound = ffmpeg.has_value();
-  for (FrameSequence* sequence : sequences)
-    sequence->ffmpegCommand = ffmpegCommandLine(ffmpeg.value_or("ffmpeg"), *sequence,
-                                                sequence->folder.parent_path() /
-                                                  (sequence->folder.filename().string() + ".mp4"),
-                                                options.framesPerSecond);
-  if (options.video && !ffmpeg)
-  {
-    const char* env = std::getenv("CAPS_FFMPEG");
-    std::string message = "no MP4 written: ";
-    if (env && *env)
-    {
-      message += "CAPS_FFMPEG is set to ";
-      message += env;
-      message += ", which is not an executable file";
-    }
-    else
-      message += "ffmpeg was not found on PATH";
-    message += ". Install it (Debian package ffmpeg: apt-get install ffmpeg) and run:";
-    for (const FrameSequence* sequence : sequences)
-    {
-      message += "\n  ";
-      message += sequence->ffmpegCommand;
-    }
-    result.videoMessage = message;
-  }
-  else if (options.video)
-  {
-    for (std::size_t i = 0; i < sequences.size(); ++i)
-    {
-      FrameSequence& sequence = *sequences[i];
-      const fs::path video = sequence.folder.parent_path() / (sequence.folder.filename().string() + ".mp4");
-      std::string step = "Encoding ";
-      step += video.filename().string();
-      report(progress, 0.95 + 0.05 * double(i) / double(sequences.size()), step);
-      const auto [status, output] = runCommand(sequence.ffmpegCommand);
-      if (status != 0 || !fs::exists(video) || fs::file_size(video) == 0)
-      {
-        std::string problem = "ffmpeg could not encode ";
-        problem += video.string();
-        problem += " (exit status ";
-        problem += std::to_string(status);
-        problem += "): ";
-        problem += output.empty() ? std::string("no message") : output;
-        problem += "\nThe frames are written; the command was:\n  ";
-        problem += sequence.ffmpegCommand;
-        throw std::runtime_error(problem);
-      }
-      sequence.video = video;
-    }
-  }
+  encodeVideos(sequences, options, progress, result);
+  report(progress, 1.0, "Animation written");
+  return result;
+}
+
+AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const std::string& name,
+                                    const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
+                                    const fs::path& outDir, int frames, bool andBack,
+                                    const AnimationOptions& options, const TaskProgress& progress)
+{
+  const auto [width, height] = frameSize(options);
+  if (frames < 2)
+    throw std::invalid_argument("an animation needs at least 2 frames");
+  if (!from || !to || from->GetNumberOfPoints() == 0)
+    throw std::invalid_argument("the animation \"" + name + "\" has no surface to show");
+  if (from->GetNumberOfPoints() != to->GetNumberOfPoints())
+    throw std::invalid_argument("the animation \"" + name + "\": its two surfaces have " +
+                                std::to_string(from->GetNumberOfPoints()) + " and " +
+                                std::to_string(to->GetNumberOfPoints()) + " points, so one cannot become the other");
+  if (name.empty() || name.find('/') != std::string::npos)
+    throw std::invalid_argument("an animation's name must be a plain file name");
+  AnimationResult result;
+  result.planName = name;
+  Figure base;
+  base.width = width;
+  base.height = height;
+  base.multiSamples = options.multiSamples;
+  result.prePost.folder = fs::absolute(outDir) / name;
+  result.prePost.width = width;
+  result.prePost.height = height;
+  result.prePost.camera = fitCamera(std::vector<vtkPolyData*>{from, to}, toCamera, viewUp, base.sceneAspect(), 20.0, 1.05);
+  const auto started = std::chrono::steady_clock::now();
+  const int total = andBack ? 2 * frames - 2 : frames;
+  int done = 0;
+  renderMorph(from, to, base, result.prePost, frames, andBack, [&](const char* step) {
+    report(progress, 0.95 * done / total, step);
+    ++done;
+  });
+  result.framesRendered = done;
+  result.renderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  encodeVideos({&result.prePost}, options, progress, result);
   report(progress, 1.0, "Animation written");
   return result;
 }

@@ -11,6 +11,8 @@
 
 #include <vtkSmartPointer.h>
 
+#include <Eigen/Core>
+
 #include "modules/core/Module.h"
 #include "modules/report/ReportFigures.h"
 
@@ -90,5 +92,22 @@ std::optional<std::filesystem::path> findFfmpeg();
 /// written or ffmpeg fails.
 AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, const std::filesystem::path& outDir,
                                    const AnimationOptions& options, const TaskProgress& progress = {});
+
+/// Writes a morph between two display surfaces with the same points and
+/// cells, e.g. a face at rest and under an expression (thesis §5.3), like the
+/// pre → post animation: @a outDir/@a name/frame-NNNN.png and
+/// @a outDir/@a name.mp4 when ffmpeg is found (options.video). @a frames
+/// frames from @a from to @a to, then back again to @a from (the peak not
+/// repeated) when @a andBack. The camera looks along −@a toCamera with
+/// @a viewUp up, framing both surfaces. Coloured by the surfaces' skin_shade
+/// (or skin_colour) point array when they have one, else a skin tone.
+/// @throws std::invalid_argument for fewer than 2 frames, a bad size, a name
+/// that is not a plain file name, empty surfaces or different point counts;
+/// seg::Cancelled when @a progress asks to stop; std::runtime_error when a
+/// file cannot be written or ffmpeg fails.
+AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const std::string& name,
+                                    const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
+                                    const std::filesystem::path& outDir, int frames, bool andBack,
+                                    const AnimationOptions& options, const TaskProgress& progress = {});
 
 } // namespace caps::report

@@ -31,6 +31,7 @@
 #include "DemoScene.h"
 #include "app/RunProcess.h"
 #include "modules/report/PlanAnimation.h"
+#include "modules/report/PlanFigures.h"
 #include "modules/report/ReportFigures.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
@@ -452,4 +453,33 @@ TEST(PlanAnimation, ProgressIsReportedAndCancelStops)
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
   EXPECT_TRUE(fs::exists(out / "pre-post" / frameName(1)));
   EXPECT_FALSE(fs::exists(out / "pre-post" / frameName(2)));
+}
+
+// A morph there and back (an expression played and released, issue 8): the
+// frames go out to the peak and return through the same shapes, so frame k
+// and frame 2(n−1)−k are the same picture; the peak is the second surface.
+TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
+{
+  caps::Scene& scene = demoScene();
+  vtkPolyData* before = report::surfaceNamed(scene, "Z-plasty 1 skin before");
+  vtkPolyData* after = report::surfaceNamed(scene, "Z-plasty 1 skin after");
+  ASSERT_TRUE(before && after);
+  const fs::path out = caps::test::scratchFolder();
+  report::AnimationOptions options = smallOptions();
+  const Eigen::Vector3d toCamera(0.0, -1.0, 0.0), up(0.0, 0.0, 1.0);
+  const auto r = report::writeMorphAnimation(before, after, "there-and-back", toCamera, up,
+                                             out, 4, true, options);
+  EXPECT_EQ(r.prePost.frames, 6);
+  EXPECT_EQ(r.framesRendered, 6);
+  const fs::path folder = out / "there-and-back";
+  EXPECT_FALSE(fs::exists(folder / frameName(6)));
+  for (int k = 1; k <= 2; ++k)
+    EXPECT_EQ(meanDifference(readPng(folder / frameName(k)), readPng(folder / frameName(6 - k))), 0.0) << k;
+  EXPECT_GT(meanDifference(readPng(folder / frameName(0)), readPng(folder / frameName(3))), 0.05);
+  // The peak is the after surface: the same as a one-way morph's last frame.
+  report::writeMorphAnimation(before, after, "one-way", toCamera, up, out, 4, false, options);
+  EXPECT_EQ(meanDifference(readPng(folder / frameName(3)), readPng(out / "one-way" / frameName(3))), 0.0);
+  EXPECT_THROW(report::writeMorphAnimation(before, after, "a/b", toCamera, up, out, 4, true,
+                                           options),
+               std::invalid_argument);
 }
