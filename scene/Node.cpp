@@ -1,5 +1,6 @@
 #include "scene/Node.h"
 
+#include "scene/ExpressionNode.h"
 #include "scene/FeMeshNode.h"
 #include "scene/JsonFields.h"
 #include "scene/LabelMapNode.h"
@@ -68,6 +69,7 @@ std::unique_ptr<Node> Node::create(NodeType type) {
     case NodeType::Solution: return std::make_unique<SolutionNode>();
     case NodeType::Snapshot: return std::make_unique<SnapshotNode>();
     case NodeType::Landmarks: return std::make_unique<LandmarksNode>();
+    case NodeType::Expression: return std::make_unique<ExpressionNode>();
   }
   throw SceneError("unknown node type");
 }

@@ -6,7 +6,7 @@
 namespace caps {
 
 namespace {
-constexpr std::array<std::pair<NodeType, std::string_view>, 9> kNames{{
+constexpr std::array<std::pair<NodeType, std::string_view>, 10> kNames{{
     {NodeType::Volume, "Volume"},
     {NodeType::LabelMap, "LabelMap"},
     {NodeType::Surface, "Surface"},
@@ -16,6 +16,7 @@ constexpr std::array<std::pair<NodeType, std::string_view>, 9> kNames{{
     {NodeType::Solution, "Solution"},
     {NodeType::Snapshot, "Snapshot"},
     {NodeType::Landmarks, "Landmarks"},
+    {NodeType::Expression, "Expression"},
 }};
 }  // namespace
 

@@ -8,7 +8,7 @@ namespace caps {
 
 /// The kinds of node the scene holds. The string form is what scene.json
 /// stores, so existing names must never change.
-enum class NodeType { Volume, LabelMap, Surface, RangeMap, Plan, FeMesh, Solution, Snapshot, Landmarks };
+enum class NodeType { Volume, LabelMap, Surface, RangeMap, Plan, FeMesh, Solution, Snapshot, Landmarks, Expression };
 
 /// "Volume", "LabelMap", ... (also the prefix of generated node ids).
 std::string nodeTypeToString(NodeType type);

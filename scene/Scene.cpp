@@ -14,7 +14,7 @@ Scene::~Scene() {
 }
 
 NodeId Scene::uniqueId(NodeType type) {
-  int& last = lastIndex_[static_cast<std::size_t>(type)];
+  int& last = lastIndex_.at(static_cast<std::size_t>(type));
   const std::string prefix = nodeTypeToString(type);
   NodeId id;
   do {

@@ -80,7 +80,8 @@ class Scene {
 
   std::vector<std::unique_ptr<Node>> nodes_;
   std::unordered_map<NodeId, Node*> byId_;
-  std::array<int, 8> lastIndex_{};  // per NodeType, so ids are not reused soon
+  // Per NodeType (indexed by its value; room for types yet to come), so ids are not reused soon.
+  std::array<int, 32> lastIndex_{};
   std::vector<std::pair<int, std::shared_ptr<Observer>>> observers_;
   int nextObserverTag_ = 1;
   UndoStack undo_{*this};
