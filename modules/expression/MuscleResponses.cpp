@@ -38,8 +38,15 @@ MuscleResponses::MuscleResponses(fem::LinearStaticAnalysis& analysis,
     loads_.col(Eigen::Index(k)) = load.load;
     forces_.push_back(load.muscles);
   }
-  // One substitution with as many right-hand sides as muscles (§3.1.2).
-  displacements_ = muscles.empty() ? Eigen::MatrixXd(dofs, 0) : analysis.solve(loads_);
+  // One substitution with as many right-hand sides as muscles (§3.1.2),
+  // plus one without load: a model with sutures (a plan after the operation)
+  // moves under no load at all, since the closure is prescribed (U = T Ū + g);
+  // a muscle's response is what its load adds to that.
+  Eigen::MatrixXd rhs(dofs, loads_.cols() + 1);
+  rhs.leftCols(loads_.cols()) = loads_;
+  rhs.col(loads_.cols()).setZero();
+  const Eigen::MatrixXd u = analysis.solve(rhs);
+  displacements_ = u.leftCols(loads_.cols()).colwise() - u.col(loads_.cols());
 }
 
 Eigen::VectorXd MuscleResponses::combined(const Eigen::VectorXd& activations) const

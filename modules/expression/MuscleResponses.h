@@ -34,7 +34,9 @@ public:
   MuscleResponses(fem::LinearStaticAnalysis& analysis, const std::vector<std::vector<fem::Muscle>>& muscles);
 
   Eigen::Index muscleCount() const { return displacements_.cols(); }
-  /// U_k: 3N × muscles, node i's (x, y, z) at rows 3i..3i+2 (mm).
+  /// U_k: 3N × muscles, node i's (x, y, z) at rows 3i..3i+2 (mm): what
+  /// muscle k adds to the model's displacement without load (zero for a
+  /// model with fixed supports only; the closure for a model with sutures).
   const Eigen::MatrixXd& displacements() const { return displacements_; }
   /// R_k: the nodal loads of each muscle (N), 3N × muscles.
   const Eigen::MatrixXd& loads() const { return loads_; }
