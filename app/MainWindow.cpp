@@ -205,8 +205,8 @@ void MainWindow::buildModulePanels()
 
   // The selector lists the modules in the order of the work (§5.6: fewer
   // choices, in the order a surgeon makes them); modules not named here follow.
-  static const std::vector<std::string> workOrder{"volumes", "segment",  "rangemap", "incision",
-                                                  "simulate", "results", "report"};
+  static const std::vector<std::string> workOrder{"volumes",  "segment", "rangemap",   "incision",
+                                                  "simulate", "results", "expression", "report"};
   std::vector<const ModuleManager::Loaded*> ordered;
   for (const auto& loaded : session_.modules().modules())
     ordered.push_back(&loaded);

@@ -1,0 +1,285 @@
+// The Expression panel (issue 8 item 4) driven as a surgeon drives it: the
+// demo scene's face model built, the smile slider moved (the face against
+// the logic's own superposition for the same activations, the mouth corners
+// going up), the smile saved, changed and recalled, played, and kept in the
+// saved scene.
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <vector>
+
+#include <unistd.h>
+
+#include <QComboBox>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QSlider>
+
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+
+#include "Workstation.h"
+#include "modules/expression/ExpressionLogic.h"
+#include "report/DemoScene.h"
+#include "scene/ExpressionNode.h"
+#include "scene/SurfaceNode.h"
+
+namespace caps {
+namespace {
+
+SurfaceNode* surfaceNamed(Scene& scene, const std::string& name)
+{
+  for (Node* n : scene.nodesOfType(NodeType::Surface))
+    if (n->name() == name)
+      return static_cast<SurfaceNode*>(n);
+  return nullptr;
+}
+
+ExpressionNode* expressionNamed(Scene& scene, const std::string& name)
+{
+  for (Node* n : scene.nodesOfType(NodeType::Expression))
+    if (n->name() == name)
+      return static_cast<ExpressionNode*>(n);
+  return nullptr;
+}
+
+/// Largest distance between the surface's points and @a expected (3 × V).
+double largestGap(vtkPolyData* surface, const Eigen::Matrix3Xd& expected)
+{
+  if (surface->GetNumberOfPoints() != expected.cols())
+    return INFINITY;
+  double worst = 0.0, p[3];
+  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i)
+  {
+    surface->GetPoint(i, p);
+    worst = std::max(worst, (Eigen::Vector3d(p[0], p[1], p[2]) - expected.col(i)).norm());
+  }
+  return worst;
+}
+
+Eigen::Matrix3Xd pointsOf(vtkPolyData* surface)
+{
+  Eigen::Matrix3Xd out(3, surface->GetNumberOfPoints());
+  for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i)
+    surface->GetPoint(i, out.col(i).data());
+  return out;
+}
+
+/// The window with the 3D view alone in the middle (the slice views hidden
+/// for the picture), to see millimetres of movement on the face.
+void largeFaceShot(test::Workstation& workstation, const std::string& name)
+{
+  std::vector<QWidget*> hidden;
+  for (QWidget* child :
+       workstation.window().centralWidget()->findChildren<QWidget*>(QString(), Qt::FindDirectChildrenOnly))
+    if (child != &workstation.threeDView() && child->isVisible())
+    {
+      child->hide();
+      hidden.push_back(child);
+    }
+  workstation.screenshot(name);
+  for (QWidget* child : hidden)
+    child->show();
+  workstation.settle(100);
+}
+
+void setSlider(QSlider* slider, int value)
+{
+  slider->setValue(value); // valueChanged, as a drag emits it
+  QApplication::processEvents();
+}
+
+TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
+{
+  const std::filesystem::path bundle = test::reportDemoFolder() / "sample.caps";
+  ASSERT_TRUE(std::filesystem::exists(bundle)) << bundle;
+  test::Workstation workstation;
+  workstation.window().openPath(bundle);
+  ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
+  Scene& scene = workstation.scene();
+  SurfaceNode* skin = surfaceNamed(scene, "Skin");
+  ASSERT_NE(skin, nullptr);
+  ASSERT_TRUE(skin->visible());
+
+  workstation.selectModule("expression");
+  auto* build = workstation.widget<QPushButton>("expression.build");
+  auto* smile = workstation.widget<QSlider>("expression.expression.smile");
+  auto* frown = workstation.widget<QSlider>("expression.expression.frown");
+  auto* name = workstation.widget<QLineEdit>("expression.name");
+  auto* save = workstation.widget<QPushButton>("expression.save");
+  auto* saved = workstation.widget<QComboBox>("expression.saved");
+  auto* play = workstation.widget<QPushButton>("expression.play");
+  auto* info = workstation.widget<QLabel>("expression.info");
+  auto* status = workstation.widget<QLabel>("expression.status");
+  ASSERT_TRUE(build && smile && frown && name && save && saved && play && info && status);
+  EXPECT_FALSE(smile->isEnabled()); // nothing to move before the model
+
+  QTest::mouseClick(build, Qt::LeftButton);
+  ASSERT_TRUE(workstation.waitUntil([&] { return surfaceNamed(scene, "Face expression") != nullptr; }, 300))
+    << workstation.errors() << status->text().toStdString();
+  ASSERT_TRUE(workstation.waitUntilIdle(60));
+  std::cout << "[expression panel] " << status->text().toStdString() << "\n";
+  SurfaceNode* face = surfaceNamed(scene, "Face expression");
+  ASSERT_NE(face, nullptr);
+  EXPECT_TRUE(face->visible());
+  EXPECT_FALSE(skin->visible()) << "the segmented skin would fight the expression face for the same pixels";
+  EXPECT_EQ(face->colourArray(), "skin_colour");
+  EXPECT_TRUE(smile->isEnabled());
+
+  // The same model made here directly from the logic, from the same scene.
+  ExpressionLogic logic(scene);
+  const std::unique_ptr<expression::ExpressionModel> model =
+    expression::buildExpressionModel(logic.modelInput());
+  ASSERT_NE(model, nullptr);
+  ASSERT_EQ(face->polyData()->GetNumberOfPoints(), model->surface.vertexCount());
+  Eigen::Matrix3Xd expected;
+  const Eigen::VectorXd atRest = Eigen::VectorXd::Zero(Eigen::Index(model->muscles.size()));
+  model->positions(atRest, expected);
+  EXPECT_LT(largestGap(face->polyData(), expected), 1e-9);
+  const Eigen::Matrix3Xd rest = expected;
+  workstation.screenshot("expression-rest");
+  largeFaceShot(workstation, "expression-rest-large");
+
+  // Smile at 100 %: the face is the logic's superposition for the smile's activations.
+  setSlider(smile, 100);
+  workstation.settle(200);
+  const auto& definitions = expression::builtInExpressions();
+  const auto smileDefinition =
+    std::find_if(definitions.begin(), definitions.end(), [](const auto& e) { return e.name == "smile"; });
+  ASSERT_NE(smileDefinition, definitions.end());
+  const Eigen::VectorXd smiling = expression::expressionActivations(*smileDefinition, model->muscles);
+  EXPECT_GT(smiling.sum(), 2.0);
+  model->positions(smiling, expected);
+  EXPECT_LT(largestGap(face->polyData(), expected), 1e-9);
+  const Eigen::Matrix3Xd smileShape = expected;
+  std::cout << "[expression panel] smile: " << info->text().toStdString() << "\n";
+  EXPECT_TRUE(info->text().contains("mm")) << info->text().toStdString();
+
+  // The mouth corners (the skin nearest the zygomaticus insertions) go up.
+  const Eigen::Vector3d up = model->frame.direction();
+  for (const char* id : {"zygomaticus_major_left", "zygomaticus_major_right"})
+  {
+    const int k = model->muscleIndex(id);
+    ASSERT_GE(k, 0) << id;
+    const Eigen::Vector3d insertion = model->muscles[std::size_t(k)].functions.front().insertion;
+    Eigen::Index nearest = 0;
+    (rest.colwise() - insertion).colwise().squaredNorm().minCoeff(&nearest);
+    const Eigen::Vector3d moved = smileShape.col(nearest) - rest.col(nearest);
+    std::cout << "[expression panel] " << id << ": corner " << (rest.col(nearest) - insertion).norm()
+              << " mm from the insertion moves " << moved.norm() << " mm, " << moved.dot(up) << " mm up\n";
+    EXPECT_GT(moved.dot(up), 0.2) << id << " moved " << moved.transpose();
+  }
+  workstation.screenshot("expression-smile");
+  largeFaceShot(workstation, "expression-smile-large");
+
+  // Mixing: smile + sneer + the left risorius slider at 70 %, each muscle
+  // clamped to full contraction (the risorius: 0.6 + 0.7 → 1).
+  {
+    auto* sneer = workstation.widget<QSlider>("expression.expression.sneer");
+    auto* risorius = workstation.widget<QSlider>("expression.muscle.risorius_left");
+    ASSERT_TRUE(sneer && risorius);
+    setSlider(sneer, 100);
+    setSlider(risorius, 70);
+    Eigen::VectorXd mixed = smiling;
+    for (std::size_t k = 0; k < model->muscles.size(); ++k)
+    {
+      const expression::FittedMuscle& m = model->muscles[k];
+      if (m.definition == "levator_labii_superioris_alaeque_nasi")
+        mixed[Eigen::Index(k)] += 1.0;
+      if (m.id == "risorius_left")
+        mixed[Eigen::Index(k)] += 0.7;
+      mixed[Eigen::Index(k)] = std::min(1.0, mixed[Eigen::Index(k)]);
+    }
+    EXPECT_EQ(mixed[model->muscleIndex("risorius_left")], 1.0);
+    model->positions(mixed, expected);
+    EXPECT_LT(largestGap(face->polyData(), expected), 1e-9);
+    setSlider(sneer, 0);
+    setSlider(risorius, 0);
+    EXPECT_LT(largestGap(face->polyData(), smileShape), 1e-9);
+  }
+
+  // Saved as "smile test", the sliders changed, then recalled.
+  name->setText("smile test");
+  QTest::mouseClick(save, Qt::LeftButton);
+  workstation.settle(100);
+  ExpressionNode* node = expressionNamed(scene, "smile test");
+  ASSERT_NE(node, nullptr) << workstation.errors();
+  EXPECT_EQ(node->muscleSet(), model->muscleSetId);
+  for (std::size_t k = 0; k < model->muscles.size(); ++k)
+    EXPECT_DOUBLE_EQ(node->activation(model->muscles[k].id), smiling[Eigen::Index(k)]) << model->muscles[k].id;
+  const std::map<std::string, double> savedActivations = node->activations();
+
+  setSlider(smile, 0);
+  setSlider(frown, 100);
+  workstation.settle(100);
+  EXPECT_GT(largestGap(face->polyData(), smileShape), 0.5) << "the frown should not look like the smile";
+  workstation.screenshot("expression-frown");
+  const int index = saved->findText("smile test");
+  ASSERT_GE(index, 0);
+  saved->setCurrentIndex(index);
+  emit saved->activated(index); // as choosing it in the list does
+  workstation.settle(100);
+  EXPECT_EQ(smile->value(), 0);
+  EXPECT_EQ(frown->value(), 0);
+  for (std::size_t k = 0; k < model->muscles.size(); ++k)
+  {
+    auto* slider = workstation.widget<QSlider>("expression.muscle." + model->muscles[k].id);
+    ASSERT_NE(slider, nullptr);
+    EXPECT_EQ(slider->value(), int(std::lround(100.0 * smiling[Eigen::Index(k)]))) << model->muscles[k].id;
+  }
+  EXPECT_LT(largestGap(face->polyData(), smileShape), 1e-9);
+
+  // Play: rest → the smile → rest, then back where the sliders are.
+  const Eigen::Matrix3Xd beforePlay = pointsOf(face->polyData());
+  QTest::mouseClick(play, Qt::LeftButton);
+  double farthest = 0.0;
+  for (int i = 0; i < 30; ++i)
+  {
+    workstation.settle(50);
+    farthest = std::max(farthest, largestGap(face->polyData(), beforePlay));
+  }
+  EXPECT_GT(farthest, 0.5) << "the animation did not move the face";
+  workstation.settle(2500);
+  EXPECT_LT(largestGap(face->polyData(), beforePlay), 1e-12) << "Play did not end where it started";
+
+  // The expression stays in the saved scene.
+  const std::filesystem::path copy =
+    std::filesystem::temp_directory_path() / ("caps-expression-" + std::to_string(::getpid()) + ".caps");
+  std::filesystem::remove_all(copy);
+  ASSERT_TRUE(workstation.window().saveSceneTo(copy)) << workstation.errors();
+  ASSERT_FALSE(skin->visible()); // saved with the face showing and the skin hidden
+  workstation.window().openPath(copy);
+  ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
+  workstation.settle(200);
+  ExpressionNode* reloaded = expressionNamed(workstation.scene(), "smile test");
+  ASSERT_NE(reloaded, nullptr);
+  EXPECT_EQ(reloaded->activations(), savedActivations);
+  EXPECT_GE(saved->findText("smile test"), 0);
+  // A new scene: the model is gone with the old one, the sliders with it;
+  // the face saved with the scene goes and the skin it hid comes back.
+  EXPECT_FALSE(smile->isEnabled());
+  EXPECT_EQ(surfaceNamed(workstation.scene(), "Face expression"), nullptr);
+  ASSERT_NE(surfaceNamed(workstation.scene(), "Skin"), nullptr);
+  EXPECT_TRUE(surfaceNamed(workstation.scene(), "Skin")->visible());
+  std::filesystem::remove_all(copy);
+  EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
+}
+
+TEST(ExpressionPanel, WithoutRangeMapsTheErrorSaysWhatToDo)
+{
+  test::Workstation workstation;
+  workstation.selectModule("expression");
+  auto* build = workstation.widget<QPushButton>("expression.build");
+  ASSERT_NE(build, nullptr);
+  QTest::mouseClick(build, Qt::LeftButton);
+  workstation.settle(200);
+  const std::string errors = workstation.errors();
+  EXPECT_NE(errors.find("range map"), std::string::npos) << errors;
+  EXPECT_NE(errors.find("Range maps module"), std::string::npos) << errors;
+  EXPECT_EQ(workstation.scene().nodesOfType(NodeType::Surface).size(), 0u);
+}
+
+} // namespace
+} // namespace caps
