@@ -1,11 +1,17 @@
 #include "modules/expression/ExpressionPanel.h"
 
+#include "modules/report/PlanAnimation.h"
+#include "segmentation/Progress.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <map>
+#include <numbers>
 
+#include <QApplication>
 #include <QComboBox>
+#include <QFileDialog>
 #include <QFormLayout>
 #include <QGroupBox>
 #include <QHBoxLayout>
@@ -13,6 +19,7 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QPointer>
+#include <QProgressDialog>
 #include <QPushButton>
 #include <QScrollArea>
 #include <QShowEvent>
@@ -103,8 +110,13 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   rest_ = new QPushButton(tr("Rest"), this);
   rest_->setObjectName("expression.rest");
   rest_->setToolTip(tr("Every slider to 0: the face at rest"));
+  export_ = new QPushButton(tr("Export animation..."), this);
+  export_->setObjectName("expression.export");
+  export_->setToolTip(tr("Write the expression the sliders give, played from rest and back, as PNG frames and "
+                         "(with ffmpeg) an MP4, into a folder you choose"));
   buttons->addWidget(play_);
   buttons->addWidget(rest_);
+  buttons->addWidget(export_);
   layout->addLayout(buttons);
   info_ = new QLabel(this);
   info_->setObjectName("expression.info");
@@ -135,6 +147,7 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   connect(build_, &QPushButton::clicked, this, &ExpressionPanel::build);
   connect(play_, &QPushButton::clicked, this, &ExpressionPanel::play);
   connect(rest_, &QPushButton::clicked, this, &ExpressionPanel::rest);
+  connect(export_, &QPushButton::clicked, this, &ExpressionPanel::exportAnimation);
   connect(animation_, &QTimer::timeout, this, &ExpressionPanel::tick);
   connect(save_, &QPushButton::clicked, this, &ExpressionPanel::saveExpression);
   connect(name_, &QLineEdit::returnPressed, this, &ExpressionPanel::saveExpression);
@@ -262,7 +275,7 @@ void ExpressionPanel::setModel(std::shared_ptr<const expression::ExpressionModel
   for (const expression::ExpressionDefinition& e : expression::builtInExpressions())
     expressionActivations_.push_back(expression::expressionActivations(e, model_->muscles));
   rebuildMuscleSliders();
-  for (QWidget* w : std::initializer_list<QWidget*>{expressionBox_, muscleBox_, play_, rest_, save_, name_})
+  for (QWidget* w : std::initializer_list<QWidget*>{expressionBox_, muscleBox_, play_, rest_, export_, save_, name_})
     w->setEnabled(true);
   const fem::Mesh& mesh = model_->face.continuum.mesh;
   QString text = tr("Face model: %1 muscles, %2 elements, %3 nodes; %4 display vertices. Built in %5 s "
@@ -288,6 +301,61 @@ void ExpressionPanel::setModel(std::shared_ptr<const expression::ExpressionModel
   host_.showStatus("Face model ready: move the sliders");
 }
 
+void ExpressionPanel::exportAnimation()
+{
+  if (!model_)
+    return;
+  const Eigen::VectorXd a = activations();
+  if (a.cwiseAbs().maxCoeff() <= 0.0)
+  {
+    host_.showError("Export animation", "Every muscle is at rest: set the sliders to the expression to animate, "
+                                        "then export it.");
+    return;
+  }
+  const QString folder =
+    QFileDialog::getExistingDirectory(host_.window(), tr("Export the expression animation into the folder"));
+  if (folder.isEmpty())
+    return;
+  // Rendered offscreen on the GUI thread (the renders share the display with
+  // the views), under a modal progress dialog whose Cancel stops it.
+  vtkSmartPointer<vtkPolyData> rest = expression::expressionPolyData(*model_);
+  vtkSmartPointer<vtkPolyData> full = expression::expressionPolyData(*model_);
+  Eigen::Matrix3Xd scratch;
+  expression::applyActivations(*model_, a, full, scratch);
+  QProgressDialog dialog(tr("Writing the animation..."), tr("Cancel"), 0, 1000, host_.window());
+  dialog.setObjectName("expression.exportProgress");
+  dialog.setWindowModality(Qt::WindowModal);
+  dialog.setMinimumDuration(0);
+  const TaskProgress progress = [&dialog](double fraction, const std::string& step) {
+    dialog.setLabelText(QString::fromStdString(step));
+    dialog.setValue(int(std::lround(1000.0 * std::clamp(fraction, 0.0, 1.0))));
+    QApplication::processEvents();
+    return !dialog.wasCanceled();
+  };
+  try
+  {
+    report::AnimationOptions options;
+    const report::AnimationResult result = report::writeMorphAnimation(
+      rest, full, "expression", model_->frame.radialDirection(-0.5 * std::numbers::pi), model_->frame.direction(),
+      folder.toStdString(), 24, true, options, progress);
+    std::string message = "Wrote " + std::to_string(result.prePost.frames) + " frames to " +
+                          result.prePost.folder.string();
+    if (!result.prePost.video.empty())
+      message += " and " + result.prePost.video.string();
+    host_.showStatus(message);
+    if (!result.videoMessage.empty())
+      host_.showWarning("Export animation", result.videoMessage);
+  }
+  catch (const seg::Cancelled&)
+  {
+    host_.showStatus("The animation export was cancelled; the frames written so far are in the folder.");
+  }
+  catch (const std::exception& e)
+  {
+    host_.showError("Export animation", e.what());
+  }
+}
+
 void ExpressionPanel::dropModel(const std::string& why)
 {
   animation_->stop();
@@ -295,7 +363,7 @@ void ExpressionPanel::dropModel(const std::string& why)
   model_.reset();
   expressionActivations_.clear();
   rebuildMuscleSliders();
-  for (QWidget* w : std::initializer_list<QWidget*>{expressionBox_, muscleBox_, play_, rest_, save_, name_})
+  for (QWidget* w : std::initializer_list<QWidget*>{expressionBox_, muscleBox_, play_, rest_, export_, save_, name_})
     w->setEnabled(false);
   info_->clear();
   if (!why.empty())

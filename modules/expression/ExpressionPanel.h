@@ -65,6 +65,8 @@ private:
   void play();
   void tick();
   void rest();
+  /// The current mix played from rest and back, written as frames and MP4 (report::writeMorphAnimation).
+  void exportAnimation();
 
   ExpressionLogic& logic_;
   ModuleHost& host_;
@@ -84,6 +86,7 @@ private:
   QComboBox* saved_ = nullptr;
   QPushButton* play_ = nullptr;
   QPushButton* rest_ = nullptr;
+  QPushButton* export_ = nullptr;
   QLabel* info_ = nullptr;
   QTimer* animation_ = nullptr;
   QElapsedTimer clock_;

@@ -7,21 +7,29 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <vector>
 
 #include <unistd.h>
 
+#include <QApplication>
 #include <QComboBox>
+#include <QFileDialog>
+#include <QImage>
 #include <QLabel>
 #include <QLineEdit>
 #include <QPushButton>
 #include <QSlider>
+#include <QStatusBar>
+#include <QTimer>
 
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 
+#include "TestPaths.h"
 #include "Workstation.h"
 #include "modules/expression/ExpressionLogic.h"
+#include "modules/report/PlanAnimation.h"
 #include "report/DemoScene.h"
 #include "scene/ExpressionNode.h"
 #include "scene/SurfaceNode.h"
@@ -265,6 +273,71 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   EXPECT_TRUE(surfaceNamed(workstation.scene(), "Skin")->visible());
   std::filesystem::remove_all(copy);
   EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
+}
+
+// Export animation: the sliders' mix written played from rest and back,
+// through the folder dialog; the peak frame differs from rest, the frames
+// return through the same pictures, and with ffmpeg the MP4 is there.
+TEST(ExpressionPanel, TheMixIsExportedAsAnAnimation)
+{
+  test::Workstation workstation;
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
+  workstation.selectModule("expression");
+  auto* build = workstation.widget<QPushButton>("expression.build");
+  auto* smile = workstation.widget<QSlider>("expression.expression.smile");
+  auto* exportButton = workstation.widget<QPushButton>("expression.export");
+  ASSERT_TRUE(build && smile && exportButton);
+  EXPECT_FALSE(exportButton->isEnabled()) << "no model yet";
+  QTest::mouseClick(build, Qt::LeftButton);
+  ASSERT_TRUE(workstation.waitUntil([&] { return exportButton->isEnabled(); }, 300)) << workstation.errors();
+  ASSERT_TRUE(workstation.waitUntilIdle(60));
+
+  // At rest there is nothing to animate: a message, no dialog.
+  const std::size_t errorsBefore = workstation.window().reportedErrors().size();
+  QTest::mouseClick(exportButton, Qt::LeftButton);
+  ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBefore + 1);
+  EXPECT_NE(workstation.window().reportedErrors().back().find("at rest"), std::string::npos);
+
+  setSlider(smile, 100);
+  const std::filesystem::path folder = test::scratchFolder();
+  auto answered = std::make_shared<bool>(false);
+  auto* timer = new QTimer(&workstation.window());
+  timer->setInterval(50);
+  QObject::connect(timer, &QTimer::timeout, [timer, folder, answered] {
+    auto* dialog = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+    if (!dialog)
+    {
+      if (*answered)
+        timer->stop();
+      return;
+    }
+    dialog->selectFile(QString::fromStdString(folder.string()));
+    if (auto* edit = dialog->findChild<QLineEdit*>("fileNameEdit"))
+      edit->setText(QString::fromStdString(folder.string()));
+    QMetaObject::invokeMethod(dialog, "accept", Qt::QueuedConnection);
+    *answered = true;
+  });
+  timer->start();
+  QTest::mouseClick(exportButton, Qt::LeftButton);
+  EXPECT_EQ(workstation.window().reportedErrors().size(), errorsBefore + 1) << workstation.errors();
+  const std::filesystem::path frames = folder / "expression";
+  ASSERT_TRUE(std::filesystem::exists(frames / "frame-0045.png")) << frames; // 24 out, 22 back
+  EXPECT_FALSE(std::filesystem::exists(frames / "frame-0046.png"));
+  const auto read = [](const std::filesystem::path& file) {
+    QImage image(QString::fromStdString(file.string()));
+    return image.convertToFormat(QImage::Format_RGB888);
+  };
+  const QImage rest = read(frames / "frame-0000.png"), peak = read(frames / "frame-0023.png");
+  ASSERT_FALSE(rest.isNull());
+  EXPECT_NE(rest, peak) << "the smile does not show in the animation";
+  EXPECT_EQ(read(frames / "frame-0010.png"), read(frames / "frame-0036.png")) << "out and back differ";
+  if (report::findFfmpeg())
+  {
+    EXPECT_TRUE(std::filesystem::exists(folder / "expression.mp4"));
+  }
+  const std::string status = workstation.window().statusBar()->currentMessage().toStdString();
+  EXPECT_NE(status.find("46 frames"), std::string::npos) << status;
 }
 
 TEST(ExpressionPanel, WithoutRangeMapsTheErrorSaysWhatToDo)
