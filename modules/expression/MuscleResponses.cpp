@@ -57,17 +57,29 @@ Eigen::VectorXd MuscleResponses::combined(const Eigen::VectorXd& activations) co
 
 ExpressionSurface::ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface,
                                      const MuscleResponses& responses)
+  : ExpressionSurface(mesh, std::move(surface), responses.displacements())
+{
+}
+
+ExpressionSurface::ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface,
+                                     const Eigen::MatrixXd& responses, const Eigen::VectorXd& base)
   : surface_(std::move(surface))
 {
-  const Eigen::Index vertices = surface_.vertexCount(), muscles = responses.muscleCount();
-  if (responses.displacements().rows() != mesh.dofCount())
-    throw std::invalid_argument("the muscle responses are of another mesh than the display surface's");
-  vertexResponses_.resize(3 * vertices, muscles);
-  for (Eigen::Index k = 0; k < muscles; ++k)
-  {
-    const Eigen::VectorXd u = responses.displacements().col(k);
+  const Eigen::Index vertices = surface_.vertexCount();
+  if (responses.rows() != mesh.dofCount() || (base.size() != 0 && base.size() != mesh.dofCount()))
+    throw std::invalid_argument("the responses are of another mesh than the display surface's");
+  // Each response interpolated to the vertices once (eq. 4.14).
+  const auto atVertices = [&](const Eigen::VectorXd& u, auto&& column) {
     for (Eigen::Index v = 0; v < vertices; ++v)
-      vertexResponses_.block<3, 1>(3 * v, k) = fem::displacementAt(mesh, u, surface_.bodyPoints()[std::size_t(v)]);
+      column.template segment<3>(3 * v) = fem::displacementAt(mesh, u, surface_.bodyPoints()[std::size_t(v)]);
+  };
+  vertexResponses_.resize(3 * vertices, responses.cols());
+  for (Eigen::Index k = 0; k < responses.cols(); ++k)
+    atVertices(responses.col(k), vertexResponses_.col(k));
+  if (base.size() != 0)
+  {
+    vertexBase_.resize(3 * vertices);
+    atVertices(base, vertexBase_);
   }
 }
 
@@ -77,7 +89,10 @@ void ExpressionSurface::positions(const Eigen::VectorXd& activations, bool range
   out = surface_.undeformedPositions();
   if (rangeDetail && surface_.rangeDetail().cols() == out.cols())
     out += surface_.rangeDetail();
-  Eigen::Map<Eigen::VectorXd>(out.data(), out.size()).noalias() += vertexResponses_ * activations;
+  Eigen::Map<Eigen::VectorXd> flat(out.data(), out.size());
+  if (vertexBase_.size() == flat.size())
+    flat += vertexBase_;
+  flat.noalias() += vertexResponses_ * activations;
 }
 
 } // namespace caps::expression

@@ -64,6 +64,12 @@ public:
   /// @a surface: the skin faces to show (its undeformed positions and range
   /// detail are kept); @a responses of the same mesh.
   ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface, const MuscleResponses& responses);
+  /// The same for any linear responses of @a mesh (3N × k: a muscle's, a
+  /// fingertip's unit travel) on top of @a base (3N, e.g. the closure of a
+  /// plan after the operation; empty: none).
+  /// @throws std::invalid_argument when @a responses or @a base are not of @a mesh.
+  ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface, const Eigen::MatrixXd& responses,
+                    const Eigen::VectorXd& base = {});
 
   const fem::DisplaySurface& surface() const { return surface_; }
   Eigen::Index vertexCount() const { return surface_.vertexCount(); }
@@ -72,7 +78,7 @@ public:
   const Eigen::MatrixXd& vertexResponses() const { return vertexResponses_; }
 
   /// Vertex positions (3 × V) under @a activations: undeformed (with the
-  /// range detail when @a rangeDetail) plus Σ a_k D_k. @a out is resized only
+  /// range detail when @a rangeDetail) plus the base plus Σ a_k D_k. @a out is resized only
   /// when needed, so a caller reusing it does not allocate.
   /// @throws std::invalid_argument for a wrong number of activations.
   void positions(const Eigen::VectorXd& activations, bool rangeDetail, Eigen::Matrix3Xd& out) const;
@@ -80,6 +86,7 @@ public:
 private:
   fem::DisplaySurface surface_;
   Eigen::MatrixXd vertexResponses_;
+  Eigen::VectorXd vertexBase_; ///< 3V, empty when there is no base
 };
 
 } // namespace caps::expression

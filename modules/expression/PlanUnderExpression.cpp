@@ -1,5 +1,6 @@
 #include "modules/expression/PlanUnderExpression.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -135,12 +136,17 @@ std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const incision:
   return analysis;
 }
 
-Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push, int threads)
+namespace {
+
+/// The skin nodes of the plan's model within @a radius of @a centre where the
+/// closure put them, sutured nodes left to their sutures.
+std::vector<int> fingertipNodes(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre,
+                                double radius)
 {
   const fem::ContinuumMesh& c = prediction.continuum;
   checkSize(prediction, prediction.displacements);
-  if (!(push.radius > 0.0) || !push.centre.allFinite() || !push.displacement.allFinite())
-    throw std::invalid_argument("a push needs a fingertip radius above 0 mm and a finite centre and displacement");
+  if (!(radius > 0.0) || !centre.allFinite())
+    throw std::invalid_argument("a push needs a fingertip radius above 0 mm and a finite centre");
   std::vector<char> sutured(std::size_t(c.mesh.nodeCount()), 0);
   for (const fem::Suture& s : c.sutures)
     sutured[std::size_t(s.node)] = 1;
@@ -151,28 +157,97 @@ Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, c
   for (const auto& column : c.edgeColumns)
     if (!column.empty() && column.front() >= 0)
       skinNodes.push_back(column.front());
-
-  fem::Constraints constraints = c.constraints();
-  int pushed = 0;
+  std::vector<int> out;
   for (int node : skinNodes)
-  {
-    if (sutured[std::size_t(node)] || (displaced(prediction, prediction.displacements, node) - push.centre).norm() >
-                                        push.radius)
-      continue;
-    // From where the closure put it, by the fingertip's travel.
-    for (int d = 0; d < 3; ++d)
-      constraints.prescribe(node, d, prediction.displacements[3 * Eigen::Index(node) + d] + push.displacement[d]);
-    ++pushed;
-  }
-  if (pushed == 0)
+    if (!sutured[std::size_t(node)] && (displaced(prediction, prediction.displacements, node) - centre).norm() <= radius)
+      out.push_back(node);
+  if (out.empty())
     throw std::invalid_argument("no skin of the plan's model lies under the fingertip: put it on the meshed skin "
                                 "around the incision");
+  return out;
+}
+
+/// The plan's constraints with @a nodes held at the closure moved by @a travel.
+fem::Constraints heldBy(const incision::PlanPrediction& prediction, const std::vector<int>& nodes,
+                        const Eigen::Vector3d& travel)
+{
+  fem::Constraints constraints = prediction.continuum.constraints();
+  for (int node : nodes)
+    for (int d = 0; d < 3; ++d)
+      constraints.prescribe(node, d, prediction.displacements[3 * Eigen::Index(node) + d] + travel[d]);
+  return constraints;
+}
+
+} // namespace
+
+Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push, int threads)
+{
+  if (!push.displacement.allFinite())
+    throw std::invalid_argument("a push needs a finite displacement");
+  const std::vector<int> nodes = fingertipNodes(prediction, push.centre, push.radius);
   fem::AssemblyOptions assembly;
   assembly.threads = threads;
-  fem::LinearStaticAnalysis analysis(c.mesh, prediction.materials, constraints, assembly);
+  fem::LinearStaticAnalysis analysis(prediction.continuum.mesh, prediction.materials,
+                                     heldBy(prediction, nodes, push.displacement), assembly);
   if (analysis.prepare() != fem::SolverStatus::Success)
     throw std::runtime_error("the plan's model cannot be solved under the push: " + analysis.message());
   return analysis.solve(fem::LoadCase{});
+}
+
+PushResponses::PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre,
+                             double radius, int threads)
+  : closure_(prediction.displacements), pushedNodes_(fingertipNodes(prediction, centre, radius))
+{
+  // One factorisation with the fingertip's nodes held, then one solve per
+  // direction with the new prescribed values (the factor depends only on
+  // which DOFs are prescribed, not on their values).
+  fem::AssemblyOptions assembly;
+  assembly.threads = threads;
+  fem::LinearStaticAnalysis analysis(prediction.continuum.mesh, prediction.materials,
+                                     heldBy(prediction, pushedNodes_, Eigen::Vector3d::Zero()), assembly);
+  if (analysis.prepare() != fem::SolverStatus::Success)
+    throw std::runtime_error("the plan's model cannot be solved under the push: " + analysis.message());
+  const Eigen::VectorXd noLoad = Eigen::VectorXd::Zero(closure_.size());
+  responses_.resize(closure_.size(), 3);
+  for (int d = 0; d < 3; ++d)
+    responses_.col(d) =
+      analysis.solveWithPrescribed(noLoad, heldBy(prediction, pushedNodes_, Eigen::Vector3d::Unit(d))).col(0) -
+      closure_;
+}
+
+Eigen::VectorXd PushResponses::displacement(const Eigen::Vector3d& travel) const
+{
+  return closure_ + responses_ * travel;
+}
+
+double PushPath::length() const
+{
+  double total = 0.0;
+  Eigen::Vector3d from = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& to : waypoints)
+  {
+    total += (to - from).norm();
+    from = to;
+  }
+  return total;
+}
+
+Eigen::Vector3d PushPath::travelAt(double s) const
+{
+  const double total = length();
+  if (!(total > 0.0))
+    return Eigen::Vector3d::Zero();
+  double left = std::clamp(s, 0.0, 1.0) * total;
+  Eigen::Vector3d from = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& to : waypoints)
+  {
+    const double leg = (to - from).norm();
+    if (left <= leg && leg > 0.0)
+      return from + (left / leg) * (to - from);
+    left -= leg;
+    from = to;
+  }
+  return waypoints.back();
 }
 
 ContourBumps contourBumps(const incision::PlanPrediction& prediction, const seg::CylindricalFrame& frame,

@@ -78,6 +78,53 @@ struct SkinPush
 Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push,
                                    int threads = 2);
 
+/// @class PushResponses
+/// @brief The post-operative model under a fingertip for any travel, at
+/// display rate (§5.4 with §3.1.2). The skin nodes within the fingertip's
+/// radius of its centre (where the closure put them; sutured nodes keep their
+/// sutures) are prescribed; the model is factored once with them held and
+/// solved three times, for a unit travel along x, y and z. The model is
+/// linear, so the fingertip moved by d from where the closure put the skin
+/// gives U(d) = closure + W d exactly, and a path is a sequence of d.
+class PushResponses
+{
+public:
+  /// @throws std::invalid_argument for a radius not above 0, a centre that is
+  /// not finite, or no skin node under the fingertip; std::runtime_error when
+  /// the model cannot be solved.
+  PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
+                int threads = 2);
+
+  /// W: 3N × 3, what a unit travel along x, y, z adds to the closure.
+  const Eigen::MatrixXd& responses() const { return responses_; }
+  /// The closure (3N): the model with the fingertip resting.
+  const Eigen::VectorXd& closure() const { return closure_; }
+  /// The skin nodes the fingertip holds.
+  const std::vector<int>& pushedNodes() const { return pushedNodes_; }
+  /// closure + W @a travel.
+  Eigen::VectorXd displacement(const Eigen::Vector3d& travel) const;
+
+private:
+  Eigen::VectorXd closure_;
+  Eigen::MatrixXd responses_;
+  std::vector<int> pushedNodes_;
+};
+
+/// A fingertip's path (§5.4: a small region of skin displaced along a path):
+/// the travel from where the closure put the skin goes from zero through
+/// @a waypoints in order, straight between them, at even speed along its length.
+struct PushPath
+{
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(); ///< the fingertip on the skin after the operation (world LPS)
+  double radius = 5.0;                              ///< mm
+  std::vector<Eigen::Vector3d> waypoints;           ///< travel (mm) at each corner; the last is the end
+
+  /// The path's length (mm).
+  double length() const;
+  /// The travel at fraction @a s (clamped to [0, 1]) of the length; zero for an empty or zero-length path.
+  Eigen::Vector3d travelAt(double s) const;
+};
+
 /// The contour bumps of the skin around an incision: for each skin vertex of
 /// the plan's surface mesh within @a window (mm, in the plan's chart) of the
 /// cut's points, displaced by @a u, its height r from the head axis above or

@@ -191,6 +191,67 @@ TEST(PlanUnderExpression, APushOfHalfTheTravelIsHalfWay)
   EXPECT_THROW(pushedDisplacement(p, away), std::invalid_argument);
 }
 
+TEST(PlanUnderExpression, ThePushPathGoesThroughItsCornersAtEvenSpeed)
+{
+  PushPath path;
+  EXPECT_EQ(path.travelAt(0.5), Eigen::Vector3d::Zero()) << "an empty path stays at rest";
+  // Up 6 mm, then 3 mm sideways: 9 mm in all.
+  path.waypoints = {Eigen::Vector3d(0.0, 0.0, 6.0), Eigen::Vector3d(3.0, 0.0, 6.0)};
+  EXPECT_DOUBLE_EQ(path.length(), 9.0);
+  EXPECT_LT((path.travelAt(0.0) - Eigen::Vector3d::Zero()).norm(), 1e-12);
+  EXPECT_LT((path.travelAt(1.0 / 3.0) - Eigen::Vector3d(0.0, 0.0, 3.0)).norm(), 1e-12);
+  EXPECT_LT((path.travelAt(2.0 / 3.0) - Eigen::Vector3d(0.0, 0.0, 6.0)).norm(), 1e-12);
+  EXPECT_LT((path.travelAt(0.75) - Eigen::Vector3d(0.75, 0.0, 6.0)).norm(), 1e-12);
+  EXPECT_LT((path.travelAt(1.0) - Eigen::Vector3d(3.0, 0.0, 6.0)).norm(), 1e-12);
+  EXPECT_LT((path.travelAt(7.0) - Eigen::Vector3d(3.0, 0.0, 6.0)).norm(), 1e-12) << "s is clamped";
+  // A corner repeated (a zero-length leg) changes nothing.
+  path.waypoints.insert(path.waypoints.begin() + 1, Eigen::Vector3d(0.0, 0.0, 6.0));
+  EXPECT_LT((path.travelAt(0.75) - Eigen::Vector3d(0.75, 0.0, 6.0)).norm(), 1e-12);
+}
+
+TEST(PlanUnderExpression, ThreeUnitPushesGiveAnyTravelAsAFreshSolveDoes)
+{
+  const ClosedPlan& plan = closedPlan();
+  const incision::PlanPrediction& p = plan.prediction;
+  const fem::ChartPoint below = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
+  std::size_t nearest = 0;
+  for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
+    if ((p.surface.mesh.vertices[v] - below).norm() < (p.surface.mesh.vertices[nearest] - below).norm())
+      nearest = v;
+  const int tip = p.continuum.vertexColumns[nearest].front();
+  const Eigen::Vector3d centre =
+    p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
+  const PushResponses responses(p, centre, 4.0);
+  EXPECT_FALSE(responses.pushedNodes().empty());
+  EXPECT_LT((responses.displacement(Eigen::Vector3d::Zero()) - p.displacements).norm(), 1e-9 * p.displacements.norm())
+    << "the fingertip at rest holds the skin where the closure put it";
+
+  // A bent path: up the cheek 6 mm, then 3 mm forward and 1 mm in. At
+  // three quarters of it the superposed model must equal the model factored
+  // afresh with the fingertip there (pushedDisplacement: a new factorisation).
+  PushPath path;
+  path.centre = centre;
+  path.radius = 4.0;
+  path.waypoints = {Eigen::Vector3d(0.0, 0.0, 6.0), Eigen::Vector3d(3.0, -1.0, 6.0)};
+  for (double s : {0.3, 0.75, 1.0})
+  {
+    SkinPush push;
+    push.centre = centre;
+    push.radius = 4.0;
+    push.displacement = path.travelAt(s);
+    const Eigen::VectorXd fresh = pushedDisplacement(p, push);
+    const Eigen::VectorXd superposed = responses.displacement(path.travelAt(s));
+    EXPECT_LT((superposed - fresh).norm() / fresh.norm(), 1e-9) << "at s = " << s;
+    // The fingertip's skin is where the path put it.
+    EXPECT_LT((superposed.segment<3>(3 * Eigen::Index(tip)) - p.displacements.segment<3>(3 * Eigen::Index(tip)) -
+               path.travelAt(s))
+                .norm(),
+              1e-9);
+  }
+  EXPECT_THROW(PushResponses(p, centre + Eigen::Vector3d(0.0, -200.0, 0.0), 4.0), std::invalid_argument);
+  EXPECT_THROW(PushResponses(p, centre, 0.0), std::invalid_argument);
+}
+
 TEST(PlanUnderExpression, TheWholeFaceSmileDrivesThePlanAtItsRim)
 {
   const ClosedPlan& plan = closedPlan();
