@@ -191,31 +191,42 @@ Camera turntableCamera(const seg::CylindricalFrame& frame, double rMax, double z
   return fitCamera(points, frame.radialDirection(theta), frame.direction(), aspect, 20.0, 1.04);
 }
 
-/// Renders @a frames frames from @a from to @a to (then back to @a from,
-/// without repeating the peak, when @a andBack) into @a sequence.folder with
-/// @a sequence.camera, coloured by the surfaces' skin shade when they have
-/// one, else in a skin tone; @a step is called before each frame.
-void renderMorph(vtkPolyData* from, vtkPolyData* to, const Figure& base, FrameSequence& sequence, int frames,
-                 bool andBack, const std::function<void(const char*)>& step)
+/// Renders frame k = 0 … @a total − 1 of @a surfaceAt into
+/// @a sequence.folder with @a sequence.camera, coloured by the surfaces' skin
+/// shade when they have one, else in a skin tone; @a step is called before
+/// each frame.
+void renderSurfaces(const std::function<vtkSmartPointer<vtkPolyData>(int)>& surfaceAt, int total,
+                    const Figure& base, FrameSequence& sequence, const std::function<void(const char*)>& step)
 {
-  const char* shade = from->GetPointData()->GetArray("skin_shade")   ? "skin_shade"
-                      : from->GetPointData()->GetArray("skin_colour") ? "skin_colour"
-                                                                      : nullptr;
   prepareFolder(sequence.folder);
-  const int total = andBack ? 2 * frames - 2 : frames;
   for (int k = 0; k < total; ++k)
   {
     step("Rendering the animation");
-    const int along = k < frames ? k : 2 * (frames - 1) - k;
-    const double s = double(along) / (frames - 1);
+    vtkSmartPointer<vtkPolyData> surface = surfaceAt(k);
+    const char* shade = surface->GetPointData()->GetArray("skin_shade")    ? "skin_shade"
+                        : surface->GetPointData()->GetArray("skin_colour") ? "skin_colour"
+                                                                           : nullptr;
     Figure figure = base;
     figure.camera = sequence.camera;
-    vtkSmartPointer<vtkPolyData> blended = blendSurfaces(from, to, s);
-    figure.surfaces.push_back(shade ? SurfaceLayer::pointColours(blended, shade)
-                                    : SurfaceLayer::solid(blended, {0.90, 0.76, 0.66}));
+    figure.surfaces.push_back(shade ? SurfaceLayer::pointColours(surface, shade)
+                                    : SurfaceLayer::solid(surface, {0.90, 0.76, 0.66}));
     writePng(renderFigure(figure).GetPointer(), sequence.folder / frameName(k));
     ++sequence.frames;
   }
+}
+
+/// Renders @a frames frames from @a from to @a to (then back to @a from,
+/// without repeating the peak, when @a andBack), as renderSurfaces().
+void renderMorph(vtkPolyData* from, vtkPolyData* to, const Figure& base, FrameSequence& sequence, int frames,
+                 bool andBack, const std::function<void(const char*)>& step)
+{
+  const int total = andBack ? 2 * frames - 2 : frames;
+  renderSurfaces(
+    [&](int k) {
+      const int along = k < frames ? k : 2 * (frames - 1) - k;
+      return blendSurfaces(from, to, double(along) / (frames - 1));
+    },
+    total, base, sequence, step);
 }
 
 /// The MP4 of each sequence when ffmpeg is there and videos are asked for;
@@ -496,6 +507,48 @@ AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const st
   const int total = andBack ? 2 * frames - 2 : frames;
   int done = 0;
   renderMorph(from, to, base, result.prePost, frames, andBack, [&](const char* step) {
+    report(progress, 0.95 * done / total, step);
+    ++done;
+  });
+  result.framesRendered = done;
+  result.renderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  encodeVideos({&result.prePost}, options, progress, result);
+  report(progress, 1.0, "Animation written");
+  return result;
+}
+
+AnimationResult writeSurfaceAnimation(const std::vector<vtkSmartPointer<vtkPolyData>>& frames, const std::string& name,
+                                      const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
+                                      const fs::path& outDir, const AnimationOptions& options,
+                                      const TaskProgress& progress)
+{
+  const auto [width, height] = frameSize(options);
+  if (frames.size() < 2)
+    throw std::invalid_argument("an animation needs at least 2 frames");
+  std::vector<vtkPolyData*> surfaces;
+  for (const auto& f : frames)
+  {
+    if (!f || f->GetNumberOfPoints() == 0)
+      throw std::invalid_argument("the animation \"" + name + "\" has a frame with no surface to show");
+    surfaces.push_back(f);
+  }
+  if (name.empty() || name.find('/') != std::string::npos)
+    throw std::invalid_argument("an animation's name must be a plain file name");
+  AnimationResult result;
+  result.planName = name;
+  Figure base;
+  base.width = width;
+  base.height = height;
+  base.multiSamples = options.multiSamples;
+  result.prePost.folder = fs::absolute(outDir) / name;
+  result.prePost.width = width;
+  result.prePost.height = height;
+  // One camera framing every frame, so the surface moves and the view does not.
+  result.prePost.camera = fitCamera(surfaces, toCamera, viewUp, base.sceneAspect(), 20.0, 1.05);
+  const auto started = std::chrono::steady_clock::now();
+  const int total = int(frames.size());
+  int done = 0;
+  renderSurfaces([&](int k) { return frames[std::size_t(k)]; }, total, base, result.prePost, [&](const char* step) {
     report(progress, 0.95 * done / total, step);
     ++done;
   });

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <vtkSmartPointer.h>
 
@@ -109,5 +110,18 @@ AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const st
                                     const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
                                     const std::filesystem::path& outDir, int frames, bool andBack,
                                     const AnimationOptions& options, const TaskProgress& progress = {});
+
+/// Writes an animation whose frames are given, one surface each (a push
+/// along a bent path, thesis §5.4, is not a blend of two surfaces): like
+/// writeMorphAnimation(), @a outDir/@a name/frame-NNNN.png and @a name.mp4,
+/// one camera framing every frame.
+/// @throws std::invalid_argument for fewer than 2 frames, an empty frame, a
+/// bad size or a name that is not a plain file name; seg::Cancelled when
+/// @a progress asks to stop; std::runtime_error when a file cannot be written
+/// or ffmpeg fails.
+AnimationResult writeSurfaceAnimation(const std::vector<vtkSmartPointer<vtkPolyData>>& frames, const std::string& name,
+                                      const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
+                                      const std::filesystem::path& outDir, const AnimationOptions& options,
+                                      const TaskProgress& progress = {});
 
 } // namespace caps::report

@@ -483,3 +483,30 @@ TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
                                            options),
                std::invalid_argument);
 }
+
+TEST(PlanAnimation, GivenFramesAreRenderedInTheirOrderAsTheMorphRendersThem)
+{
+  caps::Scene& scene = demoScene();
+  vtkPolyData* before = report::surfaceNamed(scene, "Z-plasty 1 skin before");
+  vtkPolyData* after = report::surfaceNamed(scene, "Z-plasty 1 skin after");
+  ASSERT_TRUE(before && after);
+  const fs::path out = caps::test::scratchFolder();
+  const report::AnimationOptions options = smallOptions();
+  const Eigen::Vector3d toCamera(0.0, -1.0, 0.0), up(0.0, 0.0, 1.0);
+  report::writeMorphAnimation(before, after, "morph", toCamera, up, out, 4, false, options);
+  // The morph's own frames given back to front: the same pictures, reversed
+  // (the camera framing all four frames is the morph's, which frames the ends).
+  std::vector<vtkSmartPointer<vtkPolyData>> frames;
+  for (int k = 3; k >= 0; --k)
+    frames.push_back(report::blendSurfaces(before, after, k / 3.0));
+  const auto r = report::writeSurfaceAnimation(frames, "given", toCamera, up, out, options);
+  EXPECT_EQ(r.prePost.frames, 4);
+  EXPECT_FALSE(fs::exists(out / "given" / frameName(4)));
+  for (int k = 0; k < 4; ++k)
+    EXPECT_EQ(meanDifference(readPng(out / "given" / frameName(k)), readPng(out / "morph" / frameName(3 - k))), 0.0)
+      << k;
+  EXPECT_THROW(report::writeSurfaceAnimation({frames.front()}, "one", toCamera, up, out, options),
+               std::invalid_argument);
+  EXPECT_THROW(report::writeSurfaceAnimation({frames.front(), nullptr}, "hole", toCamera, up, out, options),
+               std::invalid_argument);
+}
