@@ -12,17 +12,20 @@
 #include <string>
 #include <variant>
 
+#include <vtkPoints.h>
 #include <vtkPolyData.h>
 
 #include "modules/expression/ExpressionLogic.h"
 #include "modules/expression/PlanUnderExpression.h"
 #include "modules/incision/IncisionLogic.h"
+#include "modules/incision/PlanDisplay.h"
 #include "modules/report/PlanAnimation.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/ExpressionNode.h"
 #include "scene/PlanNode.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
+#include "segmentation/SkinShade.h"
 
 namespace fs = std::filesystem;
 
@@ -31,7 +34,7 @@ namespace {
 
 const char* kExpressionUsage =
   "usage: caps expression SCENE.caps [--expression NAME] [--muscle ID=A ...]\n"
-  "                       [--plan NAME] [--push X,Y,Z:DX,DY,DZ[:R]]\n"
+  "                       [--plan NAME] [--push X,Y,Z:DX,DY,DZ[/DX,DY,DZ ...][:R]]\n"
   "                       [--animate DIR] [--frames N] [--size WxH] [--element-size MM]\n"
   "\n"
   "The face of a saved scene under an expression (thesis §5.3): the whole face is\n"
@@ -49,11 +52,15 @@ const char* kExpressionUsage =
   "                     its model's rim follows the face, the muscles act inside it, and\n"
   "                     the contour bumps within 20 mm of the cut are compared with the\n"
   "                     plan at rest (largest bump, largest change of the skin's height)\n"
-  "  --push X,Y,Z:DX,DY,DZ[:R]  with --plan: a fingertip at X,Y,Z (LPS mm, on the\n"
-  "                     skin after the operation) pushes the skin within R mm (default 5)\n"
-  "                     by DX,DY,DZ mm; the bumps compared the same way\n"
+  "  --push X,Y,Z:DX,DY,DZ[/DX,DY,DZ ...][:R]  with --plan: a fingertip at X,Y,Z (LPS\n"
+  "                     mm, on the skin after the operation) pushes the skin within R mm\n"
+  "                     (default 5) along a path: from rest through each DX,DY,DZ (mm of\n"
+  "                     travel) in turn; the bumps compared the same way at its end, and\n"
+  "                     the largest bump along the way\n"
   "  --animate DIR      writes the expression played and released as DIR/expression-NAME/\n"
-  "                     frame-NNNN.png and, with ffmpeg, DIR/expression-NAME.mp4\n"
+  "                     frame-NNNN.png and, with ffmpeg, DIR/expression-NAME.mp4; with\n"
+  "                     --plan also the plan's skin under it (DIR/plan-expression-NAME) and\n"
+  "                     under the push there and back (DIR/plan-push)\n"
   "  --frames N         frames from rest to the full expression (default 24)\n"
   "  --size WxH         frame size in pixels (default 960x720)\n"
   "  --element-size MM  element size of the face model (default 5)\n"
@@ -67,7 +74,7 @@ struct ExpressionArgs
   std::string expression = "smile";
   std::vector<std::pair<std::string, double>> muscles;
   std::string plan;
-  std::optional<expression::SkinPush> push;
+  std::optional<expression::PushPath> push;
   fs::path animate;
   int frames = 24;
   int width = 960, height = 720;
@@ -79,6 +86,31 @@ bool parseTriple(const std::string& text, Eigen::Vector3d& v)
   std::istringstream in(text);
   char c1 = 0, c2 = 0;
   return bool(in >> v.x() >> c1 >> v.y() >> c2 >> v.z()) && c1 == ',' && c2 == ',' && in.peek() == EOF;
+}
+
+/// X,Y,Z:DX,DY,DZ[/DX,DY,DZ ...][:R], or nullopt when it is not that.
+std::optional<expression::PushPath> parsePush(const std::string& text)
+{
+  expression::PushPath push;
+  const auto colon = text.find(':');
+  if (colon == std::string::npos || !parseTriple(text.substr(0, colon), push.centre))
+    return std::nullopt;
+  const auto second = text.find(':', colon + 1);
+  std::string path = text.substr(colon + 1, second == std::string::npos ? std::string::npos : second - colon - 1);
+  if (second != std::string::npos && (!cli::parseNumber(text.substr(second + 1), push.radius) || !(push.radius > 0.0)))
+    return std::nullopt;
+  for (std::size_t begin = 0;;)
+  {
+    const auto slash = path.find('/', begin);
+    Eigen::Vector3d travel;
+    if (!parseTriple(path.substr(begin, slash == std::string::npos ? std::string::npos : slash - begin), travel))
+      return std::nullopt;
+    push.waypoints.push_back(travel);
+    if (slash == std::string::npos)
+      break;
+    begin = slash + 1;
+  }
+  return push;
 }
 
 /// The parsed arguments, or the error text.
@@ -116,15 +148,10 @@ std::variant<ExpressionArgs, std::string> parseArgs(const std::vector<std::strin
       }
       else if (a == "--push")
       {
-        expression::SkinPush push;
-        const auto colon = v->find(':');
-        const auto second = colon == std::string::npos ? std::string::npos : v->find(':', colon + 1);
-        if (colon == std::string::npos || !parseTriple(v->substr(0, colon), push.centre) ||
-            !parseTriple(v->substr(colon + 1, second == std::string::npos ? std::string::npos : second - colon - 1),
-                         push.displacement) ||
-            (second != std::string::npos && !cli::parseNumber(v->substr(second + 1), push.radius)))
-          return "--push needs X,Y,Z:DX,DY,DZ[:R] in mm (got " + *v + ")";
-        parsed.push = push;
+        if (auto push = parsePush(*v))
+          parsed.push = *push;
+        else
+          return "--push needs X,Y,Z:DX,DY,DZ[/DX,DY,DZ ...][:R] in mm, R above 0 (got " + *v + ")";
       }
       else if (a == "--frames")
       {
@@ -203,6 +230,74 @@ void printComparison(std::ostream& out, const char* what, const expression::Cont
   out << line;
 }
 
+/// @a surface with its points moved to @a x (its arrays kept).
+vtkSmartPointer<vtkPolyData> movedTo(vtkPolyData* surface, const Eigen::Matrix3Xd& x)
+{
+  auto out = vtkSmartPointer<vtkPolyData>::New();
+  out->DeepCopy(surface);
+  for (Eigen::Index v = 0; v < x.cols(); ++v)
+    out->GetPoints()->SetPoint(v, x.col(v).data());
+  out->GetPoints()->Modified();
+  return out;
+}
+
+void printAnimation(const report::AnimationResult& result, std::ostream& out, std::ostream& err)
+{
+  out << "Wrote " << result.prePost.frames << " frames to " << result.prePost.folder.string() << "\n";
+  if (!result.prePost.video.empty())
+    out << "Wrote " << result.prePost.video.string() << "\n";
+  if (!result.videoMessage.empty())
+    err << result.videoMessage << "\n";
+}
+
+/// The plan's skin under the expression, played and released, and under the
+/// push along its path and back, from the camera facing the plan.
+void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionModelInput& input,
+                         const incision::PlanPrediction& prediction, double planTheta,
+                         const expression::PlanExpressionResponses& onPlan, const Eigen::VectorXd& activations,
+                         const expression::PushResponses* pushed, std::ostream& out, std::ostream& err)
+{
+  seg::ColourMap shade;
+  const seg::ColourMap* colour = nullptr;
+  if (input.ct)
+    try
+    {
+      shade = seg::skinShadeFromCt(input.ct, input.skin);
+      colour = &shade;
+    }
+    catch (const std::exception& e)
+    {
+      err << "The plan's skin is grey: its shade could not be read from the CT (" << e.what() << ")\n";
+    }
+  const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, input.skin, colour);
+  const vtkSmartPointer<vtkPolyData> atRest = incision::planDisplayPolyData(display, 1.0);
+  const seg::CylindricalFrame& frame = input.skin.frame();
+  const Eigen::Vector3d toCamera = frame.radialDirection(planTheta), up = frame.direction();
+  report::AnimationOptions options;
+  options.width = a.width;
+  options.height = a.height;
+  const fem::Mesh& mesh = prediction.continuum.mesh;
+  Eigen::Matrix3Xd x;
+  const expression::ExpressionSurface underMuscles(mesh, display.surface, onPlan.responses(), prediction.displacements);
+  underMuscles.positions(activations, display.rangeDetail, x);
+  printAnimation(report::writeMorphAnimation(atRest, movedTo(atRest, x), "plan-expression-" + a.expression, toCamera,
+                                             up, a.animate, a.frames, true, options, cli::consoleProgress(err)),
+                 out, err);
+  if (!pushed || !a.push)
+    return;
+  const expression::ExpressionSurface underPush(mesh, display.surface, pushed->responses(), prediction.displacements);
+  std::vector<vtkSmartPointer<vtkPolyData>> frames;
+  for (int k = 0; k < 2 * a.frames - 2; ++k)
+  {
+    const int along = k < a.frames ? k : 2 * (a.frames - 1) - k;
+    underPush.positions(a.push->travelAt(double(along) / (a.frames - 1)), display.rangeDetail, x);
+    frames.push_back(movedTo(atRest, x));
+  }
+  printAnimation(report::writeSurfaceAnimation(frames, "plan-push", toCamera, up, a.animate, options,
+                                               cli::consoleProgress(err)),
+                 out, err);
+}
+
 int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
 {
   const auto parsed = parseArgs(args);
@@ -267,13 +362,41 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
         functions.push_back(m.functions);
       const expression::PlanExpressionResponses onPlan(prediction, model->face.continuum.mesh, model->responses,
                                                        functions);
+      const seg::CylindricalFrame& frame = input.skin.frame();
       printComparison(out, "under the expression",
-                      expression::compareContours(prediction, input.skin.frame(), prediction.displacements,
+                      expression::compareContours(prediction, frame, prediction.displacements,
                                                   onPlan.displacement(activations)));
+      std::optional<expression::PushResponses> pushed;
       if (a.push)
+      {
+        pushed.emplace(prediction, a.push->centre, a.push->radius);
         printComparison(out, "pushed",
-                        expression::compareContours(prediction, input.skin.frame(), prediction.displacements,
-                                                    expression::pushedDisplacement(prediction, *a.push)));
+                        expression::compareContours(prediction, frame, prediction.displacements,
+                                                    pushed->displacement(a.push->travelAt(1.0))));
+        // The bumps may peak part way along a bent path, not at its end.
+        double peak = 0.0, peakAt = 0.0;
+        constexpr int kStations = 10;
+        for (int i = 1; i <= kStations; ++i)
+        {
+          const double at = double(i) / kStations;
+          const double largest =
+            expression::contourBumps(prediction, frame, pushed->displacement(a.push->travelAt(at))).largest;
+          if (largest > peak)
+          {
+            peak = largest;
+            peakAt = at;
+          }
+        }
+        std::snprintf(line, sizeof line,
+                      "Along the push (%.1f mm of path through %zu corner%s, %zu skin nodes under the fingertip): the "
+                      "largest bump peaks at %.2f mm, %.0f %% of the way\n",
+                      a.push->length(), a.push->waypoints.size(), a.push->waypoints.size() == 1 ? "" : "s",
+                      pushed->pushedNodes().size(), peak, 100.0 * peakAt);
+        out << line;
+      }
+      if (!a.animate.empty())
+        writePlanAnimations(a, input, prediction, IncisionLogic::readPlan(*planNode).centre().theta, onPlan,
+                            activations, pushed ? &*pushed : nullptr, out, err);
     }
 
     if (!a.animate.empty())
@@ -285,11 +408,7 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
       const auto result = report::writeMorphAnimation(
         rest, full, "expression-" + a.expression, frame.radialDirection(-0.5 * std::numbers::pi), frame.direction(),
         a.animate, a.frames, true, options, cli::consoleProgress(err));
-      out << "Wrote " << result.prePost.frames << " frames to " << result.prePost.folder.string() << "\n";
-      if (!result.prePost.video.empty())
-        out << "Wrote " << result.prePost.video.string() << "\n";
-      if (!result.videoMessage.empty())
-        err << result.videoMessage << "\n";
+      printAnimation(result, out, err);
     }
     return 0;
   }
