@@ -161,16 +161,10 @@ FaceMesh meshFace(const seg::RangeMap& skin, const seg::RangeMap& bone, const st
   const seg::RangeMap boneForDepth =
     incision::boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses);
   const fem::TissueGeometry geometry = incision::skinToBoneGeometry(chart, skin, boneForDepth);
-  fem::ContinuumMeshOptions continuumOptions;
-  continuumOptions.layerCount = options.layerCount;
-  continuumOptions.layerFractions = options.layerFractions;
-  continuumOptions.minDepth = options.minDepth;
-  continuumOptions.maxDepth = options.maxDepth;
-  continuumOptions.noBoneDepth = options.noBoneDepth;
+  fem::ContinuumMeshOptions continuumOptions = options.continuumMeshOptions();
   continuumOptions.rim = fem::RimCondition::Free;
   out.continuum = fem::meshContinuum(out.surface, {}, geometry, continuumOptions);
-  out.materials =
-    options.materials.empty() ? incision::defaultFacialTissueMaterials(options.layerCount) : options.materials;
+  out.materials = options.layerMaterials();
   return out;
 }
 

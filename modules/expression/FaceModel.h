@@ -11,13 +11,14 @@
 #include "fem/ContinuumMesher.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/SurfaceMesh.h"
+#include "modules/incision/PlanSimulation.h"
 #include "segmentation/Landmarks.h"
 #include "segmentation/RangeMap.h"
 
 namespace caps::expression {
 
 /// Options of meshFace(). Lengths in mm.
-struct FaceModelOptions
+struct FaceModelOptions : incision::TissueDepthOptions
 {
   /// Edge length of the quadrilaterals on the skin.
   double elementSize = 5.0;
@@ -26,17 +27,6 @@ struct FaceModelOptions
   double lateralMargin = 15.0;
   double marginBelowMenton = 10.0;
   double marginAboveForehead = 15.0;
-  /// As in incision::SimulationOptions: element layers from the skin to the
-  /// bone, their fractions of the depth (empty: equal), depth clamping, the
-  /// depth where the bone map has no bone, and the bone's smoothing.
-  int layerCount = 3;
-  std::vector<double> layerFractions;
-  double minDepth = 2.0;
-  double maxDepth = 40.0;
-  double noBoneDepth = 10.0;
-  int boneSmoothingPasses = 8;
-  /// Materials by layer; empty: incision::defaultFacialTissueMaterials(layerCount).
-  fem::MaterialTable materials;
 };
 
 /// The face region on the cylindrical frame: θ in radians, z in mm.

@@ -102,6 +102,22 @@ fem::MaterialTable defaultFacialTissueMaterials(int layerCount)
   return table;
 }
 
+fem::ContinuumMeshOptions TissueDepthOptions::continuumMeshOptions() const
+{
+  fem::ContinuumMeshOptions out;
+  out.layerCount = layerCount;
+  out.layerFractions = layerFractions;
+  out.minDepth = minDepth;
+  out.maxDepth = maxDepth;
+  out.noBoneDepth = noBoneDepth;
+  return out;
+}
+
+fem::MaterialTable TissueDepthOptions::layerMaterials() const
+{
+  return materials.empty() ? defaultFacialTissueMaterials(layerCount) : materials;
+}
+
 seg::RangeMap boneForTissueDepth(const seg::RangeMap& skin, const seg::RangeMap& bone, double noBoneDepth,
                                  int smoothingPasses)
 {
@@ -364,12 +380,7 @@ PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& b
     haveBone ? boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses) : seg::RangeMap();
   // 3. Skin to bone (§4.5.2): along the ray towards the axis.
   const fem::TissueGeometry geometry = skinToBoneGeometry(chart, skin, boneForDepth);
-  fem::ContinuumMeshOptions continuumOptions;
-  continuumOptions.layerCount = options.layerCount;
-  continuumOptions.layerFractions = options.layerFractions;
-  continuumOptions.minDepth = options.minDepth;
-  continuumOptions.maxDepth = options.maxDepth;
-  continuumOptions.noBoneDepth = options.noBoneDepth;
+  fem::ContinuumMeshOptions continuumOptions = options.continuumMeshOptions();
   continuumOptions.rim = options.rim;
   continuumOptions.cutLayers = options.cutLayers;
   out.underminedVertices = fem::underminingBand(surface, out.sutures, options.underminingWidth);
@@ -406,7 +417,7 @@ PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& b
     step += " DOF)";
     phase(0.2, step);
   }
-  out.materials = options.materials.empty() ? defaultFacialTissueMaterials(options.layerCount) : options.materials;
+  out.materials = options.layerMaterials();
   for (int layer = 0; layer < options.layerCount; ++layer)
     if (!out.materials.count(layer))
       throw std::invalid_argument("simulation options: no material for layer " + std::to_string(layer));

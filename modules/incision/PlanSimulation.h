@@ -35,17 +35,11 @@ fem::MaterialTable defaultFacialTissueMaterials(int layerCount = 3);
 /// a displacement formulation cannot solve).
 std::string materialProblem(double youngsModulusMPa, double poissonRatio);
 
-/// Options of simulatePlan(). Lengths in mm.
-struct SimulationOptions
+/// How the tissue from the skin to the bone is layered, measured and made
+/// of (§4.5.2, §4.6.1): shared by a plan's model (SimulationOptions) and the
+/// whole face's (expression::FaceModelOptions). Lengths in mm.
+struct TissueDepthOptions
 {
-  /// Element size at the wound: cut-path segments are split so every hole
-  /// border edge is at most this long (sutured edges into equal numbers of
-  /// pieces on both sides), and it is the first quad layer's thickness.
-  double elementSize = 2.0;
-  /// Distance from the hole to the rim of the meshed region.
-  double regionRadius = 25.0;
-  /// Growth of the quad layers' thickness away from the wound (SurfaceMesherOptions).
-  double layerGrowth = 1.25;
   /// Element layers from the skin to the bone.
   int layerCount = 3;
   /// Fractions of the local depth per layer, skin first (e.g. skin, fat,
@@ -60,6 +54,27 @@ struct SimulationOptions
   /// map jumps between neighbouring samples (sinus walls, holes), which folds
   /// deep elements; 0 uses the raw map.
   int boneSmoothingPasses = 8;
+  /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
+  fem::MaterialTable materials;
+
+  /// The continuum mesher's options for these layers and depths (the rim,
+  /// cut depth and undermining left at the mesher's defaults).
+  fem::ContinuumMeshOptions continuumMeshOptions() const;
+  /// materials, or the default ones for layerCount when empty.
+  fem::MaterialTable layerMaterials() const;
+};
+
+/// Options of simulatePlan(). Lengths in mm.
+struct SimulationOptions : TissueDepthOptions
+{
+  /// Element size at the wound: cut-path segments are split so every hole
+  /// border edge is at most this long (sutured edges into equal numbers of
+  /// pieces on both sides), and it is the first quad layer's thickness.
+  double elementSize = 2.0;
+  /// Distance from the hole to the rim of the meshed region.
+  double regionRadius = 25.0;
+  /// Growth of the quad layers' thickness away from the wound (SurfaceMesherOptions).
+  double layerGrowth = 1.25;
   fem::RimCondition rim = fem::RimCondition::Free;
   /// Undermining (thesis §3.2.2, §3.2.4 item 2, default form): the skin
   /// within this distance (mm, measured on the skin chart) of the sutured
@@ -73,8 +88,6 @@ struct SimulationOptions
   /// (fem::ContinuumMeshOptions::cutLayers). With the default three layers:
   /// 1 = through the skin, 2 = through the fat as well.
   int cutLayers = 0;
-  /// Materials by layer (region = layer index); empty: defaultFacialTissueMaterials(layerCount).
-  fem::MaterialTable materials;
   /// Threads of the assembly.
   int threads = 1;
   /// Called by simulatePlan() between its phases (surface mesh, continuum
