@@ -477,20 +477,17 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   return result;
 }
 
-AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const std::string& name,
-                                    const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
-                                    const fs::path& outDir, int frames, bool andBack,
-                                    const AnimationOptions& options, const TaskProgress& progress)
+namespace {
+
+/// Renders frame k = 0 … @a total − 1 of @a surfaceAt as @a outDir/@a name,
+/// one camera framing @a framing, then the video (writeMorphAnimation(),
+/// writeSurfaceAnimation()).
+AnimationResult writeSequence(const std::function<vtkSmartPointer<vtkPolyData>(int)>& surfaceAt, int total,
+                              const std::vector<vtkPolyData*>& framing, const std::string& name,
+                              const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp, const fs::path& outDir,
+                              const AnimationOptions& options, const TaskProgress& progress)
 {
   const auto [width, height] = frameSize(options);
-  if (frames < 2)
-    throw std::invalid_argument("an animation needs at least 2 frames");
-  if (!from || !to || from->GetNumberOfPoints() == 0)
-    throw std::invalid_argument("the animation \"" + name + "\" has no surface to show");
-  if (from->GetNumberOfPoints() != to->GetNumberOfPoints())
-    throw std::invalid_argument("the animation \"" + name + "\": its two surfaces have " +
-                                std::to_string(from->GetNumberOfPoints()) + " and " +
-                                std::to_string(to->GetNumberOfPoints()) + " points, so one cannot become the other");
   if (name.empty() || name.find('/') != std::string::npos)
     throw std::invalid_argument("an animation's name must be a plain file name");
   AnimationResult result;
@@ -502,11 +499,11 @@ AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const st
   result.prePost.folder = fs::absolute(outDir) / name;
   result.prePost.width = width;
   result.prePost.height = height;
-  result.prePost.camera = fitCamera(std::vector<vtkPolyData*>{from, to}, toCamera, viewUp, base.sceneAspect(), 20.0, 1.05);
+  // One camera for every frame, so the surface moves and the view does not.
+  result.prePost.camera = fitCamera(framing, toCamera, viewUp, base.sceneAspect(), 20.0, 1.05);
   const auto started = std::chrono::steady_clock::now();
-  const int total = andBack ? 2 * frames - 2 : frames;
   int done = 0;
-  renderMorph(from, to, base, result.prePost, frames, andBack, [&](const char* step) {
+  renderSurfaces(surfaceAt, total, base, result.prePost, [&](const char* step) {
     report(progress, 0.95 * done / total, step);
     ++done;
   });
@@ -517,12 +514,36 @@ AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const st
   return result;
 }
 
+} // namespace
+
+AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const std::string& name,
+                                    const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
+                                    const fs::path& outDir, int frames, bool andBack,
+                                    const AnimationOptions& options, const TaskProgress& progress)
+{
+  if (frames < 2)
+    throw std::invalid_argument("an animation needs at least 2 frames");
+  if (!from || !to || from->GetNumberOfPoints() == 0)
+    throw std::invalid_argument("the animation \"" + name + "\" has no surface to show");
+  if (from->GetNumberOfPoints() != to->GetNumberOfPoints())
+    throw std::invalid_argument("the animation \"" + name + "\": its two surfaces have " +
+                                std::to_string(from->GetNumberOfPoints()) + " and " +
+                                std::to_string(to->GetNumberOfPoints()) + " points, so one cannot become the other");
+  // There and back: the peak not repeated.
+  const int total = andBack ? 2 * frames - 2 : frames;
+  return writeSequence(
+    [&](int k) {
+      const int along = k < frames ? k : 2 * (frames - 1) - k;
+      return blendSurfaces(from, to, double(along) / (frames - 1));
+    },
+    total, {from, to}, name, toCamera, viewUp, outDir, options, progress);
+}
+
 AnimationResult writeSurfaceAnimation(const std::vector<vtkSmartPointer<vtkPolyData>>& frames, const std::string& name,
                                       const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
                                       const fs::path& outDir, const AnimationOptions& options,
                                       const TaskProgress& progress)
 {
-  const auto [width, height] = frameSize(options);
   if (frames.size() < 2)
     throw std::invalid_argument("an animation needs at least 2 frames");
   std::vector<vtkPolyData*> surfaces;
@@ -532,31 +553,8 @@ AnimationResult writeSurfaceAnimation(const std::vector<vtkSmartPointer<vtkPolyD
       throw std::invalid_argument("the animation \"" + name + "\" has a frame with no surface to show");
     surfaces.push_back(f);
   }
-  if (name.empty() || name.find('/') != std::string::npos)
-    throw std::invalid_argument("an animation's name must be a plain file name");
-  AnimationResult result;
-  result.planName = name;
-  Figure base;
-  base.width = width;
-  base.height = height;
-  base.multiSamples = options.multiSamples;
-  result.prePost.folder = fs::absolute(outDir) / name;
-  result.prePost.width = width;
-  result.prePost.height = height;
-  // One camera framing every frame, so the surface moves and the view does not.
-  result.prePost.camera = fitCamera(surfaces, toCamera, viewUp, base.sceneAspect(), 20.0, 1.05);
-  const auto started = std::chrono::steady_clock::now();
-  const int total = int(frames.size());
-  int done = 0;
-  renderSurfaces([&](int k) { return frames[std::size_t(k)]; }, total, base, result.prePost, [&](const char* step) {
-    report(progress, 0.95 * done / total, step);
-    ++done;
-  });
-  result.framesRendered = done;
-  result.renderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  encodeVideos({&result.prePost}, options, progress, result);
-  report(progress, 1.0, "Animation written");
-  return result;
+  return writeSequence([&](int k) { return frames[std::size_t(k)]; }, int(frames.size()), surfaces, name, toCamera,
+                       viewUp, outDir, options, progress);
 }
 
 } // namespace caps::report

@@ -50,6 +50,17 @@ const ClosedPlan& closedPlan()
   return *plan;
 }
 
+/// The skin node 12 mm below the cut's first point (in the chart): where the fingertip goes.
+int fingertipNode(const incision::PlanPrediction& p)
+{
+  const fem::ChartPoint below = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
+  std::size_t nearest = 0;
+  for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
+    if ((p.surface.mesh.vertices[v] - below).norm() < (p.surface.mesh.vertices[nearest] - below).norm())
+      nearest = v;
+  return p.continuum.vertexColumns[nearest].front();
+}
+
 Eigen::VectorXd activationsOf(const std::vector<FittedMuscle>& muscles,
                               const std::vector<std::pair<std::string, double>>& mix)
 {
@@ -155,14 +166,9 @@ TEST(PlanUnderExpression, APushOfHalfTheTravelIsHalfWay)
   const ClosedPlan& plan = closedPlan();
   const incision::PlanPrediction& p = plan.prediction;
   const seg::CylindricalFrame& frame = test::sampleFace().maps.skin.frame();
-  // The fingertip 12 mm below the cut's first point, pushing the cheek up
-  // 6 mm along the head axis (§5.4: "pushed her cheek up about a half inch").
-  const fem::ChartPoint below = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
-  std::size_t nearest = 0;
-  for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
-    if ((p.surface.mesh.vertices[v] - below).norm() < (p.surface.mesh.vertices[nearest] - below).norm())
-      nearest = v;
-  const int tip = p.continuum.vertexColumns[nearest].front();
+  // The fingertip below the cut, pushing the cheek up 6 mm along the head
+  // axis (§5.4: "pushed her cheek up about a half inch").
+  const int tip = fingertipNode(p);
   SkinPush push;
   push.centre = p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
   push.radius = 4.0;
@@ -213,12 +219,7 @@ TEST(PlanUnderExpression, ThreeUnitPushesGiveAnyTravelAsAFreshSolveDoes)
 {
   const ClosedPlan& plan = closedPlan();
   const incision::PlanPrediction& p = plan.prediction;
-  const fem::ChartPoint below = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
-  std::size_t nearest = 0;
-  for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
-    if ((p.surface.mesh.vertices[v] - below).norm() < (p.surface.mesh.vertices[nearest] - below).norm())
-      nearest = v;
-  const int tip = p.continuum.vertexColumns[nearest].front();
+  const int tip = fingertipNode(p);
   const Eigen::Vector3d centre =
     p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
   const PushResponses responses(p, centre, 4.0);
