@@ -3,7 +3,9 @@
 /// @brief The Expression module's panel (issue 8 item 4): builds the face
 /// model, then a slider per expression and per muscle moves the skin in
 /// real time by superposition (thesis §3.1.2, §5.3, Fig. 5.14–5.18);
-/// expressions are saved in the scene, recalled and played.
+/// expressions are saved in the scene, recalled and played. A predicted
+/// plan is studied in the face (item 5, §5.4): its skin after the operation
+/// follows the sliders and a fingertip, its contour bumps compared with rest.
 
 #include <memory>
 #include <string>
@@ -14,8 +16,11 @@
 #include <vtkSmartPointer.h>
 
 #include "modules/expression/ExpressionLogic.h"
+#include "modules/expression/PlanStudy.h"
 
 class QComboBox;
+class QDoubleSpinBox;
+class QGroupBox;
 class QLabel;
 class QLineEdit;
 class QPushButton;
@@ -68,6 +73,38 @@ private:
   /// The current mix played from rest and back, written as frames and MP4 (report::writeMorphAnimation).
   void exportAnimation();
 
+  /// @name Plan under expression (§5.4)
+  ///@{
+  /// The scene's plans with a prediction, in the combo.
+  void refreshPlans();
+  /// Predicts the chosen plan again inside the face model (runTask).
+  void studyPlan();
+  void setStudy(std::shared_ptr<expression::PlanStudy> study);
+  /// Drops the study: the face comes back.
+  void leaveStudy();
+  /// Adds the plan's skin node in place of the face.
+  void showStudy();
+  /// Removes the plan's skin node and shows the face again.
+  void releaseStudy();
+  /// Moves the plan's skin to the sliders' mix or the fingertip's travel
+  /// (times the play scale); returns the largest movement from rest (mm).
+  double updateStudy(const Eigen::VectorXd& activations);
+  void planOnCamera();
+  /// The bumps label for the skin as shown now (compareContours: after the sliders settle).
+  void updateBumps();
+  /// Asks for a point on the plan's skin, then builds the push (runTask).
+  void placeFingertip();
+  void buildFingertip(const Eigen::Vector3d& centre);
+  /// The fingertip's path in world mm: the corners, then the travel boxes.
+  expression::PushPath pushPath() const;
+  /// The travel boxes (up, across, in) in world mm at the fingertip.
+  Eigen::Vector3d travelBoxes() const;
+  void addCorner();
+  void clearCorners();
+  /// The fingertip's controls enabled as the study and the fingertip allow; the path's text.
+  void updatePushControls();
+  ///@}
+
   ExpressionLogic& logic_;
   ModuleHost& host_;
   int observer_ = -1;
@@ -101,6 +138,37 @@ private:
   Eigen::Matrix3Xd scratch_;
   double lastUpdateMs_ = 0.0;
   double largestMovement_ = 0.0;
+
+  // Plan under expression.
+  QGroupBox* planBox_ = nullptr;
+  QComboBox* plans_ = nullptr;
+  QPushButton* study_ = nullptr;
+  QPushButton* leave_ = nullptr;
+  QLabel* planStatus_ = nullptr;
+  QLabel* bumps_ = nullptr;
+  QPushButton* fingertip_ = nullptr;
+  QDoubleSpinBox* radius_ = nullptr;
+  QDoubleSpinBox* up_ = nullptr;
+  QDoubleSpinBox* across_ = nullptr;
+  QDoubleSpinBox* in_ = nullptr;
+  QPushButton* corner_ = nullptr;
+  QPushButton* clearCorners_ = nullptr;
+  QSlider* travel_ = nullptr;
+  QLabel* pathInfo_ = nullptr;
+  QTimer* bumpsTimer_ = nullptr;
+  bool plansPending_ = false;
+  bool studyPending_ = false;
+  /// The plan's skin shows the fingertip's push (the last control touched
+  /// was the fingertip's), not the muscles' mix.
+  bool pushing_ = false;
+  std::shared_ptr<expression::PlanStudy> planStudy_;
+  vtkSmartPointer<vtkPolyData> planSkin_;
+  NodeId planSkinId_;
+  /// The path's corners in the fingertip's frame (up, across, in; mm).
+  std::vector<Eigen::Vector3d> corners_;
+  Eigen::Matrix3Xd planRest_;
+  Eigen::Matrix3Xd planScratch_;
+  double lastCompareMs_ = 0.0;
 };
 
 } // namespace caps

@@ -4,6 +4,7 @@
 // going up), the smile saved, changed and recalled, played, and kept in the
 // saved scene.
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -14,6 +15,7 @@
 
 #include <QApplication>
 #include <QComboBox>
+#include <QDoubleSpinBox>
 #include <QFileDialog>
 #include <QImage>
 #include <QLabel>
@@ -29,9 +31,14 @@
 #include "TestPaths.h"
 #include "Workstation.h"
 #include "modules/expression/ExpressionLogic.h"
+#include "modules/expression/PlanStudy.h"
+#include "modules/incision/IncisionLogic.h"
+#include "modules/rangemap/RangeMapLogic.h"
 #include "modules/report/PlanAnimation.h"
 #include "report/DemoScene.h"
 #include "scene/ExpressionNode.h"
+#include "scene/PlanNode.h"
+#include "scene/RangeMapNode.h"
 #include "scene/SurfaceNode.h"
 
 namespace caps {
@@ -97,6 +104,29 @@ void setSlider(QSlider* slider, int value)
 {
   slider->setValue(value); // valueChanged, as a drag emits it
   QApplication::processEvents();
+}
+
+/// Answers the next folder dialog with @a folder (as a user choosing it does).
+void answerFolderDialog(QWidget* parent, const std::filesystem::path& folder)
+{
+  auto answered = std::make_shared<bool>(false);
+  auto* timer = new QTimer(parent);
+  timer->setInterval(50);
+  QObject::connect(timer, &QTimer::timeout, [timer, folder, answered] {
+    auto* dialog = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
+    if (!dialog)
+    {
+      if (*answered)
+        timer->stop();
+      return;
+    }
+    dialog->selectFile(QString::fromStdString(folder.string()));
+    if (auto* edit = dialog->findChild<QLineEdit*>("fileNameEdit"))
+      edit->setText(QString::fromStdString(folder.string()));
+    QMetaObject::invokeMethod(dialog, "accept", Qt::QueuedConnection);
+    *answered = true;
+  });
+  timer->start();
 }
 
 TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
@@ -338,6 +368,208 @@ TEST(ExpressionPanel, TheMixIsExportedAsAnAnimation)
   }
   const std::string status = workstation.window().statusBar()->currentMessage().toStdString();
   EXPECT_NE(status.find("46 frames"), std::string::npos) << status;
+}
+
+// Plan under expression (issue 8 item 5, §5.4): the demo's Z-plasty studied
+// in the face model, its skin after the operation under the smile slider
+// (against the logic's own study of the same plan), the bumps measured, then
+// a fingertip placed by a click on that skin pushing it along a bent path.
+TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
+{
+  test::Workstation workstation;
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
+  Scene& scene = workstation.scene();
+  workstation.selectModule("expression");
+  auto* build = workstation.widget<QPushButton>("expression.build");
+  auto* smile = workstation.widget<QSlider>("expression.expression.smile");
+  auto* plans = workstation.widget<QComboBox>("expression.plan");
+  auto* studyButton = workstation.widget<QPushButton>("expression.study");
+  auto* bumps = workstation.widget<QLabel>("expression.bumps");
+  auto* fingertip = workstation.widget<QPushButton>("expression.fingertip");
+  auto* radius = workstation.widget<QDoubleSpinBox>("expression.push.radius");
+  auto* up = workstation.widget<QDoubleSpinBox>("expression.push.up");
+  auto* in = workstation.widget<QDoubleSpinBox>("expression.push.in");
+  auto* corner = workstation.widget<QPushButton>("expression.push.waypoint");
+  auto* travel = workstation.widget<QSlider>("expression.push.travel");
+  auto* planStatus = workstation.widget<QLabel>("expression.planStatus");
+  auto* info = workstation.widget<QLabel>("expression.info");
+  ASSERT_TRUE(build && smile && plans && studyButton && bumps && fingertip && radius && up && in && corner &&
+              travel && planStatus && info);
+  EXPECT_FALSE(plans->isVisible()) << "the plan group shows before the face model";
+
+  QTest::mouseClick(build, Qt::LeftButton);
+  ASSERT_TRUE(workstation.waitUntil([&] { return surfaceNamed(scene, "Face expression") != nullptr; }, 300))
+    << workstation.errors();
+  ASSERT_TRUE(workstation.waitUntilIdle(60));
+  ASSERT_TRUE(plans->isVisible());
+  const int zIndex = plans->findText("Z-plasty 1");
+  ASSERT_GE(zIndex, 0) << "the demo's predicted Z-plasty is not offered";
+  EXPECT_GE(plans->count(), 2) << "the demo has two predicted plans";
+  plans->setCurrentIndex(zIndex);
+  EXPECT_FALSE(fingertip->isEnabled()) << "a fingertip before a plan is studied";
+
+  const auto started = std::chrono::steady_clock::now();
+  QTest::mouseClick(studyButton, Qt::LeftButton);
+  ASSERT_TRUE(
+    workstation.waitUntil([&] { return surfaceNamed(scene, "Z-plasty 1 under expression") != nullptr; }, 300))
+    << workstation.errors() << planStatus->text().toStdString();
+  ASSERT_TRUE(workstation.waitUntilIdle(60));
+  const double studySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  std::cout << "[plan under expression] studied in " << studySeconds << " s: " << planStatus->text().toStdString()
+            << "\n";
+  SurfaceNode* planSkin = surfaceNamed(scene, "Z-plasty 1 under expression");
+  ASSERT_NE(planSkin, nullptr);
+  EXPECT_TRUE(planSkin->visible());
+  EXPECT_EQ(planSkin->colourArray(), "skin_colour");
+  EXPECT_FALSE(surfaceNamed(scene, "Face expression")->visible()) << "the face shows under the plan's skin";
+  ASSERT_NE(surfaceNamed(scene, "Z-plasty 1 skin after"), nullptr);
+  EXPECT_FALSE(surfaceNamed(scene, "Z-plasty 1 skin after")->visible());
+  std::cout << "[plan under expression] at rest: " << bumps->text().toStdString() << "\n";
+  EXPECT_TRUE(bumps->text().contains("mm at rest")) << bumps->text().toStdString();
+
+  // The same study made here from the logic, from the same scene.
+  ExpressionLogic logic(scene);
+  expression::PlanStudyInput input;
+  input.model = expression::buildExpressionModel(logic.modelInput());
+  ASSERT_NE(input.model, nullptr);
+  const PlanNode* planNode = nullptr;
+  for (Node* n : scene.nodesOfType(NodeType::Plan))
+    if (n->name() == "Z-plasty 1")
+      planNode = static_cast<const PlanNode*>(n);
+  ASSERT_NE(planNode, nullptr);
+  input.planName = "Z-plasty 1";
+  input.plan = IncisionLogic::readPlan(*planNode);
+  input.options = IncisionLogic::simulationOptions(*planNode);
+  const auto* skinNode = scene.nodeAs<RangeMapNode>(planNode->rangeMapId());
+  ASSERT_NE(skinNode, nullptr);
+  input.skin = RangeMapLogic::toRangeMap(*skinNode);
+  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
+    if (static_cast<RangeMapNode*>(n)->role() == "bone")
+      input.bone = RangeMapLogic::toRangeMap(*static_cast<RangeMapNode*>(n));
+  const std::unique_ptr<expression::PlanStudy> study = expression::PlanStudy::build(input);
+  ASSERT_NE(study, nullptr);
+  ASSERT_EQ(planSkin->polyData()->GetNumberOfPoints(), study->surface().vertexCount());
+  Eigen::Matrix3Xd expected;
+  const Eigen::VectorXd atRest = Eigen::VectorXd::Zero(study->muscleCount());
+  study->positions(atRest, expected);
+  EXPECT_LT(largestGap(planSkin->polyData(), expected), 1e-6);
+  const Eigen::Matrix3Xd rest = expected;
+  workstation.screenshot("expression-plan-rest");
+
+  // The smile slider moves the plan's skin: the study's superposition for the smile's activations.
+  setSlider(smile, 100);
+  workstation.settle(600); // the bumps are measured once the slider rests
+  const auto& definitions = expression::builtInExpressions();
+  const auto smileDefinition =
+    std::find_if(definitions.begin(), definitions.end(), [](const auto& e) { return e.name == "smile"; });
+  ASSERT_NE(smileDefinition, definitions.end());
+  const Eigen::VectorXd smiling = expression::expressionActivations(*smileDefinition, input.model->muscles);
+  study->positions(smiling, expected);
+  EXPECT_LT(largestGap(planSkin->polyData(), expected), 1e-6);
+  EXPECT_GT(largestGap(planSkin->polyData(), rest), 0.3) << "the smile does not move the plan's skin";
+  const expression::ContourComparison smilingBumps = study->compare(smiling);
+  std::cout << "[plan under expression] smiling: " << bumps->text().toStdString() << " | " << info->text().toStdString()
+            << "\n";
+  EXPECT_TRUE(bumps->text().contains(QString::number(smilingBumps.loaded.largest, 'f', 2) + " mm now"))
+    << bumps->text().toStdString() << " vs " << smilingBumps.loaded.largest;
+  EXPECT_TRUE(bumps->text().contains(QString::number(smilingBumps.largestHeightChange, 'f', 2)))
+    << bumps->text().toStdString();
+  workstation.screenshot("expression-plan-smile");
+  largeFaceShot(workstation, "expression-plan-smile-large");
+
+  // A fingertip 12 mm below the cut's first point: the display vertex there,
+  // clicked where it shows, is where the fingertip rests (its place after
+  // the operation, whatever the sliders show).
+  const incision::PlanPrediction& p = study->prediction();
+  const fem::ChartPoint aim = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
+  std::size_t nearest = 0;
+  for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
+    if ((p.surface.mesh.vertices[v] - aim).norm() < (p.surface.mesh.vertices[nearest] - aim).norm())
+      nearest = v;
+  const int node = p.continuum.vertexColumns[nearest].front();
+  const Eigen::Vector3d below = p.continuum.mesh.nodes.col(node) + p.displacements.segment<3>(3 * Eigen::Index(node));
+  Eigen::Index vertex = 0;
+  (rest.colwise() - below).colwise().squaredNorm().minCoeff(&vertex);
+  const Eigen::Matrix3Xd shown = pointsOf(planSkin->polyData());
+  ASSERT_TRUE(fingertip->isEnabled());
+  radius->setValue(4.0);
+  QTest::mouseClick(fingertip, Qt::LeftButton);
+  workstation.settle(100);
+  const Eigen::Vector3d target = shown.col(vertex);
+  workstation.clickThreeDView(workstation.threeDViewPointOf({target.x(), target.y(), target.z()}));
+  ASSERT_TRUE(workstation.waitUntil([&] { return travel->isEnabled(); }, 60))
+    << workstation.errors() << planStatus->text().toStdString();
+  ASSERT_TRUE(workstation.waitUntilIdle(60));
+  std::cout << "[plan under expression] " << planStatus->text().toStdString() << "\n";
+  EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
+  study->setFingertip(study->restSkinPoint(vertex), 4.0);
+  const expression::Fingertip& tip = study->currentFingertip();
+
+  // Up 6 mm, half way: the study's push at half the travel.
+  up->setValue(6.0);
+  setSlider(travel, 50);
+  workstation.settle(600);
+  expression::PushPath path;
+  path.centre = tip.centre;
+  path.radius = 4.0;
+  path.waypoints = {tip.directions * Eigen::Vector3d(6.0, 0.0, 0.0)};
+  study->pushedPositions(path.travelAt(0.5), expected);
+  EXPECT_LT(largestGap(planSkin->polyData(), expected), 1e-6);
+  const Eigen::Vector3d moved = pointsOf(planSkin->polyData()).col(vertex) - rest.col(vertex);
+  std::cout << "[plan under expression] pushed half way: the fingertip's vertex moves " << moved.transpose()
+            << " (expected " << path.travelAt(0.5).transpose() << "); " << bumps->text().toStdString() << " | "
+            << info->text().toStdString() << "\n";
+  EXPECT_LT((moved - path.travelAt(0.5)).norm(), 0.5) << "the skin under the fingertip does not follow it";
+  EXPECT_TRUE(bumps->text().contains("mm now")) << bumps->text().toStdString();
+
+  // A corner at 6 mm up, then 3 mm in: the path bends; at 80 % it is on the second leg.
+  QTest::mouseClick(corner, Qt::LeftButton);
+  in->setValue(3.0);
+  setSlider(travel, 80);
+  workstation.settle(600);
+  path.waypoints = {tip.directions * Eigen::Vector3d(6.0, 0.0, 0.0), tip.directions * Eigen::Vector3d(6.0, 0.0, 3.0)};
+  study->pushedPositions(path.travelAt(0.8), expected);
+  EXPECT_LT(largestGap(planSkin->polyData(), expected), 1e-6);
+  const expression::ContourComparison pushedBumps = study->comparePush(path.travelAt(0.8));
+  EXPECT_TRUE(bumps->text().contains(QString::number(pushedBumps.loaded.largest, 'f', 2) + " mm now"))
+    << bumps->text().toStdString() << " vs " << pushedBumps.loaded.largest;
+  std::cout << "[plan under expression] bent path at 80 %: " << bumps->text().toStdString() << "\n";
+  workstation.screenshot("expression-plan-pushed");
+  largeFaceShot(workstation, "expression-plan-pushed-large");
+
+  // The push exported frame by frame along the bent path, out and back.
+  {
+    const std::filesystem::path folder = test::scratchFolder();
+    answerFolderDialog(&workstation.window(), folder);
+    QTest::mouseClick(workstation.widget<QPushButton>("expression.export"), Qt::LeftButton);
+    EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
+    const std::filesystem::path frames = folder / "Z-plasty-1-pushed";
+    ASSERT_TRUE(std::filesystem::exists(frames / "frame-0045.png")) << frames;
+    EXPECT_FALSE(std::filesystem::exists(frames / "frame-0046.png"));
+    const QImage first(QString::fromStdString((frames / "frame-0000.png").string()));
+    const QImage peak(QString::fromStdString((frames / "frame-0023.png").string()));
+    ASSERT_FALSE(first.isNull());
+    EXPECT_NE(first.convertToFormat(QImage::Format_RGB888), peak.convertToFormat(QImage::Format_RGB888))
+      << "the push does not show in the animation";
+    std::filesystem::copy_file(frames / "frame-0023.png", test::workstationArtifacts() / "expression-plan-push-frame.png",
+                               std::filesystem::copy_options::overwrite_existing);
+  }
+
+  // Back to the muscles: a slider move shows the expression again.
+  setSlider(smile, 50);
+  study->positions(0.5 * smiling, expected);
+  EXPECT_LT(largestGap(planSkin->polyData(), expected), 1e-6);
+
+  // Leaving the study: the plan's skin goes, the face comes back.
+  auto* leave = workstation.widget<QPushButton>("expression.leaveStudy");
+  ASSERT_NE(leave, nullptr);
+  QTest::mouseClick(leave, Qt::LeftButton);
+  workstation.settle(100);
+  EXPECT_EQ(surfaceNamed(scene, "Z-plasty 1 under expression"), nullptr);
+  EXPECT_TRUE(surfaceNamed(scene, "Face expression")->visible());
+  EXPECT_FALSE(fingertip->isEnabled());
+  EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
 }
 
 TEST(ExpressionPanel, WithoutRangeMapsTheErrorSaysWhatToDo)

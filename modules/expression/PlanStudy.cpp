@@ -1,0 +1,246 @@
+#include "modules/expression/PlanStudy.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include <vtkCellArray.h>
+#include <vtkImageData.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
+
+#include "modules/incision/PlanDisplay.h"
+#include "segmentation/SkinShade.h"
+
+namespace caps::expression {
+namespace {
+
+double secondsSince(std::chrono::steady_clock::time_point start)
+{
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const TaskProgress& progress)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const auto step = [&progress](double fraction, const std::string& what) {
+    return !progress || progress(fraction, what);
+  };
+  if (!input.model)
+    throw std::invalid_argument("build the face model first: the plan is studied inside it");
+  if (input.skin.frame() != input.model->frame)
+    throw std::invalid_argument("plan \"" + input.planName + "\" lies on another skin map than the face model: "
+                                "build the face model again from the plan's range maps");
+  std::unique_ptr<PlanStudy> study(new PlanStudy());
+  study->planName_ = input.planName;
+  study->frame_ = input.skin.frame();
+  study->window_ = input.window;
+
+  // The prediction as it was made (the plan's recorded options), as the
+  // report predicts it again: the scene keeps its result, not its model.
+  if (!step(0.0, "Predicting " + input.planName + " again"))
+    return nullptr;
+  auto t = std::chrono::steady_clock::now();
+  incision::SimulationOptions options = input.options;
+  options.threads = 2;
+  if (progress)
+    options.progress = [&progress](double fraction, const std::string& phase) {
+      return progress(0.6 * fraction, "Predicting: " + phase);
+    };
+  try
+  {
+    study->prediction_ = incision::simulatePlan(input.skin, input.bone, input.plan, options);
+  }
+  catch (const incision::SimulationCancelled&)
+  {
+    return nullptr;
+  }
+  study->predictSeconds = secondsSince(t);
+
+  // The plan's model with its rim following the face model under each
+  // muscle: one factorisation, one solve per muscle (§3.1.2).
+  if (!step(0.6, "The plan's model under each muscle of the face"))
+    return nullptr;
+  t = std::chrono::steady_clock::now();
+  std::vector<std::vector<fem::Muscle>> functions;
+  for (const FittedMuscle& m : input.model->muscles)
+    functions.push_back(m.functions);
+  study->responses_ = std::make_unique<PlanExpressionResponses>(
+    study->prediction_, input.model->face.continuum.mesh, input.model->responses, functions);
+  study->responseSeconds = secondsSince(t);
+
+  // The display skin (§4.7) with the scan's detail, shaded as the face is.
+  if (!step(0.85, "The plan's skin and its shade"))
+    return nullptr;
+  t = std::chrono::steady_clock::now();
+  seg::ColourMap shade;
+  const seg::ColourMap* colour = nullptr;
+  if (input.ct)
+    try
+    {
+      shade = seg::skinShadeFromCt(input.ct, input.skin);
+      colour = &shade;
+    }
+    catch (const std::exception& e)
+    {
+      study->shadeNote_ = std::string("the skin is grey: its shade could not be read from the CT (") + e.what() + ")";
+    }
+  else
+    study->shadeNote_ = "the skin is grey: the scene has no CT to read its shade from";
+  incision::PlanDisplayOptions displayOptions;
+  displayOptions.resolution = input.resolution;
+  displayOptions.maxRangeDetail = input.maxRangeDetail;
+  incision::PlanDisplay display = incision::buildPlanDisplay(study->prediction_, input.skin, colour, displayOptions);
+  study->shade_ = display.skinShade;
+  study->surface_ = ExpressionSurface(study->prediction_.continuum.mesh, std::move(display.surface),
+                                      study->responses_->responses(), study->prediction_.displacements);
+  study->displaySeconds = secondsSince(t);
+
+  if (!step(0.95, "The contour bumps at rest"))
+    return nullptr;
+  study->restBumps_ = contourBumps(study->prediction_, study->frame_, study->prediction_.displacements, input.window);
+  study->totalSeconds = secondsSince(start);
+  step(1.0, "Plan ready");
+  return study;
+}
+
+void PlanStudy::positions(const Eigen::VectorXd& activations, Eigen::Matrix3Xd& out) const
+{
+  surface_.positions(activations, true, out);
+}
+
+Eigen::VectorXd PlanStudy::displacement(const Eigen::VectorXd& activations) const
+{
+  return responses_->displacement(activations);
+}
+
+ContourComparison PlanStudy::compare(const Eigen::VectorXd& activations) const
+{
+  return compareContours(prediction_, frame_, prediction_.displacements, displacement(activations), window_);
+}
+
+Fingertip PlanStudy::fingertip(const Eigen::Vector3d& centre, double radius) const
+{
+  const auto start = std::chrono::steady_clock::now();
+  Fingertip out;
+  out.centre = centre;
+  out.radius = radius;
+  out.push = std::make_shared<PushResponses>(prediction_, centre, radius);
+  out.surface = ExpressionSurface(prediction_.continuum.mesh, surface_.surface(), out.push->responses(),
+                                  out.push->closure());
+  // The surgeon's frame at the fingertip: up the head, across the face
+  // (θ growing), into the face.
+  const seg::CylindricalPoint c = frame_.toCylindrical(centre);
+  const Eigen::Vector3d up = frame_.direction().normalized();
+  const Eigen::Vector3d in = -frame_.radialDirection(c.theta).normalized();
+  out.directions.col(0) = up;
+  out.directions.col(1) = up.cross(-in).normalized(); // d(point)/dθ: axis × radial
+  out.directions.col(2) = in;
+  out.seconds = secondsSince(start);
+  return out;
+}
+
+void PlanStudy::setFingertip(Fingertip fingertip)
+{
+  if (!fingertip.push || fingertip.surface.vertexCount() != surface_.vertexCount())
+    throw std::invalid_argument("the fingertip was not made on this plan");
+  fingertip_ = std::make_unique<Fingertip>(std::move(fingertip));
+}
+
+const Fingertip& PlanStudy::currentFingertip() const
+{
+  if (!fingertip_)
+    throw std::logic_error("no fingertip on the plan's skin yet");
+  return *fingertip_;
+}
+
+void PlanStudy::pushedPositions(const Eigen::Vector3d& travel, Eigen::Matrix3Xd& out) const
+{
+  currentFingertip().surface.positions(travel, true, out);
+}
+
+Eigen::VectorXd PlanStudy::pushedDisplacement(const Eigen::Vector3d& travel) const
+{
+  return currentFingertip().push->displacement(travel);
+}
+
+ContourComparison PlanStudy::comparePush(const Eigen::Vector3d& travel) const
+{
+  return compareContours(prediction_, frame_, prediction_.displacements, pushedDisplacement(travel), window_);
+}
+
+Eigen::Index PlanStudy::nearestVertex(const Eigen::Matrix3Xd& positions, const Eigen::Vector3d& point,
+                                      double tolerance)
+{
+  if (positions.cols() == 0)
+    return -1;
+  Eigen::Index nearest = 0;
+  const double d2 = (positions.colwise() - point).colwise().squaredNorm().minCoeff(&nearest);
+  return d2 <= tolerance * tolerance ? nearest : -1;
+}
+
+Eigen::Vector3d PlanStudy::restSkinPoint(Eigen::Index v) const
+{
+  if (v < 0 || v >= surface_.vertexCount())
+    throw std::out_of_range("no such vertex of the plan's skin");
+  Eigen::Matrix3Xd at;
+  surface_.positions(Eigen::VectorXd::Zero(muscleCount()), false, at);
+  return at.col(v);
+}
+
+vtkSmartPointer<vtkPolyData> PlanStudy::polyData() const
+{
+  const fem::DisplaySurface& s = surface_.surface();
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(vtkIdType(s.vertexCount()));
+  pd->SetPoints(points);
+  auto polys = vtkSmartPointer<vtkCellArray>::New();
+  for (const std::vector<int>& polygon : s.polygons())
+  {
+    polys->InsertNextCell(vtkIdType(polygon.size()));
+    for (int v : polygon)
+      polys->InsertCellPoint(v);
+  }
+  pd->SetPolys(polys);
+  auto colour = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colour->SetName("skin_colour");
+  colour->SetNumberOfComponents(3);
+  colour->SetNumberOfTuples(vtkIdType(s.vertexCount()));
+  for (vtkIdType v = 0; v < vtkIdType(s.vertexCount()); ++v)
+  {
+    const seg::Rgb8 c = std::size_t(v) < shade_.size() ? shade_[std::size_t(v)] : seg::kNoSourceColour;
+    for (int k = 0; k < 3; ++k)
+      colour->SetTypedComponent(v, k, c[std::size_t(k)]);
+  }
+  pd->GetPointData()->AddArray(colour);
+  pd->GetPointData()->SetScalars(colour);
+  Eigen::Matrix3Xd at;
+  positions(Eigen::VectorXd::Zero(muscleCount()), at);
+  setPoints(pd, at, at);
+  return pd;
+}
+
+double setPoints(vtkPolyData* polyData, const Eigen::Matrix3Xd& positions, const Eigen::Matrix3Xd& rest)
+{
+  vtkPoints* points = polyData ? polyData->GetPoints() : nullptr;
+  if (!points || points->GetNumberOfPoints() != vtkIdType(positions.cols()) || rest.cols() != positions.cols())
+    throw std::invalid_argument("the surface does not belong to this plan's skin");
+  double largest = 0.0;
+  for (Eigen::Index v = 0; v < positions.cols(); ++v)
+  {
+    points->SetPoint(vtkIdType(v), positions(0, v), positions(1, v), positions(2, v));
+    largest = std::max(largest, (positions.col(v) - rest.col(v)).squaredNorm());
+  }
+  points->Modified();
+  return std::sqrt(largest);
+}
+
+} // namespace caps::expression
