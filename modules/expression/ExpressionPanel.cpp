@@ -23,7 +23,6 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QPointer>
-#include <QProgressDialog>
 #include <QPushButton>
 #include <QScrollArea>
 #include <QShowEvent>
@@ -36,6 +35,7 @@
 #include <vtkPolyData.h>
 #include <vtkStringArray.h>
 
+#include "modules/core/ModalProgress.h"
 #include "modules/incision/IncisionLogic.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/ExpressionNode.h"
@@ -540,16 +540,9 @@ void ExpressionPanel::exportAnimation()
     Eigen::Matrix3Xd scratch;
     expression::applyActivations(*model_, a, full, scratch);
   }
-  QProgressDialog dialog(tr("Writing the animation..."), tr("Cancel"), 0, 1000, host_.window());
-  dialog.setObjectName("expression.exportProgress");
-  dialog.setWindowModality(Qt::WindowModal);
-  dialog.setMinimumDuration(0);
-  const TaskProgress progress = [&dialog](double fraction, const std::string& step) {
-    dialog.setLabelText(QString::fromStdString(step));
-    dialog.setValue(int(std::lround(1000.0 * std::clamp(fraction, 0.0, 1.0))));
-    QApplication::processEvents();
-    return !dialog.wasCanceled();
-  };
+  ModalProgress dialog(host_.window(), tr("Writing the animation..."), tr("Export animation"),
+                       "expression.exportProgress");
+  const TaskProgress progress = dialog.progress();
   try
   {
     report::AnimationOptions options;

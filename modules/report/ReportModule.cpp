@@ -4,11 +4,11 @@
 #include <QFileDialog>
 #include <QPrintDialog>
 #include <QPrinter>
-#include <QProgressDialog>
 
 #include <algorithm>
 #include <cmath>
 
+#include "modules/core/ModalProgress.h"
 #include "modules/core/Module.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/ReportCommands.h"
@@ -34,25 +34,13 @@ public:
 report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool deidentify)
 {
   host.showStatus("Writing the plan report...");
-  QProgressDialog dialog("Writing the plan report...", "Cancel", 0, 1000, host.window());
-  dialog.setObjectName("report.progress");
-  dialog.setWindowTitle("Plan report");
-  dialog.setWindowModality(Qt::WindowModal);
-  dialog.setMinimumDuration(0);
-  dialog.setValue(0);
-  QApplication::processEvents();
-  const TaskProgress progress = [&dialog](double fraction, const std::string& step) {
-    dialog.setLabelText(QString::fromStdString(step));
-    dialog.setValue(int(std::lround(1000.0 * std::clamp(fraction, 0.0, 1.0))));
-    QApplication::processEvents();
-    return !dialog.wasCanceled();
-  };
+  ModalProgress dialog(host.window(), "Writing the plan report...", "Plan report", "report.progress");
   try
   {
     report::ReportOptions options;
     options.deidentify = deidentify;
-    report::ReportDocument doc = report::buildPlanReport(logic.scene(), options, progress);
-    dialog.setValue(1000);
+    report::ReportDocument doc = report::buildPlanReport(logic.scene(), options, dialog.progress());
+    dialog.finish();
     return doc;
   }
   catch (...)
