@@ -13,6 +13,7 @@
 #include <vtkUnsignedCharArray.h>
 
 #include "fem/StaticAnalysis.h"
+#include "modules/incision/PlanDisplay.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/ExpressionNode.h"
 #include "scene/LandmarksNode.h"
@@ -159,37 +160,19 @@ std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput
   const fem::Mesh& mesh = model->face.continuum.mesh;
   fem::DisplaySurface display(mesh, fem::skinFaces(model->face.continuum), input.resolution);
   // Table 4.9's range displacement and source colour at each vertex's
-  // undeformed (θ, z), as incision::buildPlanDisplay reads them: the face
-  // shows the scanned skin, not the quadratic element faces.
-  seg::ColourMap shade;
-  bool shaded = false;
-  if (input.ct)
-    try
-    {
-      shade = seg::skinShadeFromCt(input.ct, input.skin);
-      shaded = true;
-    }
-    catch (const std::exception& e)
-    {
-      model->shadeNote = std::string("the skin is grey: its shade could not be read from the CT (") + e.what() + ")";
-    }
-  else
-    model->shadeNote = "the skin is grey: the scene has no CT to read its shade from";
-  const seg::CylindricalFrame& frame = input.skin.frame();
+  // undeformed (θ, z), by incision::buildPlanDisplay's rules: the face shows
+  // the scanned skin, not the quadratic element faces.
+  incision::setRangeDetail(display, input.skin, input.maxRangeDetail);
+  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  model->shadeNote = shade.note;
   const Eigen::Matrix3Xd& x = display.undeformedPositions();
-  Eigen::Matrix3Xd detail = Eigen::Matrix3Xd::Zero(3, x.cols());
   model->shade.assign(std::size_t(x.cols()), seg::kNoSourceColour);
-  for (Eigen::Index v = 0; v < x.cols(); ++v)
-  {
-    const seg::CylindricalPoint c = frame.toCylindrical(x.col(v));
-    const double r = input.skin.sample(c.theta, c.z);
-    if (std::isfinite(r))
-      if (const Eigen::Vector3d d = frame.toWorld(r, c.theta, c.z) - x.col(v); d.norm() <= input.maxRangeDetail)
-        detail.col(v) = d;
-    if (shaded)
-      model->shade[std::size_t(v)] = seg::sampleColour(shade, c.theta, c.z);
-  }
-  display.setRangeDetail(detail);
+  if (shade.colour)
+    for (Eigen::Index v = 0; v < x.cols(); ++v)
+    {
+      const seg::CylindricalPoint c = input.skin.frame().toCylindrical(x.col(v));
+      model->shade[std::size_t(v)] = seg::sampleColour(*shade.colour, c.theta, c.z);
+    }
   model->surface = ExpressionSurface(mesh, std::move(display), model->responses);
   model->totalSeconds = secondsSince(start);
   step(1.0, "Face model ready");
@@ -316,7 +299,8 @@ std::vector<ExpressionNode*> ExpressionLogic::savedExpressions() const
 {
   std::vector<ExpressionNode*> out;
   for (Node* n : scene().nodesOfType(NodeType::Expression))
-    out.push_back(static_cast<ExpressionNode*>(n));
+    if (!n->name().empty()) // a blank: a new expression whose saving was undone
+      out.push_back(static_cast<ExpressionNode*>(n));
   return out;
 }
 
@@ -338,19 +322,34 @@ ExpressionNode& ExpressionLogic::saveExpression(const std::string& name, const s
   for (const auto& [id, a] : activations)
     if (std::isfinite(a) && a > 0.0)
       kept[id] = std::min(a, 1.0);
+  const nlohmann::json fields{
+    {"name", name}, {"muscleSet", muscleSet}, {"description", description}, {"activations", kept}};
   if (ExpressionNode* existing = savedExpression(name))
   {
     // One undoable edit for all three fields.
     ScopedEdit edit(scene(), existing->id(), "Change expression " + name);
-    existing->fromJson({{"muscleSet", muscleSet}, {"description", description}, {"activations", kept}});
+    existing->fromJson(fields);
     return *existing;
   }
-  auto node = std::make_unique<ExpressionNode>();
-  node->setName(name);
-  node->setMuscleSet(muscleSet);
-  node->setDescription(description);
-  node->setActivations(std::move(kept));
-  return *static_cast<ExpressionNode*>(scene().addNode(std::move(node)));
+  // The undo stack keeps mementos of nodes that stay in the scene; it cannot
+  // take a node out. So a new expression joins the scene blank (no name, no
+  // activations) and is filled in as one edit: undo makes it blank again,
+  // which savedExpressions() does not list, and redo fills it in.
+  std::vector<NodeId> blanks;
+  for (Node* n : scene().nodesOfType(NodeType::Expression))
+    if (n->name().empty())
+      blanks.push_back(n->id());
+  auto* node = scene().add<ExpressionNode>();
+  {
+    ScopedEdit edit(scene(), node->id(), "Save expression " + name);
+    node->fromJson(fields);
+  }
+  // That edit cleared the redo entries, which were the only ones the blanks
+  // of undone saves had (their saving and any later change): nothing can
+  // bring them back now.
+  for (const NodeId& id : blanks)
+    scene().removeNode(id);
+  return *node;
 }
 
 } // namespace caps

@@ -155,13 +155,17 @@ public:
   ///         landmark the model needs is missing.
   expression::ExpressionModelInput modelInput() const;
 
-  /// The expressions saved in the scene, in scene order.
+  /// The expressions saved in the scene, in scene order; not the blanks
+  /// (Expression nodes without a name) that undoing a new one leaves.
   std::vector<ExpressionNode*> savedExpressions() const;
   ExpressionNode* savedExpression(const std::string& name) const;
 
   /// Saves @a activations (fitted id → activation, clamped to [0, 1]; zeros
-  /// left out) as expression @a name: a new ExpressionNode, or the one of
-  /// that name changed as one undoable edit.
+  /// left out) as expression @a name, as one undoable edit either way: the
+  /// one of that name changed, or a new ExpressionNode. The undo stack only
+  /// edits nodes that stay, so a new one is added blank and filled in: undo
+  /// leaves the blank (not listed), redo fills it again; the next new save
+  /// removes the blanks, which nothing can refill then.
   /// @throws std::invalid_argument for an empty name.
   ExpressionNode& saveExpression(const std::string& name, const std::string& muscleSet,
                                  const std::map<std::string, double>& activations, const std::string& description);

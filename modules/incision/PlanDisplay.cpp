@@ -87,6 +87,45 @@ vtkSmartPointer<vtkDoubleArray> fieldValue(const char* name, double value)
 
 } // namespace
 
+SkinShade skinShadeOfCt(vtkImageData* ct, const seg::RangeMap& skin)
+{
+  SkinShade out;
+  if (!ct)
+    out.note = "the skin is grey: the scene has no CT to read its shade from";
+  else
+    try
+    {
+      out.colour = seg::skinShadeFromCt(ct, skin);
+    }
+    catch (const std::exception& e)
+    {
+      out.note = std::string("the skin is grey: its shade could not be read from the CT (") + e.what() + ")";
+    }
+  return out;
+}
+
+RangeDetailCounts setRangeDetail(fem::DisplaySurface& surface, const seg::RangeMap& skin, double maxRangeDetail)
+{
+  RangeDetailCounts counts;
+  const seg::CylindricalFrame& frame = skin.frame();
+  const Eigen::Matrix3Xd& x = surface.undeformedPositions();
+  Eigen::Matrix3Xd detail = Eigen::Matrix3Xd::Zero(3, x.cols());
+  for (Eigen::Index v = 0; v < x.cols(); ++v)
+  {
+    const seg::CylindricalPoint c = frame.toCylindrical(x.col(v));
+    const double r = skin.sample(c.theta, c.z);
+    if (!std::isfinite(r))
+      ++counts.verticesWithoutScan;
+    else if (const Eigen::Vector3d d = frame.toWorld(r, c.theta, c.z) - x.col(v); d.norm() <= maxRangeDetail)
+      detail.col(v) = d;
+    else
+      ++counts.verticesBeyondDetailLimit;
+  }
+  counts.largestRangeDetail = x.cols() > 0 ? detail.colwise().norm().maxCoeff() : 0.0;
+  surface.setRangeDetail(detail);
+  return counts;
+}
+
 PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeMap& skin, const seg::ColourMap* colour,
                              const PlanDisplayOptions& options)
 {
@@ -102,22 +141,18 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
 
   // Table 4.9's range displacement and source colour, both read at the
   // vertex's undeformed (θ, z) (§4.7).
+  const RangeDetailCounts counts = setRangeDetail(out.surface, skin, options.maxRangeDetail);
+  out.verticesWithoutScan = counts.verticesWithoutScan;
+  out.verticesBeyondDetailLimit = counts.verticesBeyondDetailLimit;
+  out.largestRangeDetail = counts.largestRangeDetail;
   const seg::CylindricalFrame& frame = skin.frame();
   const Eigen::Matrix3Xd& x = out.surface.undeformedPositions();
-  Eigen::Matrix3Xd detail = Eigen::Matrix3Xd::Zero(3, x.cols());
   out.skinShade.assign(std::size_t(x.cols()), seg::kNoSourceColour);
   out.undermined = underminedAtVertices(prediction, out.surface);
   out.underminingTint.assign(std::size_t(x.cols()), 0.0);
   for (Eigen::Index v = 0; v < x.cols(); ++v)
   {
     const seg::CylindricalPoint c = frame.toCylindrical(x.col(v));
-    const double r = skin.sample(c.theta, c.z);
-    if (!std::isfinite(r))
-      ++out.verticesWithoutScan;
-    else if (const Eigen::Vector3d d = frame.toWorld(r, c.theta, c.z) - x.col(v); d.norm() <= options.maxRangeDetail)
-      detail.col(v) = d;
-    else
-      ++out.verticesBeyondDetailLimit;
     if (colour)
       out.skinShade[std::size_t(v)] = seg::sampleColour(*colour, c.theta, c.z);
     // The hatch: stripes at 45° on the skin (u = r θ around the head, z along it).
@@ -129,8 +164,6 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
     }
     out.underminingTint[std::size_t(v)] = strength * out.undermined[std::size_t(v)];
   }
-  out.largestRangeDetail = x.cols() > 0 ? detail.colwise().norm().maxCoeff() : 0.0;
-  out.surface.setRangeDetail(detail);
   return out;
 }
 

@@ -6,6 +6,8 @@
 /// displacement, strain and stress, as VTK polydata and VTP files.
 
 #include <filesystem>
+#include <optional>
+#include <string>
 #include <vector>
 
 #include <vtkSmartPointer.h>
@@ -15,6 +17,7 @@
 #include "segmentation/RangeMap.h"
 #include "segmentation/SurfaceScanColourMap.h"
 
+class vtkImageData;
 class vtkPolyData;
 
 namespace caps::incision {
@@ -77,6 +80,37 @@ struct PlanDisplay
   /// Vertex positions at displacement scale @a scale (0 before, 1 after the operation).
   Eigen::Matrix3Xd positions(double scale) const { return surface.positions({scale, rangeDetail}); }
 };
+
+/// The skin's shade for a display surface (Table 4.9's source colour): the
+/// CT's, or why the skin is grey.
+struct SkinShade
+{
+  std::optional<seg::ColourMap> colour; ///< empty: grey
+  std::string note;                     ///< why the skin is grey; "" when it is not
+  /// What buildPlanDisplay() takes: null for grey.
+  const seg::ColourMap* map() const { return colour ? &*colour : nullptr; }
+};
+
+/// The shade of seg::skinShadeFromCt() on @a skin's frame, or, when there is
+/// no CT (null) or its shade cannot be read, none and a note saying so for
+/// the status line. Does not throw for the CT's sake.
+SkinShade skinShadeOfCt(vtkImageData* ct, const seg::RangeMap& skin);
+
+/// What setRangeDetail() left out.
+struct RangeDetailCounts
+{
+  int verticesWithoutScan = 0;       ///< the map has no surface there (NaN)
+  int verticesBeyondDetailLimit = 0; ///< the offset was longer than the limit
+  double largestRangeDetail = 0.0;   ///< mm, of the offsets kept
+};
+
+/// @brief Sets the range detail of @a surface (Table 4.9's range
+/// displacement, §4.7): the scanned skin point at each vertex's undeformed
+/// (θ, z) (the skin map read bilinearly, eq. 4.9) minus the vertex; zero
+/// where the map has no surface, and where it is longer than
+/// @a maxRangeDetail (a nostril, the fold under the nose: see
+/// PlanDisplayOptions::maxRangeDetail).
+RangeDetailCounts setRangeDetail(fem::DisplaySurface& surface, const seg::RangeMap& skin, double maxRangeDetail);
 
 /// @brief Builds the display surface of the skin of the operated region
 /// (thesis §4.7) from a prediction.

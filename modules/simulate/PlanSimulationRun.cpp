@@ -142,20 +142,8 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   // Fractions of the whole run: the simulation takes most of it.
   phase(progress, 0.0, "Skin shade from the CT");
   auto start = std::chrono::steady_clock::now();
-  seg::ColourMap shade;
-  bool shaded = false;
-  if (input.ct)
-    try
-    {
-      shade = seg::skinShadeFromCt(input.ct, input.skin);
-      shaded = true;
-    }
-    catch (const std::exception& e)
-    {
-      r.shadeNote = std::string("the skin is grey: its shade could not be read from the CT (") + e.what() + ")";
-    }
-  else
-    r.shadeNote = "the skin is grey: the scene has no CT to read its shade from";
+  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  r.shadeNote = shade.note;
   r.shadeSeconds = secondsSince(start);
 
   incision::SimulationOptions options = input.options;
@@ -166,7 +154,7 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
 
   phase(progress, 0.87, "Display surfaces (\u00a74.7)");
   start = std::chrono::steady_clock::now();
-  r.display = incision::buildPlanDisplay(r.prediction, input.skin, shaded ? &shade : nullptr);
+  r.display = incision::buildPlanDisplay(r.prediction, input.skin, shade.map());
   r.displaySeconds = secondsSince(start);
 
   phase(progress, 0.95, "Skin stress near the wound");
