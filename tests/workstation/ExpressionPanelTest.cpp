@@ -44,22 +44,6 @@
 namespace caps {
 namespace {
 
-SurfaceNode* surfaceNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name() == name)
-      return static_cast<SurfaceNode*>(n);
-  return nullptr;
-}
-
-ExpressionNode* expressionNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Expression))
-    if (n->name() == name)
-      return static_cast<ExpressionNode*>(n);
-  return nullptr;
-}
-
 /// Largest distance between the surface's points and @a expected (3 × V).
 double largestGap(vtkPolyData* surface, const Eigen::Matrix3Xd& expected)
 {
@@ -137,7 +121,7 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   workstation.window().openPath(bundle);
   ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
   Scene& scene = workstation.scene();
-  SurfaceNode* skin = surfaceNamed(scene, "Skin");
+  SurfaceNode* skin = test::nodeNamed<SurfaceNode>(scene, "Skin");
   ASSERT_NE(skin, nullptr);
   ASSERT_TRUE(skin->visible());
 
@@ -155,11 +139,11 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   EXPECT_FALSE(smile->isEnabled()); // nothing to move before the model
 
   QTest::mouseClick(build, Qt::LeftButton);
-  ASSERT_TRUE(workstation.waitUntil([&] { return surfaceNamed(scene, "Face expression") != nullptr; }, 300))
+  ASSERT_TRUE(workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
     << workstation.errors() << status->text().toStdString();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   std::cout << "[expression panel] " << status->text().toStdString() << "\n";
-  SurfaceNode* face = surfaceNamed(scene, "Face expression");
+  SurfaceNode* face = test::nodeNamed<SurfaceNode>(scene, "Face expression");
   ASSERT_NE(face, nullptr);
   EXPECT_TRUE(face->visible());
   EXPECT_FALSE(skin->visible()) << "the segmented skin would fight the expression face for the same pixels";
@@ -242,7 +226,7 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   name->setText("smile test");
   QTest::mouseClick(save, Qt::LeftButton);
   workstation.settle(100);
-  ExpressionNode* node = expressionNamed(scene, "smile test");
+  ExpressionNode* node = test::nodeNamed<ExpressionNode>(scene, "smile test");
   ASSERT_NE(node, nullptr) << workstation.errors();
   EXPECT_EQ(node->muscleSet(), model->muscleSetId);
   for (std::size_t k = 0; k < model->muscles.size(); ++k)
@@ -291,16 +275,16 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   workstation.window().openPath(copy);
   ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
   workstation.settle(200);
-  ExpressionNode* reloaded = expressionNamed(workstation.scene(), "smile test");
+  ExpressionNode* reloaded = test::nodeNamed<ExpressionNode>(workstation.scene(), "smile test");
   ASSERT_NE(reloaded, nullptr);
   EXPECT_EQ(reloaded->activations(), savedActivations);
   EXPECT_GE(saved->findText("smile test"), 0);
   // A new scene: the model is gone with the old one, the sliders with it;
   // the face saved with the scene goes and the skin it hid comes back.
   EXPECT_FALSE(smile->isEnabled());
-  EXPECT_EQ(surfaceNamed(workstation.scene(), "Face expression"), nullptr);
-  ASSERT_NE(surfaceNamed(workstation.scene(), "Skin"), nullptr);
-  EXPECT_TRUE(surfaceNamed(workstation.scene(), "Skin")->visible());
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(workstation.scene(), "Face expression"), nullptr);
+  ASSERT_NE(test::nodeNamed<SurfaceNode>(workstation.scene(), "Skin"), nullptr);
+  EXPECT_TRUE(test::nodeNamed<SurfaceNode>(workstation.scene(), "Skin")->visible());
   std::filesystem::remove_all(copy);
   EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
 }
@@ -399,7 +383,7 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   EXPECT_FALSE(plans->isVisible()) << "the plan group shows before the face model";
 
   QTest::mouseClick(build, Qt::LeftButton);
-  ASSERT_TRUE(workstation.waitUntil([&] { return surfaceNamed(scene, "Face expression") != nullptr; }, 300))
+  ASSERT_TRUE(workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
     << workstation.errors();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   ASSERT_TRUE(plans->isVisible());
@@ -412,19 +396,19 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   const auto started = std::chrono::steady_clock::now();
   QTest::mouseClick(studyButton, Qt::LeftButton);
   ASSERT_TRUE(
-    workstation.waitUntil([&] { return surfaceNamed(scene, "Z-plasty 1 under expression") != nullptr; }, 300))
+    workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression") != nullptr; }, 300))
     << workstation.errors() << planStatus->text().toStdString();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   const double studySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   std::cout << "[plan under expression] studied in " << studySeconds << " s: " << planStatus->text().toStdString()
             << "\n";
-  SurfaceNode* planSkin = surfaceNamed(scene, "Z-plasty 1 under expression");
+  SurfaceNode* planSkin = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression");
   ASSERT_NE(planSkin, nullptr);
   EXPECT_TRUE(planSkin->visible());
   EXPECT_EQ(planSkin->colourArray(), "skin_colour");
-  EXPECT_FALSE(surfaceNamed(scene, "Face expression")->visible()) << "the face shows under the plan's skin";
-  ASSERT_NE(surfaceNamed(scene, "Z-plasty 1 skin after"), nullptr);
-  EXPECT_FALSE(surfaceNamed(scene, "Z-plasty 1 skin after")->visible());
+  EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Face expression")->visible()) << "the face shows under the plan's skin";
+  ASSERT_NE(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after"), nullptr);
+  EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after")->visible());
   std::cout << "[plan under expression] at rest: " << bumps->text().toStdString() << "\n";
   EXPECT_TRUE(bumps->text().contains("mm at rest")) << bumps->text().toStdString();
 
@@ -566,8 +550,8 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   ASSERT_NE(leave, nullptr);
   QTest::mouseClick(leave, Qt::LeftButton);
   workstation.settle(100);
-  EXPECT_EQ(surfaceNamed(scene, "Z-plasty 1 under expression"), nullptr);
-  EXPECT_TRUE(surfaceNamed(scene, "Face expression")->visible());
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression"), nullptr);
+  EXPECT_TRUE(test::nodeNamed<SurfaceNode>(scene, "Face expression")->visible());
   EXPECT_FALSE(fingertip->isEnabled());
   EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
 }

@@ -47,22 +47,6 @@ const RangeMapNode* newestSkin(Scene& scene)
   return skin;
 }
 
-PlanNode* planNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Plan))
-    if (n->name() == name)
-      return static_cast<PlanNode*>(n);
-  return nullptr;
-}
-
-SurfaceNode* surfaceNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name() == name)
-      return static_cast<SurfaceNode*>(n);
-  return nullptr;
-}
-
 /// The table's value in the row whose first cell reads @a what; NaN when none.
 double tableValue(QTableWidget* table, const QString& what)
 {
@@ -167,7 +151,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   const RangeMapNode* skinNode = newestSkin(scene);
   ASSERT_NE(skinNode, nullptr) << "the demo scene has no skin range map";
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);
-  PlanNode* demoPlan = planNamed(scene, "Z-plasty 1");
+  PlanNode* demoPlan = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
   ASSERT_NE(demoPlan, nullptr);
 
   // The skin point of the demo's Z-plasty: θ = -40°, z = -47 mm.
@@ -201,7 +185,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   ASSERT_TRUE(workstation.waitUntil(
     [&] { return scene.nodesOfType(NodeType::Plan).size() == plansBefore + 1; }, 10))
     << workstation.errors();
-  PlanNode* planNode = planNamed(scene, "Z-plasty 2");
+  PlanNode* planNode = test::nodeNamed<PlanNode>(scene, "Z-plasty 2");
   ASSERT_NE(planNode, nullptr) << "the new plan is not named Z-plasty 2";
   const NodeId planId = planNode->id();
   EXPECT_EQ(planNode->rangeMapId(), skinNode->id());
@@ -229,7 +213,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   }
 
   // Its lines on the skin.
-  SurfaceNode* lines = surfaceNamed(scene, "Z-plasty 2 incision");
+  SurfaceNode* lines = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 2 incision");
   ASSERT_NE(lines, nullptr);
   EXPECT_DOUBLE_EQ(lines->lineWidth(), 3.0);
   expectLinesOnSkin(lines->polyData(), placed, skin);
@@ -277,13 +261,13 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
     for (const auto& a : m.limbAngles)
       EXPECT_NEAR(tableValue(table, QString("Angle at p%1").arg(a.point)), a.skin / kDegree, 0.05);
   }
-  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
+  expectLinesOnSkin(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
 
   click(workstation.widget<QPushButton>("incision.undo"));
   ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == before; }, 5));
   EXPECT_NEAR(limbAngle->value(), 60.0, 1e-9);
   workstation.settle(100);
-  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), placed, skin);
+  expectLinesOnSkin(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 2 incision")->polyData(), placed, skin);
   click(workstation.widget<QPushButton>("incision.redo"));
   ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == after; }, 5));
   // The keys do the same while the panel has focus.
@@ -297,7 +281,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   QTest::keyClick(list, Qt::Key_Z, Qt::ControlModifier | Qt::ShiftModifier);
   EXPECT_TRUE(workstation.waitUntil([&] { return planNode->toJson() == after; }, 5)) << "Ctrl+Shift+Z did not redo";
   workstation.settle(100);
-  expectLinesOnSkin(surfaceNamed(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
+  expectLinesOnSkin(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 2 incision")->polyData(), changed, skin);
   workstation.screenshot("incision-editor");
 
   // Move: its centre re-picked 8° further round the face.
@@ -352,7 +336,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   const nlohmann::json demoBefore = demoPlan->toJson();
   length->setValue(length->value() - 2.0);
   ASSERT_TRUE(workstation.waitUntil([&] { return demoPlan->toJson() != demoBefore; }, 5)) << workstation.errors();
-  EXPECT_NE(surfaceNamed(scene, "Z-plasty 1 skin after"), nullptr);
+  EXPECT_NE(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after"), nullptr);
   EXPECT_NE(status->text().indexOf("out of date"), -1) << status->text().toStdString();
   workstation.screenshot("incision-prediction-out-of-date");
   click(workstation.widget<QPushButton>("incision.undo"));
@@ -361,13 +345,13 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
 
   // An excision selected: drawn with its hole border; its excised area is the logic's.
   {
-    PlanNode* ellipse = planNamed(scene, "Elliptical excision 2");
+    PlanNode* ellipse = test::nodeNamed<PlanNode>(scene, "Elliptical excision 2");
     ASSERT_NE(ellipse, nullptr);
     selectPlan(list, ellipse->name());
     workstation.settle(200);
     const incision::IncisionPlan plan = IncisionLogic::readPlan(*ellipse);
     ASSERT_TRUE(plan.isExcision());
-    SurfaceNode* ellipseLines = surfaceNamed(scene, "Elliptical excision 2 incision");
+    SurfaceNode* ellipseLines = test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 incision");
     ASSERT_NE(ellipseLines, nullptr);
     EXPECT_EQ(ellipseLines->polyData()->GetNumberOfLines(), 2) << "the cut and the hole border";
     expectLinesOnSkin(ellipseLines->polyData(), plan, skin);
@@ -382,9 +366,9 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   click(workstation.widget<QPushButton>("incision.delete"));
   ASSERT_TRUE(workstation.waitUntil([&] { return scene.node(planId) == nullptr; }, 5));
   workstation.settle(100);
-  EXPECT_EQ(surfaceNamed(scene, "Z-plasty 2 incision"), nullptr);
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 2 incision"), nullptr);
   EXPECT_EQ(list->findItems("Z-plasty 2", Qt::MatchExactly).size(), 0);
-  EXPECT_NE(planNamed(scene, "Z-plasty 1"), nullptr);
+  EXPECT_NE(test::nodeNamed<PlanNode>(scene, "Z-plasty 1"), nullptr);
 }
 
 // Editing a plan by hand (the recipe's operations from the panel): a cut
@@ -399,7 +383,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   ASSERT_TRUE(workstation.waitUntilIdle(60)) << workstation.errors();
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
   const seg::CylindricalFrame& frame = skin.frame();
-  PlanNode* node = planNamed(scene, "Z-plasty 1");
+  PlanNode* node = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
   ASSERT_NE(node, nullptr);
   const NodeId planId = node->id();
   hidePredictedSkins(scene);
@@ -504,7 +488,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   EXPECT_EQ(a.toJson(), b.toJson());
   // The region's outline is drawn on the skin in the undermining tint.
   {
-    auto* lines = surfaceNamed(scene, "Z-plasty 1 incision");
+    auto* lines = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 incision");
     ASSERT_NE(lines, nullptr);
     auto* colours = vtkUnsignedCharArray::SafeDownCast(lines->polyData()->GetPointData()->GetArray("line_colour"));
     ASSERT_NE(colours, nullptr);
@@ -525,7 +509,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   click(workstation.widget<QPushButton>("incision.finishDraw"));
   workstation.settle(200);
   ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBeforeRegion) << workstation.errors();
-  PlanNode* drawnNode = planNamed(scene, "Cut 1");
+  PlanNode* drawnNode = test::nodeNamed<PlanNode>(scene, "Cut 1");
   ASSERT_NE(drawnNode, nullptr);
   const incision::IncisionPlan drawn = IncisionLogic::readPlan(*drawnNode);
   ASSERT_EQ(drawn.pointCount(), 3);
@@ -535,7 +519,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
     EXPECT_LT((skinPoint(t, z) - cutPoints[std::size_t(k)]).norm(), 1.5) << "cut point " << k;
   }
   EXPECT_EQ(drawn.writtenSutures(), incision::straightClosureSutures(3));
-  EXPECT_NE(surfaceNamed(scene, "Cut 1 incision"), nullptr);
+  EXPECT_NE(test::nodeNamed<SurfaceNode>(scene, "Cut 1 incision"), nullptr);
   selectPlan(list, "Z-plasty 1");
   workstation.settle(100);
   // Clear takes the regions away again.
@@ -557,7 +541,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*newestSkin(scene));
   const seg::CylindricalFrame& frame = skin.frame();
   hidePredictedSkins(scene);
-  PlanNode* node = planNamed(scene, "Z-plasty 1");
+  PlanNode* node = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
   ASSERT_NE(node, nullptr);
   const NodeId planId = node->id();
   auto skinPoint = [&](double theta, double z) { return frame.toWorld(skin.sample(theta, z), theta, z); };
@@ -649,7 +633,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   guide->setChecked(true);
   workstation.settle(200);
   ASSERT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
-  SurfaceNode* lines = surfaceNamed(scene, "Skin tension lines");
+  SurfaceNode* lines = test::nodeNamed<SurfaceNode>(scene, "Skin tension lines");
   ASSERT_NE(lines, nullptr);
   vtkPolyData* data = lines->polyData();
   ASSERT_NE(data, nullptr);
@@ -662,7 +646,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
   const incision::SkinTensionLines logic(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
   const double expected =
-    incision::axisToTensionLines(IncisionLogic::readPlan(*planNamed(scene, "Z-plasty 1")), logic).degrees;
+    incision::axisToTensionLines(IncisionLogic::readPlan(*test::nodeNamed<PlanNode>(scene, "Z-plasty 1")), logic).degrees;
   EXPECT_NEAR(shown, expected, 0.5);
   EXPECT_GE(shown, 0.0);
   EXPECT_LE(shown, 90.0);
@@ -680,7 +664,7 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
 
   guide->setChecked(false);
   workstation.settle(100);
-  EXPECT_EQ(surfaceNamed(scene, "Skin tension lines"), nullptr);
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Skin tension lines"), nullptr);
   EXPECT_TRUE(std::isnan(tableValue(table, axisRow)));
 }
 

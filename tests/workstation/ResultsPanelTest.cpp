@@ -38,22 +38,6 @@
 namespace caps {
 namespace {
 
-SurfaceNode* surfaceNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name() == name)
-      return static_cast<SurfaceNode*>(n);
-  return nullptr;
-}
-
-PlanNode* planNamed(Scene& scene, const std::string& name)
-{
-  for (Node* n : scene.nodesOfType(NodeType::Plan))
-    if (n->name() == name)
-      return static_cast<PlanNode*>(n);
-  return nullptr;
-}
-
 const RangeMapNode* mapOfRole(Scene& scene, const std::string& role)
 {
   for (Node* n : scene.nodesOfType(NodeType::RangeMap))
@@ -94,8 +78,8 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
   workstation.window().openPath(bundle);
   ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
   Scene& scene = workstation.scene();
-  SurfaceNode* before = surfaceNamed(scene, "Z-plasty 1 skin before");
-  SurfaceNode* after = surfaceNamed(scene, "Z-plasty 1 skin after");
+  SurfaceNode* before = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin before");
+  SurfaceNode* after = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after");
   ASSERT_TRUE(before && after);
   ASSERT_EQ(before->polyData()->GetNumberOfPoints(), after->polyData()->GetNumberOfPoints());
 
@@ -124,15 +108,15 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
   ASSERT_TRUE(workstation.waitUntil([&] { return plan->findText("Z-plasty 1") >= 0; }, 10));
   plan->setCurrentIndex(plan->findText("Z-plasty 1"));
   workstation.settle(300);
-  SurfaceNode* result = surfaceNamed(scene, "Z-plasty 1 result");
+  SurfaceNode* result = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 result");
   ASSERT_NE(result, nullptr);
   EXPECT_TRUE(result->visible());
   EXPECT_FALSE(before->visible());
   EXPECT_FALSE(after->visible());
   // The head's skin without the cells under the patch (no z-fighting).
   {
-    SurfaceNode* head = surfaceNamed(scene, "Skin");
-    SurfaceNode* cut = surfaceNamed(scene, "Z-plasty 1 result head");
+    SurfaceNode* head = test::nodeNamed<SurfaceNode>(scene, "Skin");
+    SurfaceNode* cut = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 result head");
     ASSERT_TRUE(head && cut);
     EXPECT_FALSE(head->visible());
     EXPECT_TRUE(cut->visible());
@@ -293,7 +277,7 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
       << summary->text().toStdString();
   }
   {
-    PlanNode* node = planNamed(scene, "Z-plasty 1");
+    PlanNode* node = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
     ASSERT_NE(node, nullptr);
     const seg::RangeMap skin = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
     const seg::RangeMap bone = RangeMapLogic::toRangeMap(*mapOfRole(scene, "bone"));
@@ -383,11 +367,11 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
     ASSERT_GE(other, 0);
     plan->setCurrentIndex(other);
     workstation.settle(300);
-    EXPECT_EQ(surfaceNamed(scene, "Z-plasty 1 result"), nullptr);
+    EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 result"), nullptr);
     EXPECT_TRUE(after->visible());
     EXPECT_FALSE(before->visible());
-    ASSERT_NE(surfaceNamed(scene, "Elliptical excision 2 result"), nullptr);
-    EXPECT_FALSE(surfaceNamed(scene, "Elliptical excision 2 skin after")->visible());
+    ASSERT_NE(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 result"), nullptr);
+    EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 skin after")->visible());
     // Its closure force is computed in the background meanwhile.
     EXPECT_TRUE(summary->text().contains("computing...")) << summary->text().toStdString();
     ASSERT_TRUE(workstation.waitUntilIdle(600));
@@ -397,10 +381,10 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
   // Another module: the plan's own surfaces come back, the panel's go.
   workstation.selectModule("incision");
   workstation.settle(200);
-  EXPECT_EQ(surfaceNamed(scene, "Elliptical excision 2 result"), nullptr);
-  EXPECT_EQ(surfaceNamed(scene, "Elliptical excision 2 result head"), nullptr);
-  EXPECT_TRUE(surfaceNamed(scene, "Elliptical excision 2 skin after")->visible());
-  EXPECT_TRUE(surfaceNamed(scene, "Skin")->visible());
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 result"), nullptr);
+  EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 result head"), nullptr);
+  EXPECT_TRUE(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 skin after")->visible());
+  EXPECT_TRUE(test::nodeNamed<SurfaceNode>(scene, "Skin")->visible());
   EXPECT_EQ(workstation.errors(), "");
 }
 
@@ -415,8 +399,8 @@ TEST(ResultsPanel, ProfileAlongTheIncision)
   ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
   Scene& scene = workstation.scene();
   ResultsLogic logic(scene);
-  const PlanNode* node = planNamed(scene, "Z-plasty 1");
-  SurfaceNode* before = surfaceNamed(scene, "Z-plasty 1 skin before");
+  const PlanNode* node = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
+  SurfaceNode* before = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin before");
   ASSERT_TRUE(node && before);
   const IncisionProfile profile = logic.incisionProfile(*node, before->polyData());
   ASSERT_GT(profile.arcLength.size(), 10u);
@@ -475,9 +459,9 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   left->renderer()->GetActiveCamera()->Azimuth(20.0);
   workstation.settle(200);
   // Both colour ranges are the union of the two plans' von Mises ranges.
-  const double zMax = ResultsLogic::arrayMaximum(surfaceNamed(scene, "Z-plasty 1 skin after")->polyData(), "von_mises_kPa");
+  const double zMax = ResultsLogic::arrayMaximum(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after")->polyData(), "von_mises_kPa");
   const std::string otherName = other->currentText().toStdString();
-  const double oMax = ResultsLogic::arrayMaximum(surfaceNamed(scene, otherName + " skin after")->polyData(), "von_mises_kPa");
+  const double oMax = ResultsLogic::arrayMaximum(test::nodeNamed<SurfaceNode>(scene, otherName + " skin after")->polyData(), "von_mises_kPa");
   auto* window = left->window();
   const QString text = window->findChild<QLabel*>("results.comparison.rightTitle")->text();
   EXPECT_NE(text.indexOf(QString::fromStdString(otherName)), -1) << text.toStdString();
@@ -496,15 +480,15 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   }
   // The excision's head is cut away inside its hole too: no head vertex is
   // left near the plan's centre (the middle of the excised ellipse).
-  if (PlanNode* excision = planNamed(scene, otherName); excision && excision->procedure() == "elliptical-excision")
+  if (PlanNode* excision = test::nodeNamed<PlanNode>(scene, otherName); excision && excision->procedure() == "elliptical-excision")
   {
     const incision::IncisionPlan read = IncisionLogic::readPlan(*excision);
     const seg::RangeMap skinMap = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
     const double theta = read.centre().theta, z = read.centre().z;
     const Eigen::Vector3d centre = skinMap.frame().toWorld(skinMap.sample(theta, z), theta, z);
-    auto* head = surfaceNamed(scene, "Skin");
+    auto* head = test::nodeNamed<SurfaceNode>(scene, "Skin");
     ASSERT_NE(head, nullptr);
-    const auto cut = ResultsLogic::headWithoutPatch(head->polyData(), surfaceNamed(scene, otherName + " skin before")->polyData());
+    const auto cut = ResultsLogic::headWithoutPatch(head->polyData(), test::nodeNamed<SurfaceNode>(scene, otherName + " skin before")->polyData());
     // Only the vertices of kept cells count.
     double nearest = 1e9;
     cut->GetPolys()->InitTraversal();

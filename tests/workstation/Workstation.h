@@ -31,6 +31,18 @@
 namespace caps::test {
 
 /// Folder of this suite's screenshots.
+/// The first node of @a scene named @a name that is a @a T (SurfaceNode,
+/// PlanNode, ..., or Node for any); nullptr when there is none.
+template <class T = Node>
+T* nodeNamed(Scene& scene, const std::string& name)
+{
+  for (Node* node : scene.nodes())
+    if (node->name() == name)
+      if (auto* t = dynamic_cast<T*>(node))
+        return t;
+  return nullptr;
+}
+
 inline std::filesystem::path workstationArtifacts()
 {
   const std::filesystem::path folder = std::filesystem::path(CAPS_TEST_ARTIFACTS_DIR) / "workstation";

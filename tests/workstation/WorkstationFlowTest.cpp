@@ -49,14 +49,6 @@ std::vector<T*> nodesOf(caps::Scene& scene, caps::NodeType type)
   return nodes;
 }
 
-caps::Node* nodeNamed(caps::Scene& scene, const std::string& name)
-{
-  for (caps::Node* node : scene.nodes())
-    if (node->name() == name)
-      return node;
-  return nullptr;
-}
-
 const caps::RangeMapNode* rangeMap(caps::Scene& scene, const std::string& role)
 {
   const caps::RangeMapNode* found = nullptr;
@@ -208,7 +200,7 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   ASSERT_NE(paint, nullptr);
   paint->setChecked(true);
   ws.settle(200);
-  auto* skinSurface = static_cast<caps::SurfaceNode*>(nodeNamed(scene, "Skin"));
+  auto* skinSurface = static_cast<caps::SurfaceNode*>(caps::test::nodeNamed(scene, "Skin"));
   ASSERT_NE(skinSurface, nullptr);
   EXPECT_EQ(skinSurface->colourArray(), "thickness_mm");
   ws.screenshot("flow-03-thickness");
@@ -250,8 +242,8 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   press(ws, "simulate.run");
   ASSERT_TRUE(ws.waitUntilIdle(900)) << "the simulation did not finish";
   ASSERT_TRUE(ws.errors().empty()) << ws.errors();
-  ASSERT_NE(nodeNamed(scene, planName + " skin after"), nullptr);
-  ASSERT_NE(nodeNamed(scene, planName + " closure"), nullptr);
+  ASSERT_NE(caps::test::nodeNamed(scene, planName + " skin after"), nullptr);
+  ASSERT_NE(caps::test::nodeNamed(scene, planName + " closure"), nullptr);
   ws.screenshot("flow-05-simulated");
 
   // 6. Results: von Mises on the face after the operation, then a snapshot.
@@ -283,7 +275,7 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   std::multiset<std::string> names;
   for (caps::Node* node : scene.nodes())
     names.insert(node->name());
-  caps::Node* plan = nodeNamed(scene, planName);
+  caps::Node* plan = caps::test::nodeNamed(scene, planName);
   ASSERT_NE(plan, nullptr);
   const nlohmann::json planJson = plan->toJson();
 
@@ -295,7 +287,7 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   for (caps::Node* node : reopened.scene().nodes())
     reopenedNames.insert(node->name());
   EXPECT_EQ(reopenedNames, names);
-  auto* reopenedPlan = nodeNamed(reopened.scene(), planName);
+  auto* reopenedPlan = caps::test::nodeNamed(reopened.scene(), planName);
   ASSERT_NE(reopenedPlan, nullptr);
   EXPECT_EQ(reopenedPlan->toJson(), planJson);
   reopened.screenshot("flow-07-reopened");
