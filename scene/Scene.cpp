@@ -57,14 +57,27 @@ std::vector<Node*> Scene::nodesOfType(NodeType type) const {
   return out;
 }
 
-bool Scene::removeNode(NodeId id) {
+bool Scene::removeNode(NodeId id) { return remove(id, true); }
+
+void Scene::takeOut(const NodeId& id) { remove(id, false); }
+
+void Scene::putBack(NodeType type, const NodeId& id, const nlohmann::json& json) {
+  if (node(id)) return;  // already there (cannot happen through the stack; harmless)
+  std::unique_ptr<Node> n = Node::create(type);
+  n->id_ = id;
+  n->fromJson(json);  // not in a scene yet: no notification
+  addNode(std::move(n));
+}
+
+bool Scene::remove(const NodeId& idToRemove, bool dropUndo) {
+  const NodeId id = idToRemove;  // a copy: the caller's may die with the node
   Node* raw = node(id);
   if (!raw) return false;
   notify(SceneEvent::NodeAboutToBeRemoved, *raw);
   // An observer may have removed it already (raw then dangles: compare only).
   if (!holds(id, raw)) return true;
   auto it = std::find_if(nodes_.begin(), nodes_.end(), [&](const auto& n) { return n.get() == raw; });
-  undo_.removeEntriesFor(id);
+  if (dropUndo) undo_.removeEntriesFor(id);
   byId_.erase(id);
   std::unique_ptr<Node> dead = std::move(*it);
   nodes_.erase(it);

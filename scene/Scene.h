@@ -73,6 +73,12 @@ class Scene {
 
  private:
   friend class Node;
+  friend class UndoStack;
+  /// removeNode() without dropping the node's undo entries: undoing its addition.
+  void takeOut(const NodeId& id);
+  /// A node of @a type with @a id and the state @a json added again: redoing its addition.
+  void putBack(NodeType type, const NodeId& id, const nlohmann::json& json);
+  bool remove(const NodeId& id, bool dropUndo);
   void notify(SceneEvent event, const Node& node);
   /// True while @a node is the scene's node of that id (not removed since).
   bool holds(const NodeId& id, const Node* node) const;

@@ -18,7 +18,7 @@ ScopedEdit::~ScopedEdit() {
     Node* node = scene_.node(id_);
     if (!node) return;
     nlohmann::json after = node->toJson();
-    if (after != before_) scene_.undoStack().push({label_, id_, std::move(before_), std::move(after)});
+    if (after != before_) scene_.undoStack().push({label_, id_, std::move(before_), std::move(after), std::nullopt});
   } catch (...) {
   }
 }

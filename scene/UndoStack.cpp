@@ -1,6 +1,7 @@
 #include "scene/UndoStack.h"
 
 #include "scene/Scene.h"
+#include "scene/SceneError.h"
 
 namespace caps {
 
@@ -11,23 +12,44 @@ void UndoStack::push(Entry entry) {
   applied_ = entries_.size();
 }
 
+void UndoStack::pushAddition(const Node& node, std::string label) {
+  if (node.scene() != &scene_)
+    throw SceneError("cannot record the addition of '" + node.id() + "': it is not in this scene");
+  if (!node.bulkFileExtension().empty())
+    throw SceneError("cannot record the addition of '" + node.id() +
+                     "' for undo: its bulk data would not come back with redo");
+  Entry entry;
+  entry.label = std::move(label);
+  entry.nodeId = node.id();
+  entry.after = node.toJson();
+  entry.added = node.type();
+  push(std::move(entry));
+}
+
 std::string UndoStack::undoLabel() const { return canUndo() ? entries_[applied_ - 1].label : std::string(); }
 
 std::string UndoStack::redoLabel() const { return canRedo() ? entries_[applied_].label : std::string(); }
 
 bool UndoStack::undo() {
   if (!canUndo()) return false;
-  const Entry& e = entries_[applied_ - 1];
+  // A copy: taking a node out tells observers, who may push edits of their own.
+  const Entry e = entries_[applied_ - 1];
   --applied_;
-  if (Node* node = scene_.node(e.nodeId)) node->fromJson(e.before);
+  if (e.added)
+    scene_.takeOut(e.nodeId);
+  else if (Node* node = scene_.node(e.nodeId))
+    node->fromJson(e.before);
   return true;
 }
 
 bool UndoStack::redo() {
   if (!canRedo()) return false;
-  const Entry& e = entries_[applied_];
+  const Entry e = entries_[applied_];
   ++applied_;
-  if (Node* node = scene_.node(e.nodeId)) node->fromJson(e.after);
+  if (e.added)
+    scene_.putBack(*e.added, e.nodeId, e.after);
+  else if (Node* node = scene_.node(e.nodeId))
+    node->fromJson(e.after);
   return true;
 }
 

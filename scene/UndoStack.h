@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <deque>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -24,6 +25,10 @@ class UndoStack {
     NodeId nodeId;
     nlohmann::json before;
     nlohmann::json after;
+    /// Set when the entry is the node's addition (pushAddition()): undo
+    /// takes the node out of the scene, redo puts it back with the same id
+    /// and the state @a after.
+    std::optional<NodeType> added;
   };
 
   static constexpr std::size_t kDefaultDepthLimit = 100;
@@ -33,6 +38,12 @@ class UndoStack {
   UndoStack& operator=(const UndoStack&) = delete;
 
   void push(Entry entry);
+  /// Records that @a node was just added to the scene, as one undoable
+  /// step. Only for nodes whose whole state is in toJson() (plans,
+  /// landmarks, expressions): a node with bulk data (an image, a mesh)
+  /// could not be put back, so it throws SceneError, as it does for a node
+  /// not in this stack's scene.
+  void pushAddition(const Node& node, std::string label);
 
   bool canUndo() const { return applied_ > 0; }
   bool canRedo() const { return applied_ < entries_.size(); }

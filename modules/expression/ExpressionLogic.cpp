@@ -179,13 +179,17 @@ std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput
   return model;
 }
 
-vtkSmartPointer<vtkPolyData> expressionPolyData(const ExpressionModel& model)
+vtkSmartPointer<vtkPolyData> shadedSkinPolyData(const ExpressionSurface& surface, const std::vector<seg::Rgb8>& shade)
 {
-  const fem::DisplaySurface& s = model.surface.surface();
+  const fem::DisplaySurface& s = surface.surface();
   auto pd = vtkSmartPointer<vtkPolyData>::New();
+  Eigen::Matrix3Xd rest;
+  surface.positions(Eigen::VectorXd::Zero(surface.muscleCount()), true, rest);
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(vtkIdType(s.vertexCount()));
+  points->SetNumberOfPoints(vtkIdType(rest.cols()));
+  for (Eigen::Index v = 0; v < rest.cols(); ++v)
+    points->SetPoint(vtkIdType(v), rest.col(v).data());
   pd->SetPoints(points);
   auto polys = vtkSmartPointer<vtkCellArray>::New();
   for (const std::vector<int>& polygon : s.polygons())
@@ -198,15 +202,21 @@ vtkSmartPointer<vtkPolyData> expressionPolyData(const ExpressionModel& model)
   auto colour = vtkSmartPointer<vtkUnsignedCharArray>::New();
   colour->SetName("skin_colour");
   colour->SetNumberOfComponents(3);
-  colour->SetNumberOfTuples(vtkIdType(s.vertexCount()));
-  for (std::size_t v = 0; v < model.shade.size(); ++v)
-    for (int c = 0; c < 3; ++c)
-      colour->SetTypedComponent(vtkIdType(v), c, model.shade[v][std::size_t(c)]);
+  colour->SetNumberOfTuples(vtkIdType(rest.cols()));
+  for (vtkIdType v = 0; v < vtkIdType(rest.cols()); ++v)
+  {
+    const seg::Rgb8 c = std::size_t(v) < shade.size() ? shade[std::size_t(v)] : seg::kNoSourceColour;
+    for (int k = 0; k < 3; ++k)
+      colour->SetTypedComponent(v, k, c[std::size_t(k)]);
+  }
   pd->GetPointData()->AddArray(colour);
   pd->GetPointData()->SetScalars(colour);
-  Eigen::Matrix3Xd scratch;
-  applyActivations(model, Eigen::VectorXd::Zero(model.surface.muscleCount()), pd, scratch);
   return pd;
+}
+
+vtkSmartPointer<vtkPolyData> expressionPolyData(const ExpressionModel& model)
+{
+  return shadedSkinPolyData(model.surface, model.shade);
 }
 
 double applyActivations(const ExpressionModel& model, const Eigen::VectorXd& activations, vtkPolyData* polyData,
@@ -299,8 +309,7 @@ std::vector<ExpressionNode*> ExpressionLogic::savedExpressions() const
 {
   std::vector<ExpressionNode*> out;
   for (Node* n : scene().nodesOfType(NodeType::Expression))
-    if (!n->name().empty()) // a blank: a new expression whose saving was undone
-      out.push_back(static_cast<ExpressionNode*>(n));
+    out.push_back(static_cast<ExpressionNode*>(n));
   return out;
 }
 
@@ -331,24 +340,9 @@ ExpressionNode& ExpressionLogic::saveExpression(const std::string& name, const s
     existing->fromJson(fields);
     return *existing;
   }
-  // The undo stack keeps mementos of nodes that stay in the scene; it cannot
-  // take a node out. So a new expression joins the scene blank (no name, no
-  // activations) and is filled in as one edit: undo makes it blank again,
-  // which savedExpressions() does not list, and redo fills it in.
-  std::vector<NodeId> blanks;
-  for (Node* n : scene().nodesOfType(NodeType::Expression))
-    if (n->name().empty())
-      blanks.push_back(n->id());
   auto* node = scene().add<ExpressionNode>();
-  {
-    ScopedEdit edit(scene(), node->id(), "Save expression " + name);
-    node->fromJson(fields);
-  }
-  // That edit cleared the redo entries, which were the only ones the blanks
-  // of undone saves had (their saving and any later change): nothing can
-  // bring them back now.
-  for (const NodeId& id : blanks)
-    scene().removeNode(id);
+  node->fromJson(fields);
+  scene().undoStack().pushAddition(*node, "Save expression " + name);
   return *node;
 }
 

@@ -130,8 +130,13 @@ struct ExpressionModel
 std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput& input,
                                                       const TaskProgress& progress = {});
 
-/// The display skin as polydata at rest: points, the display polygons
-/// (triangles and quadrilaterals, outward) and the RGB array skin_colour.
+/// A display skin as polydata with every activation 0 (the base only, range
+/// detail on): points, the display polygons (triangles and quadrilaterals,
+/// outward) and the RGB array skin_colour (the active scalars) from
+/// @a shade, one per vertex (grey where it has none).
+vtkSmartPointer<vtkPolyData> shadedSkinPolyData(const ExpressionSurface& surface, const std::vector<seg::Rgb8>& shade);
+
+/// The face's display skin as polydata at rest (shadedSkinPolyData()).
 vtkSmartPointer<vtkPolyData> expressionPolyData(const ExpressionModel& model);
 
 /// Moves the points of @a polyData (made by expressionPolyData()) to the
@@ -155,17 +160,14 @@ public:
   ///         landmark the model needs is missing.
   expression::ExpressionModelInput modelInput() const;
 
-  /// The expressions saved in the scene, in scene order; not the blanks
-  /// (Expression nodes without a name) that undoing a new one leaves.
+  /// The expressions saved in the scene, in scene order.
   std::vector<ExpressionNode*> savedExpressions() const;
   ExpressionNode* savedExpression(const std::string& name) const;
 
   /// Saves @a activations (fitted id → activation, clamped to [0, 1]; zeros
   /// left out) as expression @a name, as one undoable edit either way: the
-  /// one of that name changed, or a new ExpressionNode. The undo stack only
-  /// edits nodes that stay, so a new one is added blank and filled in: undo
-  /// leaves the blank (not listed), redo fills it again; the next new save
-  /// removes the blanks, which nothing can refill then.
+  /// one of that name changed, or a new ExpressionNode (undo takes it out
+  /// of the scene, redo puts it back with the same id).
   /// @throws std::invalid_argument for an empty name.
   ExpressionNode& saveExpression(const std::string& name, const std::string& muscleSet,
                                  const std::map<std::string, double>& activations, const std::string& description);

@@ -196,8 +196,9 @@ TEST(SavedExpression, ANewOneIsOneUndoableEdit)
   ASSERT_TRUE(scene.undoStack().canUndo());
   EXPECT_EQ(scene.undoStack().undoLabel(), "Save expression grin");
 
-  // Undo: the expression is gone from the list and by name.
+  // Undo: the expression is gone from the scene, the list and by name.
   ASSERT_TRUE(scene.undoStack().undo());
+  EXPECT_TRUE(scene.nodesOfType(NodeType::Expression).empty());
   EXPECT_TRUE(logic.savedExpressions().empty());
   EXPECT_EQ(logic.savedExpression("grin"), nullptr);
   EXPECT_FALSE(scene.undoStack().canUndo());
@@ -211,15 +212,16 @@ TEST(SavedExpression, ANewOneIsOneUndoableEdit)
   EXPECT_EQ(back.description(), "a test grin");
   EXPECT_EQ(back.muscleSet(), "default");
 
-  // Undo again, then save another: the blank cannot come back, so it goes.
+  // Undo again, then save another: the first is out of the scene for good.
   ASSERT_TRUE(scene.undoStack().undo());
+  EXPECT_EQ(scene.node(id), nullptr) << "an undone expression is out of the scene";
   logic.saveExpression("pout", "default", {{"orbicularis_oris_lower", 0.5}}, "");
   EXPECT_EQ(savedNames(logic), std::vector<std::string>{"pout"});
   EXPECT_EQ(scene.nodesOfType(NodeType::Expression).size(), 1u);
-  EXPECT_EQ(scene.node(id), nullptr);
   EXPECT_FALSE(scene.undoStack().canRedo());
   ASSERT_TRUE(scene.undoStack().undo());
   EXPECT_TRUE(logic.savedExpressions().empty());
+  EXPECT_TRUE(scene.nodesOfType(NodeType::Expression).empty());
 }
 
 TEST(SavedExpression, OverwritingChangesItAndUndoRestoresTheOldActivations)

@@ -2,10 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
 #include "scene/PlanNode.h"
 #include "scene/Scene.h"
 #include "scene/SceneError.h"
 #include "scene/ScopedEdit.h"
+#include "scene/SurfaceNode.h"
 
 namespace caps {
 namespace {
@@ -118,6 +122,55 @@ TEST_F(UndoFixture, NodeRemovedDuringEditIsNotRecorded) {
     plan->setNotes("gone");
     scene.removeNode(plan->id());
   }
+  EXPECT_FALSE(scene.undoStack().canUndo());
+}
+
+TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndState) {
+  std::vector<std::pair<SceneEvent, NodeId>> events;
+  scene.addObserver([&](SceneEvent e, const Node& n) { events.emplace_back(e, n.id()); });
+  auto* added = scene.add<PlanNode>();
+  added->setName("Added plan");
+  added->setCutPath({{0, 0}, {0.5, 0.5}});
+  const NodeId id = added->id();
+  scene.undoStack().pushAddition(*added, "Add plan");
+  move(1, 0.7);  // an edit of another node after it
+  ASSERT_EQ(scene.size(), 2u);
+
+  EXPECT_TRUE(scene.undoStack().undo());  // the move
+  events.clear();
+  EXPECT_EQ(scene.undoStack().undoLabel(), "Add plan");
+  EXPECT_TRUE(scene.undoStack().undo());  // the addition
+  EXPECT_EQ(scene.node(id), nullptr);
+  EXPECT_EQ(scene.size(), 1u);
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0], std::make_pair(SceneEvent::NodeAboutToBeRemoved, id));
+  EXPECT_EQ(scene.undoStack().redoLabel(), "Add plan");
+
+  events.clear();
+  EXPECT_TRUE(scene.undoStack().redo());
+  auto* back = scene.nodeAs<PlanNode>(id);
+  ASSERT_NE(back, nullptr);
+  EXPECT_EQ(back->name(), "Added plan");
+  ASSERT_EQ(back->cutPath().size(), 2u);
+  EXPECT_EQ(back->cutPath()[1], Eigen::Vector2d(0.5, 0.5));
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events[0], std::make_pair(SceneEvent::NodeAdded, id));
+  EXPECT_TRUE(scene.undoStack().redo());  // the move, still there after the addition
+  EXPECT_EQ(plan->cutPath()[1], Eigen::Vector2d(0.7, 0.7));
+
+  // Removing the node by hand drops its entries, the addition with them.
+  scene.removeNode(id);
+  EXPECT_EQ(scene.undoStack().size(), 1u);
+  EXPECT_EQ(scene.undoStack().undoLabel(), "Move point 1");
+}
+
+TEST_F(UndoFixture, AnAdditionThatCouldNotBePutBackIsRefused) {
+  auto* surface = scene.add<SurfaceNode>();
+  surface->setPolyData(vtkSmartPointer<vtkPolyData>::New());  // bulk data: a mesh
+  EXPECT_THROW(scene.undoStack().pushAddition(*surface, "Add surface"), SceneError);
+  Scene other;
+  auto* elsewhere = other.add<PlanNode>();
+  EXPECT_THROW(scene.undoStack().pushAddition(*elsewhere, "Add plan"), SceneError);
   EXPECT_FALSE(scene.undoStack().canUndo());
 }
 
