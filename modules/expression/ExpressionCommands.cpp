@@ -25,7 +25,6 @@
 #include "scene/PlanNode.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
-#include "segmentation/SkinShade.h"
 
 namespace fs = std::filesystem;
 
@@ -257,19 +256,10 @@ void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionMo
                          const expression::PlanExpressionResponses& onPlan, const Eigen::VectorXd& activations,
                          const expression::PushResponses* pushed, std::ostream& out, std::ostream& err)
 {
-  seg::ColourMap shade;
-  const seg::ColourMap* colour = nullptr;
-  if (input.ct)
-    try
-    {
-      shade = seg::skinShadeFromCt(input.ct, input.skin);
-      colour = &shade;
-    }
-    catch (const std::exception& e)
-    {
-      err << "The plan's skin is grey: its shade could not be read from the CT (" << e.what() << ")\n";
-    }
-  const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, input.skin, colour);
+  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  if (!shade.note.empty())
+    err << "The plan's animation: " << shade.note << "\n";
+  const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, input.skin, shade.map());
   const vtkSmartPointer<vtkPolyData> atRest = incision::planDisplayPolyData(display, 1.0);
   const seg::CylindricalFrame& frame = input.skin.frame();
   const Eigen::Vector3d toCamera = frame.radialDirection(planTheta), up = frame.direction();

@@ -79,24 +79,13 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   if (!step(0.85, "The plan's skin and its shade"))
     return nullptr;
   t = std::chrono::steady_clock::now();
-  seg::ColourMap shade;
-  const seg::ColourMap* colour = nullptr;
-  if (input.ct)
-    try
-    {
-      shade = seg::skinShadeFromCt(input.ct, input.skin);
-      colour = &shade;
-    }
-    catch (const std::exception& e)
-    {
-      study->shadeNote_ = std::string("the skin is grey: its shade could not be read from the CT (") + e.what() + ")";
-    }
-  else
-    study->shadeNote_ = "the skin is grey: the scene has no CT to read its shade from";
+  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  study->shadeNote_ = shade.note;
   incision::PlanDisplayOptions displayOptions;
   displayOptions.resolution = input.resolution;
   displayOptions.maxRangeDetail = input.maxRangeDetail;
-  incision::PlanDisplay display = incision::buildPlanDisplay(study->prediction_, input.skin, colour, displayOptions);
+  incision::PlanDisplay display =
+    incision::buildPlanDisplay(study->prediction_, input.skin, shade.map(), displayOptions);
   study->shade_ = display.skinShade;
   study->surface_ = ExpressionSurface(study->prediction_.continuum.mesh, std::move(display.surface),
                                       study->responses_->responses(), study->prediction_.displacements);
@@ -196,36 +185,7 @@ Eigen::Vector3d PlanStudy::restSkinPoint(Eigen::Index v) const
 
 vtkSmartPointer<vtkPolyData> PlanStudy::polyData() const
 {
-  const fem::DisplaySurface& s = surface_.surface();
-  auto pd = vtkSmartPointer<vtkPolyData>::New();
-  auto points = vtkSmartPointer<vtkPoints>::New();
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(vtkIdType(s.vertexCount()));
-  pd->SetPoints(points);
-  auto polys = vtkSmartPointer<vtkCellArray>::New();
-  for (const std::vector<int>& polygon : s.polygons())
-  {
-    polys->InsertNextCell(vtkIdType(polygon.size()));
-    for (int v : polygon)
-      polys->InsertCellPoint(v);
-  }
-  pd->SetPolys(polys);
-  auto colour = vtkSmartPointer<vtkUnsignedCharArray>::New();
-  colour->SetName("skin_colour");
-  colour->SetNumberOfComponents(3);
-  colour->SetNumberOfTuples(vtkIdType(s.vertexCount()));
-  for (vtkIdType v = 0; v < vtkIdType(s.vertexCount()); ++v)
-  {
-    const seg::Rgb8 c = std::size_t(v) < shade_.size() ? shade_[std::size_t(v)] : seg::kNoSourceColour;
-    for (int k = 0; k < 3; ++k)
-      colour->SetTypedComponent(v, k, c[std::size_t(k)]);
-  }
-  pd->GetPointData()->AddArray(colour);
-  pd->GetPointData()->SetScalars(colour);
-  Eigen::Matrix3Xd at;
-  positions(Eigen::VectorXd::Zero(muscleCount()), at);
-  setPoints(pd, at, at);
-  return pd;
+  return shadedSkinPolyData(surface_, shade_);
 }
 
 double setPoints(vtkPolyData* polyData, const Eigen::Matrix3Xd& positions, const Eigen::Matrix3Xd& rest)
