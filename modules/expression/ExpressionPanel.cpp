@@ -31,7 +31,9 @@
 #include <QTimer>
 #include <QVBoxLayout>
 
+#include <vtkCellArray.h>
 #include <vtkFieldData.h>
+#include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkStringArray.h>
 
@@ -632,8 +634,18 @@ void ExpressionPanel::updateFace()
     muscleValues_[k]->setText(QString("%1 %").arg(std::lround(100.0 * a[Eigen::Index(k)])));
   if (planStudy_ && !planSkinId_.empty())
   {
-    // The plan's skin shows instead of the face: it moves, the face waits.
+    // The plan's skin in the face around it: both move under the muscles
+    // (the plan's rim follows the face model); under the fingertip the face
+    // stays at rest.
     largestMovement_ = updateStudy(playScale_ * a);
+    if (auto* node = logic_.scene().nodeAs<SurfaceNode>(faceId_); node && face_)
+    {
+      const Eigen::VectorXd faceA = pushing_ ? Eigen::VectorXd::Zero(a.size()) : Eigen::VectorXd(playScale_ * a);
+      expression::applyActivations(*model_, faceA, face_, scratch_);
+      if (faceAround_)
+        faceAround_->Modified();
+      node->modified();
+    }
     lastUpdateMs_ = clock.nsecsElapsed() / 1e6;
     info_->setText(tr("%1: the skin moves up to %2 mm from the plan at rest. Slider update: %3 ms.")
                      .arg(pushing_ ? tr("Pushed by the fingertip") : tr("Under the expression"))
@@ -1095,9 +1107,26 @@ void ExpressionPanel::showStudy()
   if (!planStudy_ || !planSkinId_.empty())
     return;
   Scene& scene = logic_.scene();
-  // The plan's skin replaces the face (they lie on the same skin).
-  if (auto* face = scene.nodeAs<SurfaceNode>(faceId_))
-    face->setVisible(false);
+  // The face keeps the cells around the plan's region and gives up those
+  // under it to the plan's skin (they lie on the same skin).
+  if (auto* face = scene.nodeAs<SurfaceNode>(faceId_); face && face_)
+  {
+    const std::vector<char> under = planStudy_->faceCellsUnderPlan(expression::expressionPolyData(*model_));
+    faceAround_ = vtkSmartPointer<vtkPolyData>::New();
+    faceAround_->SetPoints(face_->GetPoints());
+    faceAround_->GetPointData()->ShallowCopy(face_->GetPointData());
+    faceAround_->GetFieldData()->ShallowCopy(face_->GetFieldData());
+    auto polys = vtkSmartPointer<vtkCellArray>::New();
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    face_->GetPolys()->InitTraversal();
+    for (std::size_t cell = 0; face_->GetPolys()->GetNextCell(n, ids); ++cell)
+      if (cell >= under.size() || !under[cell])
+        polys->InsertNextCell(n, ids);
+    faceAround_->SetPolys(polys);
+    face->setPolyData(faceAround_);
+    face->setColourArray("skin_colour");
+  }
   planSkin_ = planStudy_->polyData();
   auto mark = vtkSmartPointer<vtkStringArray>::New();
   mark->SetName(kStudyArray);
@@ -1122,8 +1151,12 @@ void ExpressionPanel::releaseStudy()
     scene.removeNode(id);
   }
   planSkin_ = nullptr;
-  if (auto* face = scene.nodeAs<SurfaceNode>(faceId_); face && !face->visible())
-    face->setVisible(true);
+  if (auto* face = scene.nodeAs<SurfaceNode>(faceId_); face && faceAround_)
+  {
+    face->setPolyData(face_);
+    face->setColourArray("skin_colour");
+  }
+  faceAround_ = nullptr;
 }
 
 double ExpressionPanel::updateStudy(const Eigen::VectorXd& activations)

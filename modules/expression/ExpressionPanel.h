@@ -133,6 +133,9 @@ private:
   /// Per built-in expression, its activations on the model's muscles.
   std::vector<Eigen::VectorXd> expressionActivations_;
   vtkSmartPointer<vtkPolyData> face_;
+  /// While a plan is studied: the face without the cells under the plan's
+  /// region (its points are face_'s), so the plan's skin shows in its face.
+  vtkSmartPointer<vtkPolyData> faceAround_;
   NodeId faceId_;
   std::vector<NodeId> hidden_; ///< surfaces hidden while the face shows
   Eigen::Matrix3Xd scratch_;

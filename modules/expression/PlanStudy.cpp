@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -181,6 +182,70 @@ Eigen::Vector3d PlanStudy::restSkinPoint(Eigen::Index v) const
   Eigen::Matrix3Xd at;
   surface_.positions(Eigen::VectorXd::Zero(muscleCount()), false, at);
   return at.col(v);
+}
+
+namespace {
+
+/// (arc mm from @a theta0 at radius @a r0, z) of @a x about the frame's axis.
+Eigen::Vector2d onCylinder(const seg::CylindricalFrame& frame, const Eigen::Vector3d& x, double theta0, double r0)
+{
+  const seg::CylindricalPoint c = frame.toCylindrical(x);
+  return {r0 * std::remainder(c.theta - theta0, 2.0 * std::numbers::pi), c.z};
+}
+
+/// Even-odd rule: whether @a p lies inside the closed polygon @a ring.
+bool inside(const std::vector<Eigen::Vector2d>& ring, const Eigen::Vector2d& p)
+{
+  bool in = false;
+  for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++)
+    if ((ring[i].y() > p.y()) != (ring[j].y() > p.y()) &&
+        p.x() < ring[j].x() + (ring[i].x() - ring[j].x()) * (p.y() - ring[j].y()) / (ring[i].y() - ring[j].y()))
+      in = !in;
+  return in;
+}
+
+} // namespace
+
+std::vector<Eigen::Vector2d> PlanStudy::rimOnSkin() const
+{
+  const fem::ContinuumMesh& c = prediction_.continuum;
+  const std::vector<int>& border = prediction_.surface.mesh.outerBorder;
+  if (border.size() < 3)
+    return {};
+  // The skin nodes of the rim before the operation (the undeformed mesh).
+  const Eigen::Vector3d first = c.mesh.nodes.col(c.vertexColumns[std::size_t(border.front())].front());
+  const seg::CylindricalPoint origin = frame_.toCylindrical(first);
+  std::vector<Eigen::Vector2d> ring;
+  for (int v : border)
+    ring.push_back(onCylinder(frame_, c.mesh.nodes.col(c.vertexColumns[std::size_t(v)].front()), origin.theta,
+                              origin.r));
+  return ring;
+}
+
+std::vector<char> PlanStudy::faceCellsUnderPlan(vtkPolyData* face) const
+{
+  std::vector<char> under(face ? std::size_t(face->GetNumberOfCells()) : 0, 0);
+  const std::vector<Eigen::Vector2d> ring = rimOnSkin();
+  if (!face || ring.empty())
+    return under;
+  const fem::ContinuumMesh& c = prediction_.continuum;
+  const seg::CylindricalPoint origin = frame_.toCylindrical(
+    c.mesh.nodes.col(c.vertexColumns[std::size_t(prediction_.surface.mesh.outerBorder.front())].front()));
+  vtkIdType n = 0;
+  const vtkIdType* ids = nullptr;
+  vtkCellArray* polys = face->GetPolys();
+  polys->InitTraversal();
+  // A cell is under the plan when all its corners are: a cell the rim cuts
+  // stays, overlapping the plan's skin by less than a cell where both follow
+  // the same face, rather than leaving a gap.
+  for (std::size_t cell = 0; polys->GetNextCell(n, ids) && cell < under.size(); ++cell)
+  {
+    bool all = n > 0;
+    for (vtkIdType k = 0; k < n && all; ++k)
+      all = inside(ring, onCylinder(frame_, Eigen::Vector3d(face->GetPoint(ids[k])), origin.theta, origin.r));
+    under[cell] = all;
+  }
+  return under;
 }
 
 vtkSmartPointer<vtkPolyData> PlanStudy::polyData() const

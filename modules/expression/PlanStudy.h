@@ -139,6 +139,17 @@ public:
   /// (no range detail, no load): a fingertip's centre.
   Eigen::Vector3d restSkinPoint(Eigen::Index v) const;
 
+  /// The rim of the plan's meshed region (its outer border, counter-clockwise
+  /// seen from outside) on the skin before the operation, as (arc mm about
+  /// the head axis from the rim's first point, z mm): a closed polygon.
+  std::vector<Eigen::Vector2d> rimOnSkin() const;
+  /// @brief For each cell of @a face (a display skin at rest, e.g.
+  /// expressionPolyData()), whether it lies over the plan's region: every
+  /// corner inside rimOnSkin() (the excised hole included). The face drawn
+  /// without them frames the plan's skin, whose rim follows the face (§5.4);
+  /// the cells the rim cuts stay, so there is no gap between the two.
+  std::vector<char> faceCellsUnderPlan(vtkPolyData* face) const;
+
   /// The display skin as polydata at rest: points, polygons and the RGB
   /// array skin_colour (the shade), as expressionPolyData() makes the face's.
   vtkSmartPointer<vtkPolyData> polyData() const;

@@ -13,6 +13,8 @@
 #include <numbers>
 
 #include <Eigen/Dense>
+#include <vtkCellArray.h>
+#include <vtkPolyData.h>
 
 #include "SampleFace.h"
 #include "modules/expression/PlanStudy.h"
@@ -230,6 +232,61 @@ TEST(PlanStudy, TheSuperposedPushEqualsAPushFactoredAfresh)
   std::printf("[plan study] push by superposition vs factored afresh: %.1e relative\n", relative);
   EXPECT_LT(relative, 1e-9);
   EXPECT_GT((superposed - study.prediction().displacements).cwiseAbs().maxCoeff(), 1.0);
+}
+
+TEST(PlanStudy, TheFaceCellsUnderThePlanCoverTheRegionInsideItsRim)
+{
+  const Studied& s = studied();
+  const PlanStudy& study = *s.study;
+  const vtkSmartPointer<vtkPolyData> face = expressionPolyData(*s.model);
+  const std::vector<char> under = study.faceCellsUnderPlan(face);
+  ASSERT_EQ(under.size(), std::size_t(face->GetNumberOfCells()));
+
+  // Two measures of the same area on the cylinder (arc, z): the rim's
+  // polygon (shoelace), and the face cells marked, each by its own polygon.
+  // They differ only by the cells the rim cuts: at most a band one cell wide.
+  const std::vector<Eigen::Vector2d> rim = study.rimOnSkin();
+  ASSERT_GT(rim.size(), 8u);
+  const auto shoelace = [](const std::vector<Eigen::Vector2d>& ring) {
+    double twice = 0.0;
+    for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++)
+      twice += ring[j].x() * ring[i].y() - ring[i].x() * ring[j].y();
+    return 0.5 * std::abs(twice);
+  };
+  double perimeter = 0.0;
+  for (std::size_t i = 0, j = rim.size() - 1; i < rim.size(); j = i++)
+    perimeter += (rim[i] - rim[j]).norm();
+  const incision::PlanPrediction& p = study.prediction();
+  const seg::CylindricalFrame& frame = test::sampleFace().maps.skin.frame();
+  const seg::CylindricalPoint origin = frame.toCylindrical(
+    p.continuum.mesh.nodes.col(p.continuum.vertexColumns[std::size_t(p.surface.mesh.outerBorder.front())].front()));
+  double marked = 0.0, largestCell = 0.0;
+  int count = 0;
+  vtkIdType n = 0;
+  const vtkIdType* ids = nullptr;
+  face->GetPolys()->InitTraversal();
+  for (std::size_t cell = 0; face->GetPolys()->GetNextCell(n, ids); ++cell)
+  {
+    std::vector<Eigen::Vector2d> polygon;
+    for (vtkIdType k = 0; k < n; ++k)
+    {
+      const seg::CylindricalPoint c = frame.toCylindrical(Eigen::Vector3d(face->GetPoint(ids[k])));
+      polygon.emplace_back(origin.r * std::remainder(c.theta - origin.theta, 2.0 * std::numbers::pi), c.z);
+    }
+    const double area = shoelace(polygon);
+    if (under[cell])
+    {
+      marked += area;
+      ++count;
+      largestCell = std::max(largestCell, area);
+    }
+  }
+  const double rimArea = shoelace(rim);
+  std::printf("[face around plan] rim %.0f mm^2 (perimeter %.0f mm); %d face cells under it, %.0f mm^2\n", rimArea,
+              perimeter, count, marked);
+  EXPECT_GT(rimArea, std::numbers::pi * 20.0 * 20.0) << "the region reaches 25 mm beyond the hole";
+  EXPECT_NEAR(marked, rimArea, perimeter * std::sqrt(largestCell));
+  EXPECT_LT(count, int(under.size()) / 2) << "most of the face is outside the plan";
 }
 
 TEST(PlanStudy, WithoutAFaceModelTheErrorSaysWhatToDo)

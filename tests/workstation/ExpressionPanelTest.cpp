@@ -4,6 +4,7 @@
 // going up), the smile saved, changed and recalled, played, and kept in the
 // saved scene.
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -406,7 +407,10 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   ASSERT_NE(planSkin, nullptr);
   EXPECT_TRUE(planSkin->visible());
   EXPECT_EQ(planSkin->colourArray(), "skin_colour");
-  EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Face expression")->visible()) << "the face shows under the plan's skin";
+  SurfaceNode* faceNode = test::nodeNamed<SurfaceNode>(scene, "Face expression");
+  ASSERT_NE(faceNode, nullptr);
+  EXPECT_TRUE(faceNode->visible()) << "the face frames the plan's skin";
+  const vtkIdType faceCells = faceNode->polyData()->GetNumberOfCells();
   ASSERT_NE(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after"), nullptr);
   EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after")->visible());
   std::cout << "[plan under expression] at rest: " << bumps->text().toStdString() << "\n";
@@ -433,6 +437,15 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
       input.bone = RangeMapLogic::toRangeMap(*static_cast<RangeMapNode*>(n));
   const std::unique_ptr<expression::PlanStudy> study = expression::PlanStudy::build(input);
   ASSERT_NE(study, nullptr);
+  // The face shown around the plan: every cell of the face at rest but
+  // those under the plan's region, so they do not cover its skin.
+  {
+    const auto fullFace = expression::expressionPolyData(*input.model);
+    const std::vector<char> under = study->faceCellsUnderPlan(fullFace);
+    const auto covered = std::count(under.begin(), under.end(), char(1));
+    EXPECT_GT(covered, 0);
+    EXPECT_EQ(faceCells, fullFace->GetNumberOfCells() - vtkIdType(covered));
+  }
   ASSERT_EQ(planSkin->polyData()->GetNumberOfPoints(), study->surface().vertexCount());
   Eigen::Matrix3Xd expected;
   const Eigen::VectorXd atRest = Eigen::VectorXd::Zero(study->muscleCount());
@@ -552,6 +565,8 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   workstation.settle(100);
   EXPECT_EQ(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression"), nullptr);
   EXPECT_TRUE(test::nodeNamed<SurfaceNode>(scene, "Face expression")->visible());
+  EXPECT_GT(test::nodeNamed<SurfaceNode>(scene, "Face expression")->polyData()->GetNumberOfCells(), faceCells)
+    << "the whole face again";
   EXPECT_FALSE(fingertip->isEnabled());
   EXPECT_TRUE(workstation.window().reportedErrors().empty()) << workstation.errors();
 }
