@@ -316,24 +316,7 @@ TEST(ExpressionPanel, TheMixIsExportedAsAnAnimation)
 
   setSlider(smile, 100);
   const std::filesystem::path folder = test::scratchFolder();
-  auto answered = std::make_shared<bool>(false);
-  auto* timer = new QTimer(&workstation.window());
-  timer->setInterval(50);
-  QObject::connect(timer, &QTimer::timeout, [timer, folder, answered] {
-    auto* dialog = qobject_cast<QFileDialog*>(QApplication::activeModalWidget());
-    if (!dialog)
-    {
-      if (*answered)
-        timer->stop();
-      return;
-    }
-    dialog->selectFile(QString::fromStdString(folder.string()));
-    if (auto* edit = dialog->findChild<QLineEdit*>("fileNameEdit"))
-      edit->setText(QString::fromStdString(folder.string()));
-    QMetaObject::invokeMethod(dialog, "accept", Qt::QueuedConnection);
-    *answered = true;
-  });
-  timer->start();
+  answerFolderDialog(&workstation.window(), folder);
   QTest::mouseClick(exportButton, Qt::LeftButton);
   EXPECT_EQ(workstation.window().reportedErrors().size(), errorsBefore + 1) << workstation.errors();
   const std::filesystem::path frames = folder / "expression";
