@@ -55,6 +55,18 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
         map.offset[Eigen::Index(d)] != map.offset[representative[std::size_t(r)]])
       needAux = true;
   }
+  // General rows of T (equations), u_d = sum c_k Ubar_k + g_d, written over
+  // the representatives: u_d - sum c_k u_rep(k) - beta u_aux = 0 with
+  // beta = g_d - sum c_k g_rep(k). A row without terms is a *BOUNDARY.
+  std::vector<double> generalBeta(map.general.size(), 0.0);
+  for (std::size_t g = 0; g < map.general.size(); ++g) {
+    double beta = map.offset[map.general[g]];
+    for (int e = map.generalStart[g]; e < map.generalStart[g + 1]; ++e)
+      beta -= map.generalCoefficient[std::size_t(e)] *
+              map.offset[representative[std::size_t(map.generalIndex[std::size_t(e)])]];
+    generalBeta[g] = beta;
+    if (beta != 0.0 && map.generalStart[g + 1] > map.generalStart[g]) needAux = true;
+  }
   const Eigen::Index aux = n + 1;
   if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
 
@@ -114,11 +126,39 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     if (beta != 0.0) o << ", " << aux << ", 1, " << -beta;
     o << "\n";
   }
+  // Equations (resolved, so no dependent DOF appears in another equation):
+  // ccx reads at most 4 terms (12 fields) per line.
+  for (std::size_t g = 0; g < map.general.size(); ++g) {
+    const int first = map.generalStart[g], last = map.generalStart[g + 1];
+    if (first == last) continue;
+    if (!equationHeader) o << "*EQUATION\n";
+    equationHeader = true;
+    const int d = map.general[g];
+    const double beta = generalBeta[g];
+    o << 1 + (last - first) + (beta != 0.0 ? 1 : 0) << "\n" << d / 3 + 1 << ", " << d % 3 + 1 << ", 1.0";
+    int written = 1;
+    const auto term = [&o, &written](long node, int direction, double coefficient) {
+      o << (written % 4 == 0 ? "\n" : ", ") << node << ", " << direction << ", " << coefficient;
+      ++written;
+    };
+    for (int e = first; e < last; ++e) {
+      const int rep = representative[std::size_t(map.generalIndex[std::size_t(e)])];
+      term(rep / 3 + 1, rep % 3 + 1, -map.generalCoefficient[std::size_t(e)]);
+    }
+    if (beta != 0.0) term(long(aux), 1, -beta);
+    o << "\n";
+  }
   o << "*STEP\n*STATIC\n*BOUNDARY\n";
   if (needAux) o << aux << ", 1, 1, 1.0\n" << aux << ", 2, 3, 0.0\n";
-  for (std::size_t d = 0; d < map.reduced.size(); ++d)
-    if (map.reduced[d] < 0)
-      o << d / 3 + 1 << ", " << d % 3 + 1 << ", " << d % 3 + 1 << ", " << map.offset[Eigen::Index(d)] << "\n";
+  for (std::size_t d = 0, g = 0; d < map.reduced.size(); ++d) {
+    if (map.reduced[d] >= 0) continue;
+    if (g < map.general.size() && map.general[g] == int(d)) {
+      const bool hasTerms = map.generalStart[g + 1] > map.generalStart[g];
+      ++g;
+      if (hasTerms) continue;  // written as an *EQUATION
+    }
+    o << d / 3 + 1 << ", " << d % 3 + 1 << ", " << d % 3 + 1 << ", " << map.offset[Eigen::Index(d)] << "\n";
+  }
   if (!load.nodalForces.empty() || !load.muscles.empty()) {
     // Sum forces per node so each (node, direction) appears once.
     std::map<int, Eigen::Vector3d> forces;

@@ -18,6 +18,90 @@ void checkNode(int node, Eigen::Index n, const std::string& what) {
                                 ", but the mesh has nodes 0.." + std::to_string(n - 1));
 }
 
+std::string dofName(int dof) { return "node " + std::to_string(dof / 3) + " " + axisName(dof % 3); }
+
+/// One equation with its terms moved to root DOFs (through sutures), summed,
+/// zeros dropped: lead u_dependent + sum others = value.
+struct RootEquation {
+  int dependent = -1;
+  double lead = 0.0;
+  std::vector<std::pair<int, double>> others;  ///< (root DOF, coefficient)
+  double value = 0.0;
+};
+
+/// A resolved row of T: sum c Ubar_i + constant.
+struct ResolvedRow {
+  std::vector<std::pair<int, double>> terms;  ///< (reduced DOF, coefficient), ascending, merged
+  double constant = 0.0;
+};
+
+/// Substitutes equations into each other, depth first (cascades), detecting
+/// closed loops of dependent DOFs.
+class EquationResolver {
+public:
+  EquationResolver(const std::vector<RootEquation>& equations, const std::vector<int>& equationOf,
+                   const std::vector<char>& isPrescribed, const Eigen::VectorXd& value, const std::vector<int>& reduced)
+      : equations_(equations),
+        equationOf_(equationOf),
+        isPrescribed_(isPrescribed),
+        value_(value),
+        reduced_(reduced),
+        rows_(equations.size()),
+        state_(equations.size(), 0) {}
+
+  const ResolvedRow& row(int e) {
+    if (state_[std::size_t(e)] == 2) return rows_[std::size_t(e)];
+    const RootEquation& q = equations_[std::size_t(e)];
+    if (state_[std::size_t(e)] == 1) {
+      std::string loop;
+      auto at = std::find(path_.begin(), path_.end(), q.dependent);
+      for (; at != path_.end(); ++at) loop += dofName(*at) + " -> ";
+      throw std::invalid_argument("equations form a closed loop of dependent degrees of freedom: " + loop +
+                                  dofName(q.dependent) + "; begin one of these equations with another term");
+    }
+    state_[std::size_t(e)] = 1;
+    path_.push_back(q.dependent);
+    ResolvedRow r;
+    r.constant = q.value / q.lead;
+    for (const auto& [dof, c] : q.others) {
+      const double f = -c / q.lead;
+      if (isPrescribed_[std::size_t(dof)]) {
+        r.constant += f * value_[dof];
+      } else if (const int other = equationOf_[std::size_t(dof)]; other >= 0) {
+        const ResolvedRow& sub = row(other);
+        r.constant += f * sub.constant;
+        for (const auto& [i, ci] : sub.terms) r.terms.push_back({i, f * ci});
+      } else {
+        r.terms.push_back({reduced_[std::size_t(dof)], f});
+      }
+    }
+    std::sort(r.terms.begin(), r.terms.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<int, double>> merged;
+    for (const auto& t : r.terms)
+      if (!merged.empty() && merged.back().first == t.first)
+        merged.back().second += t.second;
+      else
+        merged.push_back(t);
+    merged.erase(std::remove_if(merged.begin(), merged.end(), [](const auto& t) { return t.second == 0.0; }),
+                 merged.end());
+    r.terms = std::move(merged);
+    path_.pop_back();
+    state_[std::size_t(e)] = 2;
+    rows_[std::size_t(e)] = std::move(r);
+    return rows_[std::size_t(e)];
+  }
+
+private:
+  const std::vector<RootEquation>& equations_;
+  const std::vector<int>& equationOf_;
+  const std::vector<char>& isPrescribed_;
+  const Eigen::VectorXd& value_;
+  const std::vector<int>& reduced_;
+  std::vector<ResolvedRow> rows_;
+  std::vector<char> state_;  ///< 0 not yet, 1 on the current path, 2 resolved
+  std::vector<int> path_;
+};
+
 }  // namespace
 
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
@@ -83,6 +167,65 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
     for (int p : path) root[p] = r;
   }
 
+  // Equations: terms moved to root DOFs (u_i = u_root + x_root - x_i), summed.
+  std::vector<RootEquation> equations;
+  std::vector<int> equationOf(c.equations.empty() ? 0 : std::size_t(ndof), -1);
+  for (std::size_t e = 0; e < c.equations.size(); ++e) {
+    const LinearConstraint& q = c.equations[e];
+    const std::string which = "equation " + std::to_string(e);
+    if (q.terms.empty()) throw std::invalid_argument(which + " has no terms");
+    for (const ConstraintTerm& t : q.terms) {
+      checkNode(t.node, n, which);
+      if (t.direction < 0 || t.direction > 2)
+        throw std::invalid_argument(which + " has a term on node " + std::to_string(t.node) + " in direction " +
+                                    std::to_string(t.direction) + " (0, 1, 2 for x, y, z)");
+      if (!std::isfinite(t.coefficient))
+        throw std::invalid_argument(which + " has a non-finite coefficient for node " + std::to_string(t.node) +
+                                    " " + axisName(t.direction));
+    }
+    const int dependent = 3 * q.terms[0].node + q.terms[0].direction;
+    const std::string name = which + " (dependent DOF " + dofName(dependent) + ")";
+    if (!std::isfinite(q.value)) throw std::invalid_argument(name + " has a non-finite value");
+    if (q.terms[0].coefficient == 0.0)
+      throw std::invalid_argument(name + " has a zero coefficient in its first term, which is the DOF it "
+                                  "eliminates; begin it with a term whose coefficient is not zero");
+    if (isPrescribed[std::size_t(dependent)])
+      throw std::invalid_argument(dofName(dependent) + " is prescribed and also the dependent DOF (first term) of " +
+                                  which + "; begin the equation with another term");
+    if (sutureTarget[std::size_t(q.terms[0].node)] >= 0)
+      throw std::invalid_argument(dofName(dependent) + " is sutured to node " +
+                                  std::to_string(sutureTarget[std::size_t(q.terms[0].node)]) +
+                                  " and also the dependent DOF (first term) of " + which +
+                                  "; begin the equation with another term");
+    if (const int other = equationOf[std::size_t(dependent)]; other >= 0)
+      throw std::invalid_argument(dofName(dependent) + " is the dependent DOF (first term) of two equations, " +
+                                  std::to_string(other) + " and " + std::to_string(e) +
+                                  "; begin one of them with another term");
+    equationOf[std::size_t(dependent)] = int(equations.size());
+    RootEquation r;
+    r.dependent = dependent;
+    r.value = q.value;
+    for (const ConstraintTerm& t : q.terms) {
+      if (t.coefficient == 0.0) continue;
+      const int rootNode = root[std::size_t(t.node)];
+      const int dof = 3 * rootNode + t.direction;
+      r.value -= t.coefficient * (mesh.nodes(t.direction, rootNode) - mesh.nodes(t.direction, t.node));
+      auto at = std::find_if(r.others.begin(), r.others.end(), [dof](const auto& o) { return o.first == dof; });
+      if (at == r.others.end())
+        r.others.push_back({dof, t.coefficient});
+      else
+        at->second += t.coefficient;
+    }
+    auto lead = std::find_if(r.others.begin(), r.others.end(), [dependent](const auto& o) { return o.first == dependent; });
+    r.lead = lead->second;
+    r.others.erase(lead);
+    if (r.lead == 0.0)
+      throw std::invalid_argument(name + ": the terms on its dependent DOF cancel out (coefficients sum to zero)");
+    r.others.erase(std::remove_if(r.others.begin(), r.others.end(), [](const auto& o) { return o.second == 0.0; }),
+                   r.others.end());
+    equations.push_back(std::move(r));
+  }
+
   ConstraintMap map;
   map.reduced.assign(ndof, -1);
   map.offset = Eigen::VectorXd::Zero(ndof);
@@ -93,10 +236,34 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
       const int dof = 3 * i + d;
       if (isPrescribed[dof]) {
         map.offset[dof] = value[dof];
+      } else if (!equationOf.empty() && equationOf[std::size_t(dof)] >= 0) {
+        continue;  // a general row, below
       } else {
         map.reduced[dof] = int(map.masterOf.size());
         map.masterOf.push_back(dof);
       }
+    }
+  }
+  // Dependent DOFs of equations, substituted in cascade.
+  std::vector<const ResolvedRow*> rowOfRoot(equations.empty() ? 0 : std::size_t(ndof), nullptr);
+  if (!equations.empty()) {
+    EquationResolver resolver(equations, equationOf, isPrescribed, value, map.reduced);
+    for (std::size_t e = 0; e < equations.size(); ++e) {
+      const ResolvedRow& r = resolver.row(int(e));
+      map.offset[equations[e].dependent] = r.constant;
+    }
+    for (std::size_t e = 0; e < equations.size(); ++e)
+      rowOfRoot[std::size_t(equations[e].dependent)] = &resolver.row(int(e));
+    // Rows of T for them and for the DOFs sutured onto them, in DOF order.
+    for (int dof = 0; dof < ndof; ++dof) {
+      const ResolvedRow* r = rowOfRoot[std::size_t(3 * root[std::size_t(dof / 3)] + dof % 3)];
+      if (!r) continue;
+      map.general.push_back(dof);
+      for (const auto& [i, ci] : r->terms) {
+        map.generalIndex.push_back(i);
+        map.generalCoefficient.push_back(ci);
+      }
+      map.generalStart.push_back(int(map.generalIndex.size()));
     }
   }
   // Slaves: u_i = u_root + (x_root - x_i), summed along the chain telescopes to this.
@@ -112,6 +279,14 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
   return map;
 }
 
+struct ConstraintMap::ReductionPlan {
+  Eigen::Index rows = 0, kNonZeros = 0, kbarNonZeros = 0;
+  std::size_t outerHash = 0;  ///< of K's column starts: a cheap check of the pattern
+  std::vector<int> source;    ///< per contribution, in summation order: K's value index
+  std::vector<double> weight;
+  std::vector<int> target;    ///< K̄'s value index
+};
+
 Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatrix<double>& k) const {
   // Each full DOF stands for at most one reduced DOF with coefficient 1, so
   // T^T K T just renames rows and columns and sums what lands together.
@@ -120,7 +295,7 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
   const Eigen::Index n = reducedCount();
   // Fixed and prescribed DOFs only (no sutures): K-bar is K without their
   // rows and columns, renumbered in the same order, so one copying pass.
-  bool selection = true;
+  bool selection = !hasGeneralRows();
   for (std::size_t d = 0, last = 0; d < reduced.size() && selection; ++d)
     if (reduced[d] >= 0) {
       selection = std::size_t(reduced[d]) == last;
@@ -153,36 +328,92 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
     return r;
   }
 
-  std::vector<int> count(std::size_t(n) + 1, 0);
-  auto target = [this](Eigen::Index i, Eigen::Index j, int& a, int& b) {
-    a = reduced[std::size_t(i)];
-    b = reduced[std::size_t(j)];
-    if (a > b) std::swap(a, b);
-  };
-  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
-      if (it.row() > j) continue;  // upper triangle only
-      int a, b;
-      target(it.row(), j, a, b);
-      if (a >= 0) ++count[std::size_t(b) + 1];
+  if (!hasGeneralRows()) return reduceGeneral(k, nullptr);
+  auto plan = std::make_shared<ReductionPlan>();
+  Eigen::SparseMatrix<double> r = reduceGeneral(k, plan.get());
+  plan_ = plan;
+  return r;
+}
+
+namespace {
+
+std::size_t outerHash(const Eigen::SparseMatrix<double>& k) {
+  std::size_t h = 1469598103934665603ull;
+  for (Eigen::Index j = 0; j <= k.outerSize(); ++j) h = (h ^ std::size_t(k.outerIndexPtr()[j])) * 1099511628211ull;
+  return h;
+}
+
+}  // namespace
+
+Eigen::SparseMatrix<double> ConstraintMap::reduceGeneral(const Eigen::SparseMatrix<double>& k,
+                                                         ReductionPlan* plan) const {
+  // T^T K T entry by entry: K_ij (i <= j) times each pair of row i's and row
+  // j's terms lands on K̄(min, max); from an off-diagonal K_ij a pair on one
+  // reduced DOF lands there twice (K_ij and K_ji). Rows with one coefficient-1
+  // term (sutures) give the weights 1 and 2 of a plain renaming. Counted into
+  // compressed columns directly (a triplet sort took most of the time);
+  // columns are then sorted and their duplicates summed.
+  const Eigen::Index n = reducedCount();
+  // Rows of T per full DOF.
+  std::vector<int> rowStart(reduced.size() + 1, 0);
+  std::vector<int> rowIndex;
+  std::vector<double> rowCoefficient;
+  rowIndex.reserve(reduced.size() + generalIndex.size());
+  rowCoefficient.reserve(rowIndex.capacity());
+  for (std::size_t d = 0, g = 0; d < reduced.size(); ++d) {
+    if (reduced[d] >= 0) {
+      rowIndex.push_back(reduced[d]);
+      rowCoefficient.push_back(1.0);
+    } else if (g < general.size() && general[g] == int(d)) {
+      for (int e = generalStart[g]; e < generalStart[g + 1]; ++e) {
+        rowIndex.push_back(generalIndex[std::size_t(e)]);
+        rowCoefficient.push_back(generalCoefficient[std::size_t(e)]);
+      }
+      ++g;
     }
+    rowStart[d + 1] = int(rowIndex.size());
+  }
+  const int* outerK = k.outerIndexPtr();
+  const int* innerK = k.innerIndexPtr();
+  const double* valuesK = k.valuePtr();
+  const auto columnEnd = [&k, outerK](Eigen::Index j) {
+    return k.isCompressed() ? outerK[j + 1] : outerK[j] + k.innerNonZeroPtr()[j];
+  };
+  // Calls f(K's value index, a, b, weight) for every contribution, in K's order.
+  const auto forEach = [&](auto&& f) {
+    for (Eigen::Index j = 0; j < k.outerSize(); ++j)
+      for (int p = outerK[j], end = columnEnd(j); p < end; ++p) {
+        const int i = innerK[p];
+        if (i > j) continue;  // upper triangle only
+        for (int x = rowStart[std::size_t(i)]; x < rowStart[std::size_t(i) + 1]; ++x)
+          for (int y = rowStart[std::size_t(j)]; y < rowStart[std::size_t(j) + 1]; ++y) {
+            int a = rowIndex[std::size_t(x)], b = rowIndex[std::size_t(y)];
+            if (i == j && a > b) continue;  // the pair (b, a) of the same row gives it
+            if (a > b) std::swap(a, b);
+            double w = rowCoefficient[std::size_t(x)] * rowCoefficient[std::size_t(y)];
+            if (a == b && i != j) w *= 2.0;  // K_ij and K_ji both land on the diagonal
+            f(p, a, b, w);
+          }
+      }
+  };
+
+  std::vector<int> count(std::size_t(n) + 1, 0);
+  forEach([&count](int, int, int b, double) { ++count[std::size_t(b) + 1]; });
   for (std::size_t c = 0; c < std::size_t(n); ++c) count[c + 1] += count[c];
   std::vector<int> rows(std::size_t(count.back()));
   std::vector<double> vals(rows.size());
+  std::vector<int> sources(plan ? rows.size() : 0);
+  std::vector<double> weights(plan ? rows.size() : 0);
   std::vector<int> fill(count.begin(), count.end() - 1);
-  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(k, j); it; ++it) {
-      const Eigen::Index i = it.row();
-      if (i > j) continue;
-      int a, b;
-      target(i, j, a, b);
-      if (a < 0) continue;
-      double v = it.value();
-      if (a == b && i != j) v *= 2.0;  // K_ij and K_ji both land on the diagonal
-      const int at = fill[std::size_t(b)]++;
-      rows[std::size_t(at)] = a;
-      vals[std::size_t(at)] = v;
+  forEach([&](int p, int a, int b, double w) {
+    const int at = fill[std::size_t(b)]++;
+    rows[std::size_t(at)] = a;
+    vals[std::size_t(at)] = valuesK[p] * w;
+    if (plan) {
+      sources[std::size_t(at)] = p;
+      weights[std::size_t(at)] = w;
     }
+  });
 
   Eigen::SparseMatrix<double> r(n, n);
   std::vector<int> order;
@@ -191,6 +422,14 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
   std::vector<double> values;
   inner.reserve(rows.size());
   values.reserve(rows.size());
+  if (plan) {
+    plan->source.clear();
+    plan->weight.clear();
+    plan->target.clear();
+    plan->source.reserve(rows.size());
+    plan->weight.reserve(rows.size());
+    plan->target.reserve(rows.size());
+  }
   for (Eigen::Index c = 0; c < n; ++c) {
     const int first = count[std::size_t(c)], last = count[std::size_t(c) + 1];
     order.resize(std::size_t(last - first));
@@ -208,6 +447,11 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
         inner.push_back(rows[std::size_t(e)]);
         values.push_back(vals[std::size_t(e)]);
       }
+      if (plan) {
+        plan->source.push_back(sources[std::size_t(e)]);
+        plan->weight.push_back(weights[std::size_t(e)]);
+        plan->target.push_back(int(inner.size()) - 1);
+      }
     }
     outer[std::size_t(c) + 1] = int(inner.size());
   }
@@ -215,16 +459,43 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceMatrix(const Eigen::SparseMatri
   std::copy(outer.begin(), outer.end(), r.outerIndexPtr());
   std::copy(inner.begin(), inner.end(), r.innerIndexPtr());
   std::copy(values.begin(), values.end(), r.valuePtr());
+  if (plan) {
+    plan->rows = k.rows();
+    plan->kNonZeros = k.nonZeros();
+    plan->kbarNonZeros = r.nonZeros();
+    plan->outerHash = outerHash(k);
+  }
   return r;
 }
 
 void ConstraintMap::reduceValues(const Eigen::SparseMatrix<double>& k, Eigen::SparseMatrix<double>& kbar) const {
-  bool selection = k.isCompressed();
+  bool selection = k.isCompressed() && !hasGeneralRows();
   for (std::size_t d = 0, last = 0; d < reduced.size() && selection; ++d)
     if (reduced[d] >= 0) {
       selection = std::size_t(reduced[d]) == last;
       ++last;
     }
+  if (!selection && hasGeneralRows() && k.isCompressed()) {
+    // Replay the scatter plan (made once per pattern): the same products,
+    // summed in the same order as reduceMatrix(), so the same values.
+    std::shared_ptr<const ReductionPlan> plan = plan_;
+    if (!plan || plan->rows != k.rows() || plan->kNonZeros != k.nonZeros() || plan->outerHash != outerHash(k)) {
+      auto fresh = std::make_shared<ReductionPlan>();
+      reduceGeneral(k, fresh.get());
+      plan_ = plan = fresh;
+    }
+    if (plan->kbarNonZeros != kbar.nonZeros() || kbar.rows() != reducedCount())
+      throw std::invalid_argument("reduceValues: the reduced matrix was made from another pattern");
+    double* values = kbar.valuePtr();
+    const double* valuesK = k.valuePtr();
+    std::fill(values, values + kbar.nonZeros(), 0.0);
+    const std::size_t m = plan->source.size();
+    const int* source = plan->source.data();
+    const int* target = plan->target.data();
+    const double* weight = plan->weight.data();
+    for (std::size_t e = 0; e < m; ++e) values[target[e]] += valuesK[source[e]] * weight[e];
+    return;
+  }
   if (!selection) {
     // Sutures sum entries into shared places: rebuild (same pattern, same order).
     Eigen::SparseMatrix<double> fresh = reduceMatrix(k);
@@ -254,16 +525,42 @@ Eigen::MatrixXd ConstraintMap::reduceVector(const Eigen::MatrixXd& r) const {
   Eigen::MatrixXd out = Eigen::MatrixXd::Zero(reducedCount(), r.cols());
   for (std::size_t d = 0; d < reduced.size(); ++d)
     if (reduced[d] >= 0) out.row(reduced[d]) += r.row(Eigen::Index(d));
+  for (std::size_t g = 0; g < general.size(); ++g)
+    for (int e = generalStart[g]; e < generalStart[g + 1]; ++e)
+      out.row(generalIndex[std::size_t(e)]) += generalCoefficient[std::size_t(e)] * r.row(general[g]);
   return out;
 }
 
-Eigen::MatrixXd ConstraintMap::expand(const Eigen::MatrixXd& ubar) const {
+Eigen::MatrixXd ConstraintMap::expand(const Eigen::MatrixXd& ubar) const { return expand(ubar, 1.0); }
+
+Eigen::MatrixXd ConstraintMap::expand(const Eigen::MatrixXd& ubar, double offsetScale) const {
   Eigen::MatrixXd u(Eigen::Index(reduced.size()), ubar.cols());
   for (std::size_t d = 0; d < reduced.size(); ++d) {
-    u.row(Eigen::Index(d)).setConstant(offset[Eigen::Index(d)]);
+    u.row(Eigen::Index(d)).setConstant(offsetScale * offset[Eigen::Index(d)]);
     if (reduced[d] >= 0) u.row(Eigen::Index(d)) += ubar.row(reduced[d]);
   }
+  for (std::size_t g = 0; g < general.size(); ++g)
+    for (int e = generalStart[g]; e < generalStart[g + 1]; ++e)
+      u.row(general[g]) += generalCoefficient[std::size_t(e)] * ubar.row(generalIndex[std::size_t(e)]);
   return u;
+}
+
+Eigen::SparseMatrix<double> ConstraintMap::transformation() const {
+  std::vector<Eigen::Triplet<double>> t;
+  for (std::size_t d = 0; d < reduced.size(); ++d)
+    if (reduced[d] >= 0) t.emplace_back(int(d), reduced[d], 1.0);
+  for (std::size_t g = 0; g < general.size(); ++g)
+    for (int e = generalStart[g]; e < generalStart[g + 1]; ++e)
+      t.emplace_back(general[g], generalIndex[std::size_t(e)], generalCoefficient[std::size_t(e)]);
+  Eigen::SparseMatrix<double> m(Eigen::Index(reduced.size()), reducedCount());
+  m.setFromTriplets(t.begin(), t.end());
+  return m;
+}
+
+bool ConstraintMap::sameTransformation(const ConstraintMap& other) const {
+  return reduced == other.reduced && masterOf == other.masterOf && general == other.general &&
+         generalStart == other.generalStart && generalIndex == other.generalIndex &&
+         generalCoefficient == other.generalCoefficient;
 }
 
 }  // namespace caps::fem

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <memory>
 #include <vector>
 
 namespace caps::fem {
@@ -22,8 +23,27 @@ struct PrescribedDof {
   double value = 0.0;
 };
 
+/// One term c u(node, direction) of a linear multi-point constraint.
+struct ConstraintTerm {
+  int node = -1;
+  int direction = 0;  ///< 0 x, 1 y, 2 z
+  double coefficient = 0.0;
+};
+
 /**
- * @brief Essential conditions of a model: fixed and prescribed DOFs, sutures.
+ * @brief A linear multi-point constraint sum_k c_k u(node_k, direction_k) =
+ *        value (CalculiX/Abaqus *EQUATION, any number of terms). The first
+ *        term's DOF is the dependent one: it is eliminated, as in CalculiX.
+ *        Sliding on a plane (u . n = 0) and general ties are such equations.
+ */
+struct LinearConstraint {
+  std::vector<ConstraintTerm> terms;
+  double value = 0.0;  ///< mm (scaled with the load in a large-deformation step)
+};
+
+/**
+ * @brief Essential conditions of a model: fixed and prescribed DOFs, sutures,
+ *        general linear multi-point constraints.
  *
  * Only records them; resolveConstraints() turns them into the master-slave
  * map U = T Ubar + g.
@@ -31,6 +51,7 @@ struct PrescribedDof {
 struct Constraints {
   std::vector<PrescribedDof> prescribed;
   std::vector<Suture> sutures;
+  std::vector<LinearConstraint> equations;
 
   void fix(int node, int direction) { prescribed.push_back({node, direction, 0.0}); }
   void fixNode(int node) {
@@ -40,6 +61,7 @@ struct Constraints {
     prescribed.push_back({node, direction, value});
   }
   void suture(int node, int target) { sutures.push_back({node, target}); }
+  void equation(LinearConstraint c) { equations.push_back(std::move(c)); }
 };
 
 /**
@@ -47,28 +69,61 @@ struct Constraints {
  *        by substitution, so the reduced system stays symmetric positive
  *        definite).
  *
- * Each full DOF d maps to at most one reduced DOF with coefficient 1:
+ * Most full DOFs map to at most one reduced DOF with coefficient 1:
  * U_d = Ubar_{reduced[d]} + g_d, or U_d = g_d when reduced[d] = -1
  * (prescribed, or sutured, maybe through a chain, onto a prescribed DOF).
  * For a suture of node i onto s, u_i = u_s + (x_s - x_i) per direction
  * (eq. 4.44-4.45); chains i -> s -> m resolve to m with summed offsets.
+ *
+ * The dependent DOF of a general equation (and any DOF sutured onto one)
+ * has reduced[d] = -1 too, but a general row of T: U_d = sum_k c_k
+ * Ubar_{i_k} + g_d, listed in @ref general. Without equations @ref general
+ * is empty and every operation takes the plain copying path it always had.
  */
 struct ConstraintMap {
-  std::vector<int> reduced;     ///< per full DOF: reduced index or -1
+  std::vector<int> reduced;     ///< per full DOF: reduced index, or -1 (prescribed, or a general row)
   Eigen::VectorXd offset;       ///< g, size 3N
   std::vector<int> masterOf;    ///< per reduced DOF: the full DOF it stands for
+  /// Full DOFs with a general row of T (dependent DOFs of equations and the
+  /// DOFs sutured onto them), ascending.
+  std::vector<int> general;
+  /// Row of T of general[k]: entries generalStart[k] .. generalStart[k+1]-1 of
+  /// generalIndex (reduced DOFs, ascending) and generalCoefficient; may be
+  /// empty (U_d = g_d, every term of its equation prescribed).
+  std::vector<int> generalStart{0};
+  std::vector<int> generalIndex;
+  std::vector<double> generalCoefficient;
+
   Eigen::Index reducedCount() const { return Eigen::Index(masterOf.size()); }
+  bool hasGeneralRows() const { return !general.empty(); }
+  /// T (3N x reducedCount()) as a sparse matrix, for checks and exporters.
+  Eigen::SparseMatrix<double> transformation() const;
+  /// True when @a other has the same T (only g may differ): K̄ is the same.
+  bool sameTransformation(const ConstraintMap& other) const;
 
   /// K̄ = T^T K T from @a kUpper (upper triangle of K) to an upper-triangle K̄.
+  /// With general rows it also keeps the scatter plan reduceValues() reuses.
   Eigen::SparseMatrix<double> reduceMatrix(const Eigen::SparseMatrix<double>& kUpper) const;
   /// The values of T^T K T into @a kbar, which holds reduceMatrix()'s result
   /// for a matrix with @a kUpper's pattern (e.g. made from the pattern alone,
-  /// before the values were known): no new arrays.
+  /// before the values were known): no new arrays. With general rows the
+  /// scatter plan of the last reduceMatrix() call on this map (or one made
+  /// here once) is replayed; not to be called on one map from two threads.
   void reduceValues(const Eigen::SparseMatrix<double>& kUpper, Eigen::SparseMatrix<double>& kbar) const;
   /// T^T r for full-size vectors (one column per load case).
   Eigen::MatrixXd reduceVector(const Eigen::MatrixXd& r) const;
   /// U = T Ubar + g (one column per load case).
   Eigen::MatrixXd expand(const Eigen::MatrixXd& ubar) const;
+  /// U = T Ubar + @a offsetScale g: a load increment of a large-deformation
+  /// step applies that share of the prescribed values and suture gaps.
+  Eigen::MatrixXd expand(const Eigen::MatrixXd& ubar, double offsetScale) const;
+
+  /// For each contribution to K̄'s values: K's entry, weight, K̄'s entry.
+  struct ReductionPlan;
+
+private:
+  Eigen::SparseMatrix<double> reduceGeneral(const Eigen::SparseMatrix<double>& kUpper, ReductionPlan* plan) const;
+  mutable std::shared_ptr<const ReductionPlan> plan_;
 };
 
 /**
@@ -76,7 +131,15 @@ struct ConstraintMap {
  *        a node or direction out of range, a DOF prescribed twice with
  *        different values, a suture of a node to itself, a node sutured to two
  *        different targets, a prescribed node that is also sutured onto
- *        another, or a closed loop of sutures.
+ *        another, or a closed loop of sutures; and for equations: no terms, a
+ *        non-finite coefficient or value, a zero first coefficient, a
+ *        dependent DOF that is prescribed, sutured onto another node, or
+ *        dependent in two equations, and equations whose dependent DOFs depend
+ *        on each other in a closed loop.
+ *
+ * Equation terms with zero coefficients are dropped and terms on the same DOF
+ * (also through sutures) summed; other terms may be prescribed, sutured or
+ * dependent in other equations (resolved in cascade).
  */
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& constraints);
 

@@ -112,7 +112,8 @@ SolverStatus LinearStaticAnalysis::prepareStages() {
         std::vector<SparseCholeskySolver::AttachedGroup> midEdges;
         const std::vector<std::array<int, 2>> ends = edgeEndsOf(mesh_);
         // The group of a node: the node its free DOFs stand for (a sutured
-        // node's are its target's), -1 if it has none.
+        // node's are its target's), -1 if it has none (a node whose DOFs are
+        // all prescribed or dependent in equations).
         auto masterNode = [this](int node) {
           for (int c = 0; c < 3; ++c)
             if (const int r = map_.reduced[std::size_t(3 * node + c)]; r >= 0) return map_.masterOf[std::size_t(r)] / 3;
@@ -172,6 +173,7 @@ SolverStatus LinearStaticAnalysis::prepareStages() {
       const int dof = map_.masterOf[std::size_t(col)];
       m << ": node " << dof / 3 << " is free to move in " << "xyz"[dof % 3]
         << "; fix or suture more nodes";
+      if (map_.hasGeneralRows()) m << " (or check that the equations do not leave it free)";
     }
     m << " [solver, numbering the reduced system after constraints: " << message_ << "]";
     message_ = m.str();
@@ -228,9 +230,10 @@ Eigen::MatrixXd LinearStaticAnalysis::solveWithPrescribed(const Eigen::MatrixXd&
   if (r.rows() != mesh_.dofCount())
     throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: load vectors must have 3N rows");
   const ConstraintMap other = resolveConstraints(mesh_, constraints);
-  if (other.reduced != map_.reduced)
-    throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: the constraints fix or suture other "
-                                "degrees of freedom than the model was factored with");
+  if (!other.sameTransformation(map_))
+    throw std::invalid_argument("LinearStaticAnalysis::solveWithPrescribed: the constraints fix, suture or tie "
+                                "other degrees of freedom (or with other equation coefficients) than the model was "
+                                "factored with");
   const Eigen::VectorXd kg = k_.selfadjointView<Eigen::Upper>() * other.offset;
   return substitute(r, kg, other);
 }

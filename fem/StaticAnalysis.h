@@ -62,8 +62,9 @@ public:
   /// Displacements (3N) of one load case.
   Eigen::VectorXd solve(const LoadCase& load);
   /// Displacements (3N x cases) for full load vectors @a r under
-  /// @a constraints: the same DOFs prescribed and the same sutures as the
-  /// model was prepared with, other prescribed values (a submodel's boundary
+  /// @a constraints: the same DOFs prescribed, the same sutures and equations
+  /// with the same coefficients as the model was prepared with, other
+  /// prescribed values and equation right-hand sides (a submodel's boundary
   /// moved by the model around it, a fingertip's travel). K̄ does not change,
   /// so the factorization is reused: U = T Ū + g', K̄ Ū = T^T (R - K g').
   /// Throws std::invalid_argument when @a constraints constrain other DOFs,
