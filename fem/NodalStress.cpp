@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -106,20 +107,19 @@ NodalStressField recoverNodalStresses(const Mesh& mesh, const MaterialTable& mat
                                       int pointsPerDirection) {
   if (u.size() != mesh.dofCount())
     throw std::invalid_argument("recoverNodalStresses: the displacement vector must have 3N entries");
-  const Eigen::MatrixXd hexExtrapolation = gaussToNodeExtrapolation(pointsPerDirection);
-  Eigen::MatrixXd wedgeExtrapolation;
-  for (const Element& el : mesh.elements)
-    if (el.kind == ElementKind::Wedge15) {
-      wedgeExtrapolation = gaussToNodeExtrapolation(ElementKind::Wedge15, pointsPerDirection);
-      break;
-    }
+  // Extrapolation of each (kind, rule) in use: each element's own points.
+  std::map<std::pair<ElementKind, int>, Eigen::MatrixXd> extrapolations;
+  for (const Element& el : mesh.elements) {
+    const std::pair<ElementKind, int> key{el.kind, integrationPointsOf(el, pointsPerDirection)};
+    if (!extrapolations.count(key)) extrapolations[key] = gaussToNodeExtrapolation(key.first, key.second);
+  }
   NodalStressField field;
   field.stress = NodalStressMatrix::Zero(6, mesh.nodeCount());
   field.elementCount = Eigen::VectorXi::Zero(mesh.nodeCount());
   Eigen::Matrix<double, 6, Eigen::Dynamic> gauss;
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
-    const Eigen::MatrixXd& extrapolation =
-        mesh.elements[e].kind == ElementKind::Wedge15 ? wedgeExtrapolation : hexExtrapolation;
+    const Element& el = mesh.elements[e];
+    const Eigen::MatrixXd& extrapolation = extrapolations.at({el.kind, integrationPointsOf(el, pointsPerDirection)});
     const auto points = recoverStressAtGaussPoints(mesh, materials, u, int(e), pointsPerDirection);
     gauss.resize(6, Eigen::Index(points.size()));
     for (std::size_t p = 0; p < points.size(); ++p) gauss.col(Eigen::Index(p)) = points[p].stress;

@@ -52,6 +52,11 @@ Eigen::MatrixXd gaussToNodeExtrapolation(int pointsPerDirection);
  *        gaussToNodeExtrapolation() of its kind, then averaged (plain mean)
  *        over the elements sharing each node.
  *
+ * Each element uses its own rule, integrationPointsOf(element,
+ * @a pointsPerDirection): a deck's C3D20R extrapolates from its 2x2x2
+ * points, a C3D20 from its 3x3x3 ones (as ccx does); @a pointsPerDirection
+ * is the choice for elements that leave it to the analysis (0).
+ *
  * The default 2x2x2 points are the Barlow (superconvergent) points of the
  * 20-node brick; its trilinear extrapolation reproduces any stress field
  * linear in (r, s, t) exactly and does not amplify the cubic noise of the

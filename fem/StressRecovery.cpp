@@ -53,7 +53,8 @@ std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const Mate
                                                    const Eigen::VectorXd& u, int element,
                                                    int pointsPerDirection) {
   checkElement(mesh, element);
-  const IntegrationRule& rule = integrationRule(mesh.elements[std::size_t(element)].kind, pointsPerDirection);
+  const Element& el = mesh.elements[std::size_t(element)];
+  const IntegrationRule& rule = integrationRule(el.kind, integrationPointsOf(el, pointsPerDirection));
   std::vector<StressPoint> out;
   out.reserve(rule.size());
   for (const auto& p : rule.points) out.push_back(recoverStress(mesh, materials, u, element, p));

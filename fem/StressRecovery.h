@@ -33,9 +33,11 @@ struct StressPoint {
 StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
                           int element, const Eigen::Vector3d& rst);
 
-/// The same at every point of the element's rule, integrationRule(kind,
-/// @a pointsPerDirection): the n x n x n Gauss points of a brick, or
-/// wedgeRule(n) of a native wedge.
+/// The same at every point of the element's own rule, integrationRule(kind,
+/// integrationPointsOf(element, @a pointsPerDirection)): the n x n x n Gauss
+/// points of a brick (C3D20R's 2x2x2, C3D20's 3x3x3), or wedgeRule(n) of a
+/// native wedge. @a pointsPerDirection is the default for elements whose
+/// integrationPoints is 0. Points in gaussRule()/wedgeRule() order.
 std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const MaterialTable& materials,
                                                    const Eigen::VectorXd& u, int element,
                                                    int pointsPerDirection = 3);
