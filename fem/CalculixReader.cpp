@@ -102,6 +102,13 @@ private:
     if (s.empty() || *end != '\0') fail(line, "'" + s + "' is not an integer");
     return v;
   }
+  /// True if @a s is wholly an integer: a node or element number, not a set
+  /// name (set names may start with a digit, e.g. ELSET=1E).
+  static bool isInteger(const std::string& s) {
+    char* end = nullptr;
+    std::strtol(s.c_str(), &end, 10);
+    return !s.empty() && *end == '\0';
+  }
 
   std::string required(const std::map<std::string, std::string>& params, const std::string& name,
                        const std::string& keyword) const {
@@ -112,16 +119,20 @@ private:
 
   /// Node numbers of a node number or NSET name.
   std::vector<long> nodesOf(const std::string& field, int line) const {
-    if (!field.empty() && (std::isdigit(static_cast<unsigned char>(field[0])) || field[0] == '-'))
-      return {integer(field, line)};
+    if (isInteger(field)) return {integer(field, line)};
     auto it = nsets_.find(upper(field));
     if (it == nsets_.end()) fail(line, "unknown node set " + field);
     return it->second;
   }
   std::vector<long> elementsOf(const std::string& field, int line) const {
-    if (!field.empty() && std::isdigit(static_cast<unsigned char>(field[0]))) return {integer(field, line)};
-    auto it = elsets_.find(upper(field));
-    if (it == elsets_.end()) fail(line, "unknown element set " + field);
+    if (isInteger(field)) return {integer(field, line)};
+    return elementSet(field, line);
+  }
+  /// The members of the element set named @a name (an ELSET= parameter is
+  /// always a name, even if it looks like a number).
+  const std::vector<long>& elementSet(const std::string& name, int line) const {
+    auto it = elsets_.find(upper(name));
+    if (it == elsets_.end()) fail(line, "unknown element set " + name);
     return it->second;
   }
   int nodeIndex(long id, int line) const {
@@ -135,15 +146,19 @@ private:
     if (keyword == "*HEADING" || keyword == "*NODE FILE" || keyword == "*EL FILE" || keyword == "*NODE PRINT" ||
         keyword == "*EL PRINT" || keyword == "*END STEP")
       return;
+    // *CONTROLS changes how ccx converges, not what the model means.
+    if (keyword == "*CONTROLS") return;
     if (keyword == "*STEP") {
       if (++steps_ > 1) fail(line_, "a second *STEP: only one static step is supported");
-      if (params.count("NLGEOM") && params.at("NLGEOM") != "NO") fail(line_, "*STEP, NLGEOM is not supported (linear analysis only)");
+      if (params.count("NLGEOM")) {
+        const std::string v = params.at("NLGEOM");
+        if (v != "" && v != "YES" && v != "NO") fail(line_, "*STEP, NLGEOM=" + v + ": expected YES or NO");
+        nlgeom_ = v != "NO";
+      }
       return;
     }
-    if (keyword == "*STATIC") {
-      if (steps_ == 0) fail(line_, "*STATIC outside a *STEP");
-      return;
-    }
+    if (keyword == "*STATIC") return readStatic(params, data);
+    if (keyword == "*HYPERELASTIC") return readHyperelastic(params, data);
     if (keyword == "*NODE") return readNodes(params, data);
     if (keyword == "*ELEMENT") return readElements(params, data);
     if (keyword == "*NSET" || keyword == "*ELSET") return readSet(keyword, params, data);
@@ -157,12 +172,15 @@ private:
     }
     if (keyword == "*ELASTIC" || keyword == "*DENSITY") {
       if (material_.empty()) fail(line_, keyword + " outside a *MATERIAL");
-      if (keyword == "*ELASTIC" && params.count("TYPE") && params.at("TYPE") != "ISO")
+      if (keyword == "*ELASTIC" && hyperelastic_.count(materialIndex_[material_]))
+        fail(line_, "material " + material_ + " has both *ELASTIC and *HYPERELASTIC");
+      if (keyword == "*ELASTIC" && params.count("TYPE") && params.at("TYPE") != "ISO" && params.at("TYPE") != "ISOTROPIC")
         fail(line_, "*ELASTIC, TYPE=" + params.at("TYPE") + " is not supported (isotropic only)");
       if (data.size() != 1) fail(line_, keyword + " needs exactly one data line (temperature tables are not supported)");
       const auto f = split(data[0].text);
       LinearElasticMaterial& m = materials_[materialIndex_[material_]];
       if (keyword == "*ELASTIC") {
+        elastic_.insert(materialIndex_[material_]);
         if (f.size() < 2) fail(data[0].number, "*ELASTIC needs E, nu");
         m.youngsModulus = number(f[0], data[0].number);
         m.poissonRatio = number(f[1], data[0].number);
@@ -176,7 +194,7 @@ private:
       const std::string material = required(params, "MATERIAL", keyword);
       auto m = materialIndex_.find(material);
       if (m == materialIndex_.end()) fail(line_, "*SOLID SECTION names material " + material + ", which is not defined");
-      for (long e : elementsOf(elset, line_)) sections_[e] = m->second;
+      for (long e : elementSet(elset, line_)) sections_[e] = m->second;
       return;
     }
     if (keyword == "*BOUNDARY") return readBoundary(params, data);
@@ -215,6 +233,61 @@ private:
     fail(line_, "unsupported keyword " + keyword);
   }
 
+  /// *STATIC[, DIRECT] with the optional line: initial increment, step
+  /// period, minimum and maximum increment (ccx's defaults for empty fields).
+  void readStatic(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+    if (steps_ == 0) fail(line_, "*STATIC outside a *STEP");
+    step_.direct = params.count("DIRECT") && params.at("DIRECT") != "NO";
+    if (data.empty()) return;
+    if (data.size() > 1) fail(data[1].number, "*STATIC has one data line (initial, period, minimum, maximum)");
+    const auto f = split(data[0].text);
+    auto field = [&](std::size_t k, double fallback) {
+      return k < f.size() && !f[k].empty() ? number(f[k], data[0].number) : fallback;
+    };
+    step_.initialIncrement = field(0, step_.initialIncrement);
+    step_.period = field(1, step_.period);
+    step_.minimumIncrement = field(2, step_.minimumIncrement);
+    step_.maximumIncrement = field(3, step_.maximumIncrement);
+    if (!(step_.period > 0.0) || !(step_.initialIncrement > 0.0) || !(step_.minimumIncrement > 0.0) ||
+        !(step_.maximumIncrement > 0.0) || step_.minimumIncrement > step_.maximumIncrement)
+      fail(data[0].number, "*STATIC increments must be positive, with minimum <= maximum (initial, period, "
+                           "minimum, maximum)");
+  }
+
+  /// *HYPERELASTIC, NEO HOOKE (C10, D1) or MOONEY-RIVLIN (C10, C01, D1): the
+  /// Abaqus/CalculiX data line order (checked against ccx 2.20: C10 = 1,
+  /// D1 = 0.1 gives E = 5.806, nu = 0.4516).
+  void readHyperelastic(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+    if (material_.empty()) fail(line_, "*HYPERELASTIC outside a *MATERIAL");
+    const int region = materialIndex_[material_];
+    if (elastic_.count(region)) fail(line_, "material " + material_ + " has both *ELASTIC and *HYPERELASTIC");
+    static const std::set<std::string> kOtherTypes = {"POLYNOMIAL", "REDUCED POLYNOMIAL", "OGDEN", "YEOH",
+                                                      "ARRUDA-BOYCE", "VAN DER WAALS", "HYPERFOAM", "MARLOW"};
+    std::string type;
+    for (const auto& [name, value] : params) {
+      if (name == "NEO HOOKE" || name == "MOONEY-RIVLIN") type = name;
+      else if (kOtherTypes.count(name))
+        fail(line_, "*HYPERELASTIC, " + name + " is not supported (NEO HOOKE and MOONEY-RIVLIN are; "
+                    "POLYNOMIAL, N=1 is MOONEY-RIVLIN)");
+    }
+    for (const auto& [name, value] : params)
+      if (name != type) fail(line_, "*HYPERELASTIC, " + name + " is not supported");
+    if (type.empty()) fail(line_, "*HYPERELASTIC needs its type: NEO HOOKE or MOONEY-RIVLIN");
+    if (data.size() != 1)
+      fail(line_, "*HYPERELASTIC needs exactly one data line (temperature tables are not supported)");
+    const auto f = split(data[0].text);
+    const int at = data[0].number;
+    const std::size_t needed = type == "NEO HOOKE" ? 2 : 3;
+    for (std::size_t k = 0; k < needed; ++k)
+      if (k >= f.size() || f[k].empty())
+        fail(at, "*HYPERELASTIC, " + type + (needed == 2 ? " needs C10, D1" : " needs C10, C01, D1"));
+    hyperelastic_[region] = needed == 2
+                                ? HyperelasticMaterial::neoHookean(number(f[0], at), number(f[1], at))
+                                : HyperelasticMaterial::mooneyRivlin(number(f[0], at), number(f[1], at),
+                                                                     number(f[2], at));
+    hyperelasticLine_[region] = at;
+  }
+
   void readNodes(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
     std::vector<long>* set = params.count("NSET") ? &nsets_[params.at("NSET")] : nullptr;
     for (const Line& l : data) {
@@ -239,6 +312,13 @@ private:
     else if (type == "C3D15") count = 15;
     else if (type == "C3D8") count = 8;
     else fail(line_, "unsupported element type " + type + " (C3D20, C3D20R, C3D15 and C3D8 are)");
+    // The rule ccx integrates each type with: C3D20 3x3x3, C3D20R 2x2x2
+    // (reduced), C3D8 2x2x2 (its full rule), C3D15 the 9-point wedge rule
+    // (wedgeRule(2)). A C3D15 read as a degenerate brick has no ccx
+    // equivalent and takes the analysis's default.
+    std::uint8_t points = 3;
+    if (type == "C3D20R" || type == "C3D8") points = 2;
+    else if (count == 15) points = options_.nativeWedges ? 2 : 0;
     std::vector<long>* set = params.count("ELSET") ? &elsets_[params.at("ELSET")] : nullptr;
     std::vector<std::string> tokens;
     int first = 0;
@@ -256,6 +336,7 @@ private:
       for (int k = 1; k <= count; ++k) n.push_back(nodeIndex(integer(tokens[std::size_t(k)], first), first));
       Element el;
       el.nodes.fill(-1);
+      el.integrationPoints = points;
       if (count == 15 && options_.nativeWedges) {
         el.kind = ElementKind::Wedge15;
         for (int c = 0; c < 15; ++c) el.nodes[std::size_t(c3d15ToWedge15(c + 1))] = n[std::size_t(c)];
@@ -353,34 +434,42 @@ private:
     }
   }
 
+  /// *EQUATION: a line with the number of terms, then node, DOF,
+  /// coefficient triples (up to four per line). The first term's DOF is the
+  /// dependent one (ccx), so its coefficient must not be zero.
   void readEquations(const std::vector<Line>& data) {
     std::size_t i = 0;
     while (i < data.size()) {
       const int at = data[i].number;
       const long terms = integer(split(data[i].text)[0], at);
-      if (terms != 2 && terms != 3)
-        fail(at, "*EQUATION with " + std::to_string(terms) + " terms is not supported (two-term ties only)");
+      if (terms < 1) fail(at, "*EQUATION with " + std::to_string(terms) + " terms: it needs at least one");
       std::vector<std::string> tokens;
       for (++i; i < data.size() && long(tokens.size()) < 3 * terms; ++i)
         for (const auto& t : split(data[i].text))
           if (!t.empty()) tokens.push_back(t);
-      if (long(tokens.size()) != 3 * terms) fail(at, "*EQUATION: expected " + std::to_string(3 * terms) + " entries");
+      if (long(tokens.size()) != 3 * terms)
+        fail(at, "*EQUATION of " + std::to_string(terms) + " terms: expected " + std::to_string(3 * terms) +
+                     " entries (node, DOF, coefficient per term), found " + std::to_string(tokens.size()));
       Equation eq;
       eq.line = at;
       for (long t = 0; t < terms; ++t) {
-        eq.node[t] = nodeIndex(integer(tokens[std::size_t(3 * t)], at), at);
-        eq.dof[t] = int(integer(tokens[std::size_t(3 * t + 1)], at)) - 1;
-        eq.coef[t] = number(tokens[std::size_t(3 * t + 2)], at);
+        const long node = integer(tokens[std::size_t(3 * t)], at);
+        const long dof = integer(tokens[std::size_t(3 * t + 1)], at);
+        if (dof < 1 || dof > 3)
+          fail(at, "*EQUATION on DOF " + std::to_string(dof) + " of node " + std::to_string(node) +
+                       ": solids have DOFs 1..3");
+        eq.terms.push_back({nodeIndex(node, at), int(dof - 1), number(tokens[std::size_t(3 * t + 2)], at)});
       }
-      eq.terms = int(terms);
-      equations_.push_back(eq);
+      if (eq.terms[0].coefficient == 0.0)
+        fail(at, "*EQUATION: the first term (the dependent DOF, node " + tokens[0] + " DOF " + tokens[1] +
+                     ") has coefficient 0");
+      equations_.push_back(std::move(eq));
     }
   }
 
   struct Equation {
-    int line = 0, terms = 0;
-    int node[3]{}, dof[3]{};
-    double coef[3]{};
+    int line = 0;
+    std::vector<ConstraintTerm> terms;
   };
   struct Boundary {
     int node, dof;
@@ -403,6 +492,25 @@ private:
       elements_[e].region = s->second;
     }
     m.mesh.elements = elements_;
+    // Hyperelastic materials: the table, and their small-strain limit as
+    // the linear material (same density).
+    for (auto& [region, h] : hyperelastic_) {
+      h.density = materials_[region].density;
+      try {
+        h.validate("material " + names_[std::size_t(region)]);
+      } catch (const std::invalid_argument& e) {
+        fail(hyperelasticLine_[region], e.what());
+      }
+      m.materials[region] = h.smallStrainLimit();
+    }
+    m.hyperelastic = hyperelastic_;
+    m.step = step_;
+    m.step.nlgeom = nlgeom_;
+    // ccx 2.20 solves a step with a hyperelastic material geometrically
+    // nonlinear even without NLGEOM (measured: the same 50 % stretch of a
+    // neo-Hookean cube with and without it), so the step is NLGEOM here too.
+    for (const Element& el : elements_)
+      if (hyperelastic_.count(el.region)) m.step.nlgeom = true;
     for (const auto& [region, material] : m.materials) {
       const std::string context = "material " + names_[std::size_t(region)];
       material.validate(context.c_str());
@@ -418,34 +526,44 @@ private:
       }
       return true;
     };
-    // Group ties by node pair; a suture needs all three directions.
-    std::map<std::pair<int, int>, std::set<int>> ties;
-    std::map<std::pair<int, int>, int> tieLine;
+    // Sutures (the fast path): ties u(a, i) - u(b, i) [+ c u(aux, 1)] = 0 of
+    // both nodes' three directions that make a end where b ends. Every other
+    // equation is kept as the general constraint it is.
+    std::map<std::pair<int, int>, std::vector<std::size_t>> ties;  // (a, b) -> equations
+    std::vector<char> tie(equations_.size(), 0);
     const double size = m.mesh.nodes.size() ? m.mesh.nodes.cwiseAbs().maxCoeff() : 1.0;
-    for (const Equation& eq : equations_) {
-      const int a = eq.node[0], b = eq.node[1], d = eq.dof[0];
-      if (eq.dof[1] != d || std::abs(eq.coef[0] + eq.coef[1]) > 1e-12 * std::abs(eq.coef[0]) || eq.coef[0] == 0.0 || d < 0 || d > 2)
-        fail(eq.line, "*EQUATION: only ties u(a, i) - u(b, i) = 0 of the same direction are supported");
+    for (std::size_t k = 0; k < equations_.size(); ++k) {
+      const auto& t = equations_[k].terms;
+      if (t.size() != 2 && t.size() != 3) continue;
+      const int a = t[0].node, b = t[1].node, d = t[0].direction;
+      if (a == b || t[1].direction != d || std::abs(t[0].coefficient + t[1].coefficient) > 1e-12 * std::abs(t[0].coefficient))
+        continue;
       double offset = 0.0;  // u_a = u_b + offset
-      if (eq.terms == 3) {
-        if (eq.dof[2] != 0 || !isAux(eq.node[2]))
-          fail(eq.line, "*EQUATION: a third term must be DOF 1 of an auxiliary node prescribed to (1, 0, 0)");
-        offset = -eq.coef[2] / eq.coef[0];
+      if (t.size() == 3) {
+        if (t[2].direction != 0 || !isAux(t[2].node)) continue;
+        offset = -t[2].coefficient / t[0].coefficient;
       }
       const double expected = m.mesh.nodes(d, b) - m.mesh.nodes(d, a);
-      if (std::abs(offset - expected) > 1e-9 * std::max(1.0, size))
-        fail(eq.line, "*EQUATION: node " + std::to_string(nodeIds_[std::size_t(a)]) + " would not end where node " +
-                          std::to_string(nodeIds_[std::size_t(b)]) +
-                          " ends (only sutures are supported: equal displacement of coincident nodes)");
-      ties[{a, b}].insert(d);
-      tieLine[{a, b}] = eq.line;
+      if (std::abs(offset - expected) > 1e-9 * std::max(1.0, size)) continue;
+      ties[{a, b}].push_back(k);
+      tie[k] = 1;
     }
-    for (const auto& [pair, dofs] : ties) {
-      if (dofs.size() != 3)
-        fail(tieLine[pair], "*EQUATION ties node " + std::to_string(nodeIds_[std::size_t(pair.first)]) + " to node " +
-                                std::to_string(nodeIds_[std::size_t(pair.second)]) +
-                                " in some directions only: a suture needs all three");
-      m.constraints.suture(pair.first, pair.second);
+    for (const auto& [pair, members] : ties) {
+      std::set<int> directions;
+      for (std::size_t k : members) directions.insert(equations_[k].terms[0].direction);
+      if (directions.size() == 3 && members.size() == 3) {
+        m.constraints.suture(pair.first, pair.second);
+      } else {
+        for (std::size_t k : members) tie[k] = 0;
+      }
+    }
+    for (std::size_t k = 0; k < equations_.size(); ++k) {
+      if (tie[k]) continue;
+      LinearConstraint c;
+      // Zero coefficients (ccx decks write them) constrain nothing.
+      for (const ConstraintTerm& t : equations_[k].terms)
+        if (t.coefficient != 0.0) c.terms.push_back(t);
+      m.constraints.equation(std::move(c));
     }
     m.load.nodalForces = forces_;
     for (const auto& [face, p] : pressures_) m.load.facePressures.push_back({face.first, face.second, p});
@@ -489,6 +607,11 @@ private:
   std::map<std::pair<int, int>, double> pressures_;  ///< (element index, face 1..6) -> MPa
   int gravityLine_ = 0;
   std::vector<Equation> equations_;
+  bool nlgeom_ = false;
+  StaticStep step_;
+  std::set<int> elastic_;  ///< regions given by *ELASTIC
+  HyperelasticTable hyperelastic_;
+  std::map<int, int> hyperelasticLine_;
 };
 
 }  // namespace

@@ -123,7 +123,153 @@ TEST(CalculixReader, ClearErrorsNamingKeywordAndLine) {
             std::string::npos);
   EXPECT_NE(errorOf(base + "*MATERIAL,NAME=M\n*ELASTIC\n5, 0.5\n*SOLID SECTION,ELSET=E,MATERIAL=M\n").find("material M"),
             std::string::npos);
-  EXPECT_NE(errorOf(base + "*MATERIAL,NAME=M\n*ELASTIC\n5, 0.3\n*SOLID SECTION,ELSET=E,MATERIAL=M\n*EQUATION\n2\n1,1,1.0,2,1,-1.0\n").find("*EQUATION"), std::string::npos);
+  EXPECT_NE(errorOf(base + "*MATERIAL,NAME=M\n*ELASTIC\n5, 0.3\n*SOLID SECTION,ELSET=E,MATERIAL=M\n*EQUATION\n2\n1,4,1.0,2,1,-1.0\n").find("*EQUATION on DOF 4 of node 1"), std::string::npos);
   EXPECT_NE(errorOf(base + "*BOUNDARY\nNOSUCH,1,3\n").find("unknown node set NOSUCH"), std::string::npos);
   EXPECT_NE(errorOf(std::string(kNodes8) + "1, 2, 3\n*NODE\n1,0,0,0\n").find("defined twice"), std::string::npos);
+}
+
+namespace {
+
+/// kNodes8 and four more on top (z = 2), two C3D8 cubes, the bottom fixed.
+std::string twoCubes(const std::string& material, const std::string& elset = "E", const std::string& nset = "TOP") {
+  return std::string(kNodes8) + "9, 0, 0, 2\n10, 1, 0, 2\n11, 1, 1, 2\n12, 0, 1, 2\n" +
+         "*ELEMENT, TYPE=C3D8, ELSET=" + elset + "\n1,1,2,3,4,5,6,7,8\n2,5,6,7,8,9,10,11,12\n" +
+         "*NSET, NSET=" + nset + "\n9, 10\n11, 12\n" + material + "*SOLID SECTION, ELSET=" + elset + ", MATERIAL=M\n";
+}
+
+}  // namespace
+
+TEST(CalculixReader, ElementTypesCarryTheRuleCcxIntegratesThemWith) {
+  const std::string deck =
+      std::string(kNodes8) +
+      "9,2,0,0\n10,2,1,0\n11,2,0,1\n12,2,1,1\n*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n"
+      "*ELEMENT, TYPE=C3D15, ELSET=E\n2,2,9,3,6,11,7,2,9,3,6,11,7,2,9,3\n"
+      "*MATERIAL,NAME=M\n*ELASTIC\n5, 0.3\n*SOLID SECTION,ELSET=E,MATERIAL=M\n";
+  // Only the element types matter here (the C3D15 is not a valid wedge: it is never solved).
+  const CalculixModel m = parseCalculixInput(deck);
+  EXPECT_EQ(m.mesh.elements[0].integrationPoints, 2);  // C3D8: ccx's full 2x2x2
+  EXPECT_EQ(m.mesh.elements[1].integrationPoints, 2);  // C3D15: ccx's 9 points, wedgeRule(2)
+  CalculixReadOptions degenerate;
+  degenerate.nativeWedges = false;
+  EXPECT_EQ(parseCalculixInput(deck, "deck", degenerate).mesh.elements[1].integrationPoints, 0);
+
+  // The same 20-node brick as C3D20 and C3D20R.
+  const Mesh brick = boxMesh(1, 1, 1, 1, 1, 1);
+  const std::string full = calculixInput(brick, {{0, {5.0, 0.3, 0.0}}}, Constraints{}, LoadCase{});
+  ASSERT_NE(full.find("TYPE=C3D20,"), std::string::npos);
+  EXPECT_EQ(parseCalculixInput(full).mesh.elements[0].integrationPoints, 3);
+  std::string reduced = full;
+  reduced.replace(reduced.find("TYPE=C3D20,"), 11, "TYPE=C3D20R,");
+  EXPECT_EQ(parseCalculixInput(reduced).mesh.elements[0].integrationPoints, 2);
+}
+
+TEST(CalculixReader, SetNamesMayStartWithADigit) {
+  const std::string material = "*MATERIAL, NAME=M\n*ELASTIC\n100, 0.3\n*DENSITY\n1e-9\n";
+  // Element set e, node sets n (top), b (bottom) and t (the set of the set n).
+  auto deck = [&](const std::string& e, const std::string& n, const std::string& b, const std::string& t) {
+    return twoCubes(material, e, n) + "*NSET, NSET=" + b + "\n1, 2, 3, 4\n*NSET, NSET=" + t + "\n" + n +
+           "\n*STEP\n*STATIC\n*BOUNDARY\n" + b + ", 1, 3\n*CLOAD\n" + t + ", 1, 0.5\n*DLOAD\n" + e +
+           ", GRAV, 9810, 0, 0, -1\n" + e + ", P2, 0.25\n*END STEP\n";
+  };
+  const CalculixModel digits = parseCalculixInput(deck("1E", "2N", "1B", "3T"));
+  const CalculixModel letters = parseCalculixInput(deck("EALL", "NTOP", "NBOTTOM", "NT"));
+  EXPECT_EQ(digits.constraints.prescribed.size(), 12u);
+  EXPECT_EQ(digits.load.nodalForces.size(), 4u);
+  EXPECT_EQ(digits.load.facePressures.size(), 2u);
+  const Eigen::VectorXd u = solve(digits.mesh, digits.materials, digits.constraints, digits.load);
+  const Eigen::VectorXd v = solve(letters.mesh, letters.materials, letters.constraints, letters.load);
+  EXPECT_GT(u.cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_LT((u - v).cwiseAbs().maxCoeff(), 1e-14);
+  // A field that is wholly an integer is still a node number, and an unknown name is named.
+  EXPECT_NE(errorOf(twoCubes(material) + "*BOUNDARY\n1X, 1, 3\n").find("unknown node set 1X"), std::string::npos);
+}
+
+TEST(CalculixReader, EquationsOfAnyNumberOfTerms) {
+  const std::string material = "*MATERIAL, NAME=M\n*ELASTIC\n100, 0.3\n";
+  // Nodes 13 and 14 coincide with 9 and 10 (a suture of 13 onto 9 in all three directions).
+  const std::string deck = twoCubes(material) + "*NODE\n13, 0, 0, 2\n14, 1, 0, 2\n"
+                           "*EQUATION\n2\n13,1,1.,9,1,-1.\n2\n13,2,1.,9,2,-1.\n2\n13,3,1.,9,3,-1.\n"
+                           "1\n10, 3, 2.5,\n"
+                           "3\n11, 1, 1., 12, 2, -0.5, 10, 1, 0.25\n"
+                           "4\n12, 3, -0.577, 12, 1, 0.0, 12, 2, 0.577,\n 14, 3, 1.\n"
+                           "2\n14, 1, 1., 10, 1, -1.\n";
+  const CalculixModel m = parseCalculixInput(deck);
+  ASSERT_EQ(m.constraints.sutures.size(), 1u);
+  EXPECT_EQ(m.constraints.sutures[0].node, 12);
+  EXPECT_EQ(m.constraints.sutures[0].target, 8);
+  // A tie in one direction only is an equation, not a suture.
+  ASSERT_EQ(m.constraints.equations.size(), 4u);
+  const auto& one = m.constraints.equations[0];
+  ASSERT_EQ(one.terms.size(), 1u);
+  EXPECT_EQ(one.terms[0].node, 9);
+  EXPECT_EQ(one.terms[0].direction, 2);
+  EXPECT_EQ(one.terms[0].coefficient, 2.5);
+  EXPECT_EQ(m.constraints.equations[1].terms.size(), 3u);
+  const auto& four = m.constraints.equations[2];  // its zero coefficient is dropped
+  ASSERT_EQ(four.terms.size(), 3u);
+  EXPECT_EQ(four.terms[0].node, 11);
+  EXPECT_EQ(four.terms[0].direction, 2);
+  EXPECT_EQ(four.terms[0].coefficient, -0.577);
+  EXPECT_EQ(four.terms[2].node, 13);
+  EXPECT_EQ(four.terms[2].coefficient, 1.0);
+  EXPECT_EQ(m.constraints.equations[3].terms.size(), 2u);
+  for (const auto& eq : m.constraints.equations) EXPECT_EQ(eq.value, 0.0);
+  EXPECT_NE(errorOf(twoCubes(material) + "*EQUATION\n2\n9, 1, 0., 10, 1, 1.\n").find("coefficient 0"),
+            std::string::npos);
+  EXPECT_NE(errorOf(twoCubes(material) + "*EQUATION\n3\n9, 1, 1., 10, 1, 1.\n").find("expected 9 entries"),
+            std::string::npos);
+}
+
+TEST(CalculixReader, LargeDeformationStepAndHyperelasticMaterials) {
+  const std::string tail = "*STEP, NLGEOM, INC=500\n*STATIC, DIRECT\n0.1, 1., 1e-4, 0.2\n"
+                           "*CONTROLS, PARAMETERS=FIELD\n1e-8, 1e-8\n*BOUNDARY\n1, 1, 3\n*END STEP\n";
+  const CalculixModel neo =
+      parseCalculixInput(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, NEO HOOKE\n0.5, 0.04\n*DENSITY\n1e-9\n") + tail);
+  EXPECT_TRUE(neo.step.nlgeom);
+  EXPECT_TRUE(neo.step.direct);
+  EXPECT_EQ(neo.step.initialIncrement, 0.1);
+  EXPECT_EQ(neo.step.period, 1.0);
+  EXPECT_EQ(neo.step.minimumIncrement, 1e-4);
+  EXPECT_EQ(neo.step.maximumIncrement, 0.2);
+  ASSERT_EQ(neo.hyperelastic.count(0), 1u);
+  const HyperelasticMaterial& h = neo.hyperelastic.at(0);
+  EXPECT_EQ(h.law, HyperelasticLaw::NeoHookean);
+  EXPECT_EQ(h.c10, 0.5);
+  EXPECT_EQ(h.d1, 0.04);
+  EXPECT_EQ(h.density, 1e-9);
+  // The linear table holds the small-strain limit: mu = 2 C10 = 1, K = 2 / D1 = 50.
+  const LinearElasticMaterial& lin = neo.materials.at(0);
+  EXPECT_NEAR(lin.youngsModulus, 9.0 * 50.0 * 1.0 / (3.0 * 50.0 + 1.0), 1e-12);
+  EXPECT_NEAR(lin.poissonRatio, (3.0 * 50.0 - 2.0) / (2.0 * (3.0 * 50.0 + 1.0)), 1e-12);
+  EXPECT_EQ(lin.density, 1e-9);
+
+  const CalculixModel mr = parseCalculixInput(
+      twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, MOONEY-RIVLIN\n0.3, 0.2, 0.04\n") +
+      "*STEP\n*STATIC\n*BOUNDARY\n1, 1, 3\n*END STEP\n");
+  EXPECT_EQ(mr.hyperelastic.at(0).law, HyperelasticLaw::MooneyRivlin);
+  EXPECT_EQ(mr.hyperelastic.at(0).c10, 0.3);
+  EXPECT_EQ(mr.hyperelastic.at(0).c01, 0.2);
+  EXPECT_EQ(mr.hyperelastic.at(0).d1, 0.04);
+  // ccx solves a hyperelastic material nonlinearly even without NLGEOM.
+  EXPECT_TRUE(mr.step.nlgeom);
+  EXPECT_FALSE(mr.step.direct);
+
+  const CalculixModel linear = parseCalculixInput(twoCubes("*MATERIAL, NAME=M\n*ELASTIC\n5, 0.3\n") +
+                                                  "*STEP, NLGEOM=NO\n*STATIC\n*END STEP\n");
+  EXPECT_FALSE(linear.step.nlgeom);
+  EXPECT_TRUE(linear.hyperelastic.empty());
+
+  const std::string ogden = errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, OGDEN, N=1\n1, 2, 0.1\n"));
+  EXPECT_NE(ogden.find("*HYPERELASTIC, "), std::string::npos) << ogden;
+  EXPECT_NE(ogden.find("is not supported (NEO HOOKE and MOONEY-RIVLIN are"), std::string::npos) << ogden;
+  EXPECT_NE(errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, POLYNOMIAL\n1, 2, 0.1\n")).find("POLYNOMIAL"),
+            std::string::npos);
+  EXPECT_NE(errorOf(twoCubes("*MATERIAL, NAME=M\n*ELASTIC\n5, 0.3\n*HYPERELASTIC, NEO HOOKE\n1, 0.1\n"))
+                .find("both *ELASTIC and *HYPERELASTIC"),
+            std::string::npos);
+  EXPECT_NE(errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, NEO HOOKE\n1\n")).find("needs C10, D1"),
+            std::string::npos);
+  EXPECT_NE(errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, NEO HOOKE\n-1, 0.1\n")).find("deck.inp:22: "),
+            std::string::npos)
+      << errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, NEO HOOKE\n-1, 0.1\n"));
 }
