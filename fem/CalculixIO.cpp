@@ -3,6 +3,9 @@
 #include "fem/ElementNumbering.h"
 #include "fem/FacePressure.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -20,20 +23,82 @@ std::string regionName(const char* prefix, int region) {
   return name.str();
 }
 
+/// *CONTROLS for tight Newton convergence in ccx: residual at most 1e-8 of
+/// the average force (R_n, and R_p after I_P iterations) and correction at
+/// most 1e-8 of the increment's displacement (C_n), where ccx's defaults
+/// are 0.005 and 0.01; more iterations allowed before a cut-back.
+constexpr const char* kTightControls =
+    "*CONTROLS, PARAMETERS=FIELD\n1e-8, 1e-8, 0.01, , 1e-8, 1e-5, 1e-8, 1e-8\n"
+    "*CONTROLS, PARAMETERS=TIME INCREMENTATION\n8, 10, 9, 30, 10, 4, , 5\n";
+
+/// @a v as a ccx data field. ccx 2.20 reads at most 20 characters of a
+/// field and silently drops the rest (-8.88178419700125e-16 was read as
+/// -0.888), so 13 significant digits: "%.13g" is at most 20 characters with
+/// sign, point and a three-digit exponent. Values within 1e-13 @a scale of
+/// zero (e.g. 1e-16 rounding noise beside 100 mm coordinates) are written
+/// as 0: they are below what 13 digits of the largest value resolve.
+std::string ccxNumber(double v, double scale = 0.0) {
+  if (!std::isfinite(v)) throw std::invalid_argument("CalculiX cannot read the non-finite number " + std::to_string(v));
+  if (std::abs(v) <= 1e-13 * scale) v = 0.0;
+  char text[32];
+  std::snprintf(text, sizeof text, "%.13g", v);
+  return text;
+}
+
+/// The material card of @a h: *HYPERELASTIC NEO HOOKE (C10, D1) or
+/// MOONEY-RIVLIN (C10, C01, D1), or *ELASTIC for St. Venant-Kirchhoff
+/// (ccx's *ELASTIC under NLGEOM is that law).
+std::string hyperelasticLines(const HyperelasticMaterial& h, int region) {
+  switch (h.law) {
+    case HyperelasticLaw::NeoHookean:
+      return "*HYPERELASTIC, NEO HOOKE\n" + ccxNumber(h.c10) + ", " + ccxNumber(h.d1) + "\n";
+    case HyperelasticLaw::MooneyRivlin:
+      return "*HYPERELASTIC, MOONEY-RIVLIN\n" + ccxNumber(h.c10) + ", " + ccxNumber(h.c01) + ", " + ccxNumber(h.d1) +
+             "\n";
+    case HyperelasticLaw::StVenantKirchhoff:
+      return "*ELASTIC\n" + ccxNumber(h.youngsModulus) + ", " + ccxNumber(h.poissonRatio) + "\n";
+    default:
+      throw std::invalid_argument(std::string("region ") + std::to_string(region) + " is " + lawName(h.law) +
+                                  ", which CalculiX has no keyword for (neo-Hookean, Mooney-Rivlin and St. "
+                                  "Venant-Kirchhoff can be exported)");
+  }
+}
+
+/// *STEP and *STATIC: linear, or NLGEOM with the increment line when the
+/// step asks for it or a material is hyperelastic (ccx would go nonlinear
+/// anyway), and the tight *CONTROLS if asked.
+std::string stepLines(const CalculixExportOptions& options, bool hyperelastic) {
+  const StaticStep& s = options.step;
+  if (!s.nlgeom && !hyperelastic) return "*STEP\n*STATIC\n";
+  // INC= allows every increment down to the minimum (ccx's default is 100).
+  const double increments = std::ceil(s.period / std::max(s.minimumIncrement, 1e-12)) + 10.0;
+  std::ostringstream o;
+  o << "*STEP, NLGEOM, INC=" << long(std::clamp(increments, 1000.0, 1e7)) << "\n*STATIC" << (s.direct ? ", DIRECT" : "")
+    << "\n"
+    << ccxNumber(s.initialIncrement) << ", " << ccxNumber(s.period) << ", " << ccxNumber(s.minimumIncrement) << ", "
+    << ccxNumber(s.maximumIncrement) << "\n";
+  if (options.tightControls) o << kTightControls;
+  return o.str();
+}
+
 }  // namespace
 
 std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
-                          const LoadCase& load) {
+                          const LoadCase& load, const CalculixExportOptions& options) {
   validateMesh(mesh, materials);
   const ConstraintMap map = resolveConstraints(mesh, constraints);
   const Eigen::Index n = mesh.nodeCount();
   std::ostringstream o;
-  // ccx reads at most 20 characters per field: 14 significant digits fit.
-  o.precision(14);
+  // ccx reads at most 20 characters per field: 13 significant digits always
+  // fit (-1.234567890123e-100 is 20), 14 do not. Fields written through
+  // ccxNumber() also lose rounding noise.
+  o.precision(13);
   o << "*HEADING\nCAPS finite element model (Bathe 8-to-20 node elements as C3D20)\n";
   o << "*NODE, NSET=NALLNODES\n";
+  const double extent = mesh.nodes.size() ? mesh.nodes.cwiseAbs().maxCoeff() : 0.0;
   for (Eigen::Index i = 0; i < n; ++i)
-    o << i + 1 << ", " << mesh.nodes(0, i) << ", " << mesh.nodes(1, i) << ", " << mesh.nodes(2, i) << "\n";
+    o << i + 1 << ", " << ccxNumber(mesh.nodes(0, i), extent) << ", " << ccxNumber(mesh.nodes(1, i), extent) << ", "
+      << ccxNumber(mesh.nodes(2, i), extent) << "\n";
   // Representative DOF of each reduced DOF in the *EQUATIONs. ccx 2.20
   // mis-assembles an equation whose dependent DOF belongs to a node repeated
   // in a degenerate (wedge) C3D20, so such a node is made the independent one.
@@ -71,24 +136,28 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
   if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
 
   // Elements, grouped by region and type.
-  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;  // (region, type 20/15/8) -> elements
+  // Type 20 is C3D20 (3x3x3), 21 C3D20R (2x2x2, ccx's reduced brick), 15
+  // C3D15 (ccx's 9 points, whatever the element's rule), 8 C3D8 (ccx's 2x2x2).
+  std::map<std::pair<int, int>, std::vector<std::size_t>> groups;  // (region, type) -> elements
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
     if (el.kind == ElementKind::Wedge15) {
       groups[{el.region, 15}].push_back(e);
       continue;
     }
+    const bool reduced = integrationPointsOf(el, options.defaultIntegrationPoints) == 2;
     int present = 0;
     for (int k = kHex20CornerCount; k < kHex20NodeCount; ++k) present += el.nodes[k] >= 0;
     if (present != 0 && present != 12)
       throw std::invalid_argument("element " + std::to_string(e) + " has " + std::to_string(present) +
                                   " of 12 mid-side nodes; CalculiX needs all (C3D20) or none (C3D8)");
-    groups[{el.region, present == 12 ? 20 : 8}].push_back(e);
+    groups[{el.region, present == 12 ? (reduced ? 21 : 20) : 8}].push_back(e);
   }
   const auto& toC3D20 = batheToC3D20Table();
   for (const auto& [key, elements] : groups) {
-    const int count = key.second;
-    o << "*ELEMENT, TYPE=C3D" << count << ", ELSET=" << regionName("R", key.first) << "\n";
+    const int count = key.second == 21 ? 20 : key.second;
+    o << "*ELEMENT, TYPE=C3D" << count << (key.second == 21 ? "R" : "") << ", ELSET=" << regionName("R", key.first)
+      << "\n";
     for (std::size_t e : elements) {
       const Element& el = mesh.elements[e];
       int c3d[kHex20NodeCount];
@@ -104,11 +173,17 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
   }
   std::set<int> usedRegions;
   for (const Element& el : mesh.elements) usedRegions.insert(el.region);
+  bool anyHyperelastic = false;
+  for (int region : usedRegions) anyHyperelastic = anyHyperelastic || options.hyperelastic.count(region);
   for (int region : usedRegions) {
     const LinearElasticMaterial& m = materials.at(region);
-    o << "*MATERIAL, NAME=" << regionName("M", region) << "\n*ELASTIC\n"
-      << m.youngsModulus << ", " << m.poissonRatio << "\n";
-    if (m.density > 0.0) o << "*DENSITY\n" << m.density << "\n";
+    o << "*MATERIAL, NAME=" << regionName("M", region) << "\n";
+    const auto h = options.hyperelastic.find(region);
+    if (h == options.hyperelastic.end())
+      o << "*ELASTIC\n" << ccxNumber(m.youngsModulus) << ", " << ccxNumber(m.poissonRatio) << "\n";
+    else
+      o << hyperelasticLines(h->second, region);
+    if (m.density > 0.0) o << "*DENSITY\n" << ccxNumber(m.density) << "\n";
     o << "*SOLID SECTION, ELSET=" << regionName("R", region) << ", MATERIAL=" << regionName("M", region)
       << "\n";
   }
@@ -148,7 +223,7 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     if (beta != 0.0) term(long(aux), 1, -beta);
     o << "\n";
   }
-  o << "*STEP\n*STATIC\n*BOUNDARY\n";
+  o << stepLines(options, anyHyperelastic) << "*BOUNDARY\n";
   if (needAux) o << aux << ", 1, 1, 1.0\n" << aux << ", 2, 3, 0.0\n";
   for (std::size_t d = 0, g = 0; d < map.reduced.size(); ++d) {
     if (map.reduced[d] >= 0) continue;
@@ -179,7 +254,7 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     o << "*CLOAD\n";
     for (const auto& [node, f] : forces)
       for (int d = 0; d < 3; ++d)
-        if (f[d] != 0.0) o << node + 1 << ", " << d + 1 << ", " << f[d] << "\n";
+        if (f[d] != 0.0) o << node + 1 << ", " << d + 1 << ", " << ccxNumber(f[d]) << "\n";
   }
   const double g = load.gravity.norm();
   if (g > 0.0) {
@@ -189,8 +264,8 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
       if (materials.at(region).density <= 0.0) continue;
       if (!header) o << "*DLOAD\n";
       header = true;
-      o << regionName("R", region) << ", GRAV, " << g << ", " << dir[0] << ", " << dir[1] << ", " << dir[2]
-        << "\n";
+      o << regionName("R", region) << ", GRAV, " << ccxNumber(g) << ", " << ccxNumber(dir[0], 1.0) << ", "
+        << ccxNumber(dir[1], 1.0) << ", " << ccxNumber(dir[2], 1.0) << "\n";
     }
   }
   if (!load.facePressures.empty()) {
@@ -203,15 +278,20 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     for (const FacePressure& p : load.facePressures) pressures[{p.element, p.face}] += p.pressure;
     o << "*DLOAD\n";
     for (const auto& [face, p] : pressures)
-      if (p != 0.0) o << face.first + 1 << ", P" << face.second << ", " << p << "\n";
+      if (p != 0.0) o << face.first + 1 << ", P" << face.second << ", " << ccxNumber(p) << "\n";
   }
   o << "*NODE FILE\nU\n*NODE PRINT, NSET=NALLNODES\nU\n*END STEP\n";
   return o.str();
 }
 
+std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
+                          const LoadCase& load) {
+  return calculixInput(mesh, materials, constraints, load, CalculixExportOptions{});
+}
+
 void writeCalculixInput(const std::string& path, const Mesh& mesh, const MaterialTable& materials,
-                        const Constraints& constraints, const LoadCase& load) {
-  const std::string text = calculixInput(mesh, materials, constraints, load);
+                        const Constraints& constraints, const LoadCase& load, const CalculixExportOptions& options) {
+  const std::string text = calculixInput(mesh, materials, constraints, load, options);
   std::ofstream f(path);
   if (!f) throw std::runtime_error("cannot write the CalculiX input " + path);
   f << text;
