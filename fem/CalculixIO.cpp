@@ -202,7 +202,12 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     o << "\n";
   }
   // Equations (resolved, so no dependent DOF appears in another equation):
-  // ccx reads at most 4 terms (12 fields) per line.
+  // ccx reads at most 4 terms (12 fields) per line. The ccx 2.20 fault above
+  // also hits an equation whose dependent DOF is on a repeated node, and no
+  // choice of dependent DOF avoids it when all terms are that node's (u . n =
+  // 0): ccx then solves another model (giving the second occurrence its own
+  // coincident node, tied to the first, avoids it; that is the element
+  // writer's part).
   for (std::size_t g = 0; g < map.general.size(); ++g) {
     const int first = map.generalStart[g], last = map.generalStart[g + 1];
     if (first == last) continue;

@@ -162,13 +162,13 @@ TEST(Constraints, CascadedEquationsAgreeWithCalculix) {
   EXPECT_LT(diff, 1e-6);
 }
 
-TEST(Constraints, FaceSlidesOnAnInclinedPlane) {
+void slideOnInclinedPlane(bool wedges) {
   // A 20 x 10 x 10 block turned so its bottom face lies on the plane through
   // the origin with normal n; bottom nodes keep u . n = 0, one corner is
   // fixed, the next corner along the face may not turn about n.
   const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
   const Eigen::Matrix3d rot = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n).toRotationMatrix();
-  const Mesh straight = boxMesh(2, 1, 1, 20, 10, 10);
+  const Mesh straight = boxMesh(2, 1, 1, 20, 10, 10, Eigen::Vector3d::Zero(), wedges);
   Mesh mesh = straight;
   mesh.nodes = rot * straight.nodes;
   const int corner = nodeNear(straight, Eigen::Vector3d(0, 0, 0));
@@ -199,18 +199,32 @@ TEST(Constraints, FaceSlidesOnAnInclinedPlane) {
     offPlane = std::max(offPlane, std::abs(x.dot(n)));
     slide = std::max(slide, (u.segment<3>(3 * i) - u.segment<3>(3 * i).dot(n) * n).norm());
   }
-  std::cout << "inclined plane: max distance of a bottom node from the plane " << offPlane << " mm, max slide "
+  const std::string kind = wedges ? "wedges" : "hexes";
+  std::cout << kind << " on an inclined plane: max distance of a bottom node from the plane " << offPlane << " mm, max slide "
             << slide << " mm\n";
   EXPECT_LT(offPlane, 1e-12);
   EXPECT_GT(slide, 0.01);
   EXPECT_LT(std::abs(u.segment<3>(3 * along).dot(t)), 1e-12);
-  if (test::ccxAvailable()) {
+  const Eigen::VectorXd lagrange = lagrangeSolution(mesh, analysis.stiffness(), c, analysis.loadVector(load));
+  const double toLagrange = (lagrange - u).cwiseAbs().maxCoeff() / u.cwiseAbs().maxCoeff();
+  std::cout << kind << " on an inclined plane: relative difference to Lagrange multipliers " << toLagrange << "\n";
+  EXPECT_LT(toLagrange, 1e-9);
+  // ccx 2.20 mis-assembles an equation whose dependent DOF is on a node a
+  // degenerate C3D20 repeats (the wedges' collapsed edges; 33 % off here), and
+  // on a wedge's bottom every DOF a plane constraint could eliminate is such a
+  // node's: only the hexes are compared with it.
+  if (!wedges) {
+    ASSERT_TRUE(test::ccxAvailable()) << "CalculiX 'ccx' was not found on PATH: install Debian package calculix-ccx";
     const test::CcxResult r = test::runCcx("plane", calculixInput(mesh, material(), c, load), mesh.nodeCount());
     const double diff = test::relativeDifference(r.dat, u);
-    std::cout << "ccx inclined plane: relative difference .dat " << diff << "\n";
+    std::cout << "ccx " << kind << " on an inclined plane: relative difference .dat " << diff << "\n";
     EXPECT_LT(diff, 1e-6);
   }
 }
+
+TEST(Constraints, FaceSlidesOnAnInclinedPlane) { slideOnInclinedPlane(false); }
+// The wedges' collapsed edges repeat bottom nodes in their elements.
+TEST(Constraints, WedgeFaceSlidesOnAnInclinedPlane) { slideOnInclinedPlane(true); }
 
 TEST(Constraints, EquationErrorsNameTheNode) {
   const Mesh mesh = boxMesh(1, 1, 1, 10, 10, 10);
