@@ -18,11 +18,15 @@ const char* kFemUsage =
   "core and writes into DIR (default: the current folder):\n"
   "  displacements.csv  node, x, y, z, ux, uy, uz (mm)\n"
   "  stresses.csv       node, sxx, syy, szz, sxy, syz, szx, von Mises (MPa, averaged at nodes)\n"
+  "  gauss_stresses.csv element, point, sxx, syy, szz, sxy, sxz, syz (MPa, at each element's\n"
+  "                     integration points, in the order and columns of ccx's *EL PRINT S)\n"
   "  result.vtu         the mesh with displacement and stress fields, for ParaView\n"
   "\n"
-  "Supported: *NODE, *ELEMENT (C3D20, C3D20R, C3D15, C3D8), *NSET, *ELSET, *MATERIAL,\n"
-  "*ELASTIC, *DENSITY, *SOLID SECTION, *BOUNDARY, *CLOAD, *DLOAD GRAV and face pressure P1..P6,\n"
-  "*EQUATION (sutures), *STEP, *STATIC; output requests are ignored. Anything else is an error.\n"
+  "Supported: *NODE, *ELEMENT (C3D20, C3D20R with its reduced 2x2x2 integration, C3D15, C3D8),\n"
+  "*NSET, *ELSET (set names may start with a digit), *MATERIAL, *ELASTIC, *HYPERELASTIC (NEO HOOKE,\n"
+  "MOONEY-RIVLIN; read, not yet solved), *DENSITY, *SOLID SECTION, *BOUNDARY, *CLOAD, *DLOAD GRAV and\n"
+  "face pressure P1..P6, *EQUATION (any number of terms), *STEP (NLGEOM read, not yet solved),\n"
+  "*STATIC; *CONTROLS and output requests are ignored. Anything else is an error.\n"
   "\n"
   "Exit status: 0 when solved, 1 when the model cannot be read or solved, 2 on wrong usage.\n";
 

@@ -6,7 +6,11 @@
 
 #include "fem/CalculixReader.h"
 #include "fem/NodalStress.h"
+#include "fem/StressRecovery.h"
 #include "fem/VtuWriter.h"
+
+#include <algorithm>
+#include <cmath>
 
 namespace fs = std::filesystem;
 
@@ -26,6 +30,30 @@ std::ofstream openForWriting(const fs::path& path)
     throw std::runtime_error("cannot write " + path.string());
   f << std::setprecision(12);
   return f;
+}
+
+/// Index into @a points (one element's rule, gaussRule()/wedgeRule() order)
+/// of each integration point in CalculiX's order: for a brick the first
+/// natural coordinate runs fastest, then the second, then the third (our
+/// gaussRule() runs the third fastest); a wedge's rule is already in ccx's
+/// order (triangle points fastest, t slowest).
+std::vector<std::size_t> ccxPointOrder(const std::vector<fem::StressPoint>& points, fem::ElementKind kind)
+{
+  std::vector<std::size_t> order(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p)
+    order[p] = p;
+  if (kind == fem::ElementKind::Wedge15)
+    return order;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    for (int d = 2; d >= 0; --d)
+    {
+      const double x = points[a].natural[d], y = points[b].natural[d];
+      if (std::abs(x - y) > 1e-9)
+        return x < y;
+    }
+    return false;
+  });
+  return order;
 }
 
 } // namespace
@@ -50,22 +78,41 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   report.elements = Eigen::Index(model.mesh.elements.size());
   report.dofs = model.mesh.dofCount();
 
-  // Nodes in no element carry no stiffness: fix those nothing else holds.
-  std::vector<char> used(std::size_t(model.mesh.nodeCount()), 0);
+  // DOFs of nodes in no element carry no stiffness: fix those nothing else
+  // holds (ccx leaves them out of the system). Per DOF, as an auxiliary node
+  // of an *EQUATION often has only its x prescribed.
+  const Eigen::Index dofs = model.mesh.dofCount();
+  std::vector<char> used(std::size_t(dofs), 0);
+  auto use = [&](int node, int direction) {
+    if (node >= 0 && node < model.mesh.nodeCount() && direction >= 0 && direction < 3)
+      used[std::size_t(3 * node + direction)] = 1;
+  };
   for (const auto& el : model.mesh.elements)
     for (int n : el.nodes)
-      if (n >= 0)
-        used[std::size_t(n)] = 1;
+      for (int d = 0; d < 3; ++d)
+        use(n, d);
   for (const auto& p : model.constraints.prescribed)
-    if (p.node >= 0 && p.node < model.mesh.nodeCount())
-      used[std::size_t(p.node)] = 1;
+    use(p.node, p.direction);
   for (const auto& s : model.constraints.sutures)
-    for (int n : {s.node, s.target})
-      if (n >= 0 && n < model.mesh.nodeCount())
-        used[std::size_t(n)] = 1;
-  for (std::size_t i = 0; i < used.size(); ++i)
-    if (!used[i])
-      model.constraints.fixNode(int(i));
+    for (int d = 0; d < 3; ++d)
+    {
+      use(s.node, d);
+      use(s.target, d);
+    }
+  for (const auto& eq : model.constraints.equations)
+    for (const auto& t : eq.terms)
+      use(t.node, t.direction);
+  for (Eigen::Index k = 0; k < dofs; ++k)
+    if (!used[std::size_t(k)])
+      model.constraints.fix(int(k / 3), int(k % 3));
+
+  if (model.step.nlgeom)
+  {
+    // Read, but the linear solver would give the small-strain answer.
+    report.message = deck.string() + ": a large-deformation step (*STEP, NLGEOM, or a *HYPERELASTIC material, "
+                                     "which CalculiX solves nonlinearly) is not solved by caps fem yet";
+    return report;
+  }
 
   fem::AssemblyOptions assembly;
   assembly.threads = options.threads;
@@ -147,6 +194,27 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
       if (!f)
         throw std::runtime_error("error while writing " + stresses.string());
     }
+    // Stress at each element's own integration points, in the order and
+    // columns of ccx's *EL PRINT S, for comparison with its .dat.
+    const fs::path gaussStresses = outDir / "gauss_stresses.csv";
+    {
+      auto f = openForWriting(gaussStresses);
+      f << "element,point,sxx,syy,szz,sxy,sxz,syz\n";
+      for (std::size_t e = 0; e < model.mesh.elements.size(); ++e)
+      {
+        const auto points = fem::recoverStressAtGaussPoints(model.mesh, model.materials, u, int(e),
+                                                            assembly.gaussPointsPerDirection);
+        const auto order = ccxPointOrder(points, model.mesh.elements[e].kind);
+        for (std::size_t k = 0; k < order.size(); ++k)
+        {
+          const fem::Vector6d& s = points[order[k]].stress; // xx yy zz xy yz zx
+          f << model.elementIds[e] << ',' << k + 1 << ',' << s[0] << ',' << s[1] << ',' << s[2] << ','
+            << s[3] << ',' << s[5] << ',' << s[4] << '\n';
+        }
+      }
+      if (!f)
+        throw std::runtime_error("error while writing " + gaussStresses.string());
+    }
     const fs::path vtu = outDir / "result.vtu";
     Eigen::MatrixXd displacement = Eigen::Map<const Eigen::MatrixXd>(u.data(), 3, model.mesh.nodeCount());
     Eigen::MatrixXd ids(1, model.mesh.nodeCount());
@@ -159,7 +227,7 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
                    {"mean_stress", stress.meanStress().transpose()},
                    {"principal_stress", stress.principal()},
                    {"node_id", ids}});
-    report.files = {displacements, stresses, vtu};
+    report.files = {displacements, stresses, gaussStresses, vtu};
   }
   catch (const std::exception& e)
   {

@@ -50,10 +50,14 @@ public:
   /// Reads @a deck (fem::readCalculixInput), solves it (fem::LinearStaticAnalysis),
   /// recovers nodal stresses (fem::recoverNodalStresses) and writes into
   /// @a outDir (created if needed) displacements.csv (node, x, y, z, ux, uy,
-  /// uz), stresses.csv (node, sxx, syy, szz, sxy, syz, szx, von Mises) and
-  /// result.vtu. Nodes in no element and not constrained are fixed (they
-  /// carry no stiffness; ccx leaves them at zero too). Never throws: errors
-  /// come back as the status and a message naming the culprit.
+  /// uz), stresses.csv (node, sxx, syy, szz, sxy, syz, szx, von Mises),
+  /// gauss_stresses.csv (element, point 1..n in CalculiX's order, sxx, syy,
+  /// szz, sxy, sxz, syz: the columns of ccx's *EL PRINT S, at each element's
+  /// own integration points) and result.vtu. A large-deformation step is
+  /// refused for now (InvalidInput). DOFs of nodes in no element that
+  /// nothing constrains are fixed (they carry no stiffness; ccx leaves them
+  /// at zero too). Never throws: errors come back as the status and a
+  /// message naming the culprit.
   static FemRunReport solveDeck(const std::filesystem::path& deck, const std::filesystem::path& outDir,
                                 const FemRunOptions& options = {});
 };
