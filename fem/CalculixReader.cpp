@@ -148,6 +148,17 @@ private:
       return;
     // *CONTROLS changes how ccx converges, not what the model means.
     if (keyword == "*CONTROLS") return;
+    // Every material here is isotropic, so a local material frame changes
+    // nothing: *ORIENTATION is accepted (and named by *SOLID SECTION).
+    if (keyword == "*ORIENTATION") {
+      orientations_.insert(required(params, "NAME", keyword));
+      return;
+    }
+    // Thermal expansion needs temperatures, which no accepted keyword gives.
+    if (keyword == "*EXPANSION") {
+      if (material_.empty()) fail(line_, "*EXPANSION outside a *MATERIAL");
+      return;
+    }
     if (keyword == "*STEP") {
       if (++steps_ > 1) fail(line_, "a second *STEP: only one static step is supported");
       if (params.count("NLGEOM")) {
@@ -194,6 +205,8 @@ private:
       const std::string material = required(params, "MATERIAL", keyword);
       auto m = materialIndex_.find(material);
       if (m == materialIndex_.end()) fail(line_, "*SOLID SECTION names material " + material + ", which is not defined");
+      if (params.count("ORIENTATION") && !orientations_.count(params.at("ORIENTATION")))
+        fail(line_, "*SOLID SECTION names orientation " + params.at("ORIENTATION") + ", which is not defined");
       for (long e : elementSet(elset, line_)) sections_[e] = m->second;
       return;
     }
@@ -610,6 +623,7 @@ private:
   bool nlgeom_ = false;
   StaticStep step_;
   std::set<int> elastic_;  ///< regions given by *ELASTIC
+  std::set<std::string> orientations_;
   HyperelasticTable hyperelastic_;
   std::map<int, int> hyperelasticLine_;
 };

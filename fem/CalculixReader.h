@@ -87,8 +87,10 @@ struct CalculixReadOptions {
  * become Constraints::sutures, every other equation a LinearConstraint in
  * Constraints::equations (zero coefficients dropped); one *STEP (NLGEOM
  * read into CalculixModel::step) with *STATIC (DIRECT, and the increment
- * line); *CONTROLS (convergence only), *NODE FILE, *EL FILE, *NODE PRINT,
- * *EL PRINT accepted and ignored. A field of *BOUNDARY, *CLOAD, *DLOAD or a
+ * line); *CONTROLS (convergence only), *ORIENTATION and *EXPANSION (every
+ * material here is isotropic, and no temperatures are read, so neither
+ * changes the result), *NODE FILE, *EL FILE, *NODE PRINT, *EL PRINT
+ * accepted and ignored. A field of *BOUNDARY, *CLOAD, *DLOAD or a
  * set's members is a number if it is wholly an integer, else a set name
  * (names may start with a digit: 1E). A step with a hyperelastic material
  * is NLGEOM even without the parameter: ccx 2.20 solves it geometrically

@@ -26,7 +26,8 @@ const char* kFemUsage =
   "*NSET, *ELSET (set names may start with a digit), *MATERIAL, *ELASTIC, *HYPERELASTIC (NEO HOOKE,\n"
   "MOONEY-RIVLIN; read, not yet solved), *DENSITY, *SOLID SECTION, *BOUNDARY, *CLOAD, *DLOAD GRAV and\n"
   "face pressure P1..P6, *EQUATION (any number of terms), *STEP (NLGEOM read, not yet solved),\n"
-  "*STATIC; *CONTROLS and output requests are ignored. Anything else is an error.\n"
+  "*STATIC; *CONTROLS, *ORIENTATION and *EXPANSION (no effect on isotropic materials without\n"
+  "temperatures) and output requests are ignored. Anything else is an error.\n"
   "\n"
   "Exit status: 0 when solved, 1 when the model cannot be read or solved, 2 on wrong usage.\n";
 

@@ -273,3 +273,21 @@ TEST(CalculixReader, LargeDeformationStepAndHyperelasticMaterials) {
             std::string::npos)
       << errorOf(twoCubes("*MATERIAL, NAME=M\n*HYPERELASTIC, NEO HOOKE\n-1, 0.1\n"));
 }
+
+TEST(CalculixReader, OrientationAndExpansionOfIsotropicMaterialsChangeNothing) {
+  const std::string material = "*ORIENTATION, NAME=S0, DEFINITION=COORDINATES, SYSTEM=RECTANGULAR\n0,1,0,-1,0,0\n"
+                               "*MATERIAL, NAME=M\n*ELASTIC, TYPE=ISOTROPIC\n100, 0.3\n*EXPANSION, TYPE=ISO\n1.2e-5\n";
+  const std::string load = "*STEP\n*STATIC\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n*CLOAD\n9,1,0.5\n*END STEP\n";
+  std::string oriented = twoCubes(material) + load;
+  const std::string section = "MATERIAL=M\n";
+  oriented.replace(oriented.find(section), section.size(), "MATERIAL=M, ORIENTATION=S0\n");
+  const CalculixModel a = parseCalculixInput(oriented);
+  const CalculixModel b = parseCalculixInput(twoCubes("*MATERIAL, NAME=M\n*ELASTIC\n100, 0.3\n") + load);
+  EXPECT_LT((solve(a.mesh, a.materials, a.constraints, a.load) - solve(b.mesh, b.materials, b.constraints, b.load))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-15);
+  std::string unknown = oriented;
+  unknown.replace(unknown.find("ORIENTATION=S0"), 14, "ORIENTATION=S1");
+  EXPECT_NE(errorOf(unknown).find("orientation S1, which is not defined"), std::string::npos) << errorOf(unknown);
+}
