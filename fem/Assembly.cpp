@@ -112,21 +112,6 @@ void scatter(const int* outer, const int* inner, const Element& el, const Elemen
   }
 }
 
-/// Element matrices of a batch of elements, computed by several threads.
-void computeBatch(const Mesh& mesh, const MaterialTable& materials, int pointsPerDirection, std::size_t first,
-                  std::size_t last, std::vector<ElementMatrix>& out, std::exception_ptr& error) {
-  try {
-    for (std::size_t e = first; e < last; ++e) {
-      const Element& el = mesh.elements[e];
-      const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
-      assembleElementStiffness(shape, mesh.elementCoordinates(e), materials.at(el.region),
-                               integrationRule(el.kind, pointsPerDirection), int(e), out[e % out.size()]);
-    }
-  } catch (...) {
-    error = std::current_exception();
-  }
-}
-
 }  // namespace
 
 Eigen::SparseMatrix<double> stiffnessPattern(const Mesh& mesh) {
@@ -140,46 +125,70 @@ Eigen::SparseMatrix<double> stiffnessPattern(const Mesh& mesh) {
   return k;
 }
 
-void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,
-                             Eigen::SparseMatrix<double>& k) {
-  // Fail early on a bad rule, not in a worker thread.
-  gaussRule(options.gaussPointsPerDirection);
-  for (const Element& el : mesh.elements)
-    if (el.kind == ElementKind::Wedge15) {
-      wedgeRule(options.gaussPointsPerDirection);
-      break;
-    }
-  if (k.rows() != mesh.dofCount() || k.cols() != mesh.dofCount() || !k.isCompressed())
-    throw std::invalid_argument("assembleStiffnessValues: the matrix does not have the mesh's stiffness pattern");
-  const int n = options.gaussPointsPerDirection;
+void assembleElements(const Mesh& mesh, int threads, const ElementKernel& kernel, Eigen::SparseMatrix<double>* k,
+                      Eigen::VectorXd* r) {
+  if (k && (k->rows() != mesh.dofCount() || k->cols() != mesh.dofCount() || !k->isCompressed()))
+    throw std::invalid_argument("assembleElements: the matrix does not have the mesh's stiffness pattern");
+  if (k) std::fill_n(k->valuePtr(), k->nonZeros(), 0.0);
+  if (r) r->setZero(mesh.dofCount());
   const std::size_t ne = mesh.elements.size();
-  const std::size_t threads = std::size_t(std::max(1, options.threads));
-  double* values = k.valuePtr();
-  std::fill_n(values, k.nonZeros(), 0.0);
+  const std::size_t workers = std::size_t(std::max(1, threads));
 
   // Element matrices in batches, threads splitting each batch; the scatter
   // runs in element order on this thread, so the sums are bit-identical for
   // any thread count. Straight into the pattern's places: no triplet list to
   // sort (that was most of the assembly time).
   constexpr std::size_t kBatch = 256;
-  std::vector<ElementMatrix> batch(kBatch);
+  std::vector<ElementMatrix> matrices(k ? kBatch : 0);
+  std::vector<ElementVector> vectors(r ? kBatch : 0);
+  auto compute = [&](std::size_t first, std::size_t last, std::exception_ptr& error) {
+    try {
+      for (std::size_t e = first; e < last; ++e)
+        kernel(e, k ? &matrices[e % kBatch] : nullptr, r ? &vectors[e % kBatch] : nullptr);
+    } catch (...) {
+      error = std::current_exception();
+    }
+  };
   for (std::size_t begin = 0; begin < ne; begin += kBatch) {
     const std::size_t end = std::min(ne, begin + kBatch);
-    const std::size_t workers = std::min(threads, end - begin);
-    std::vector<std::exception_ptr> errors(workers);
+    const std::size_t used = std::min(workers, end - begin);
+    std::vector<std::exception_ptr> errors(used);
     std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < workers; ++t) {
-      const std::size_t first = begin + (end - begin) * t / workers, last = begin + (end - begin) * (t + 1) / workers;
-      pool.emplace_back(computeBatch, std::cref(mesh), std::cref(materials), n, first, last, std::ref(batch),
+    for (std::size_t t = 1; t < used; ++t)
+      pool.emplace_back(compute, begin + (end - begin) * t / used, begin + (end - begin) * (t + 1) / used,
                         std::ref(errors[t]));
-    }
-    computeBatch(mesh, materials, n, begin, begin + (end - begin) / workers, batch, errors[0]);
+    compute(begin, begin + (end - begin) / used, errors[0]);
     for (auto& w : pool) w.join();
     for (auto& err : errors)
       if (err) std::rethrow_exception(err);  // the lowest-numbered bad element's range first
-    for (std::size_t e = begin; e < end; ++e)
-      scatter(k.outerIndexPtr(), k.innerIndexPtr(), mesh.elements[e], batch[e % kBatch], values);
+    for (std::size_t e = begin; e < end; ++e) {
+      const Element& el = mesh.elements[e];
+      if (k) scatter(k->outerIndexPtr(), k->innerIndexPtr(), el, matrices[e % kBatch], k->valuePtr());
+      if (r)
+        for (int a = 0; a < kHex20NodeCount; ++a)
+          if (el.nodes[std::size_t(a)] >= 0) r->segment<3>(3 * el.nodes[std::size_t(a)]) += vectors[e % kBatch].segment<3>(3 * a);
+    }
   }
+}
+
+void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,
+                             Eigen::SparseMatrix<double>& k) {
+  // Fail early on a bad rule, not in a worker thread.
+  gaussRule(options.gaussPointsPerDirection);
+  for (const Element& el : mesh.elements)
+    integrationRule(el.kind, integrationPointsOf(el, options.gaussPointsPerDirection));
+  if (k.rows() != mesh.dofCount() || k.cols() != mesh.dofCount() || !k.isCompressed())
+    throw std::invalid_argument("assembleStiffnessValues: the matrix does not have the mesh's stiffness pattern");
+  assembleElements(
+      mesh, options.threads,
+      [&](std::size_t e, ElementMatrix* ke, ElementVector*) {
+        const Element& el = mesh.elements[e];
+        const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
+        assembleElementStiffness(shape, mesh.elementCoordinates(e), materials.at(el.region),
+                                 integrationRule(el.kind, integrationPointsOf(el, options.gaussPointsPerDirection)),
+                                 int(e), *ke);
+      },
+      &k, nullptr);
 }
 
 Eigen::SparseMatrix<double> assembleStiffness(const Mesh& mesh, const MaterialTable& materials,
@@ -198,7 +207,8 @@ Eigen::VectorXd assembleGravityLoad(const Mesh& mesh, const MaterialTable& mater
     const double rho = materials.at(el.region).density;
     if (rho == 0.0) continue;
     assembleElementBodyForce(ElementShape::fromConnectivity(el.kind, el.nodes), mesh.elementCoordinates(e),
-                             rho * acceleration, integrationRule(el.kind, options.gaussPointsPerDirection), int(e),
+                             rho * acceleration,
+                             integrationRule(el.kind, integrationPointsOf(el, options.gaussPointsPerDirection)), int(e),
                              re);
     for (int k = 0; k < kHex20NodeCount; ++k)
       if (el.nodes[k] >= 0) r.segment<3>(3 * el.nodes[k]) += re.segment<3>(3 * k);

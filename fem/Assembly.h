@@ -1,9 +1,12 @@
 #pragma once
 
+#include "fem/ElasticityIntegrator.h"
 #include "fem/Mesh.h"
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+
+#include <functional>
 
 namespace caps::fem {
 
@@ -36,6 +39,22 @@ Eigen::SparseMatrix<double> stiffnessPattern(const Mesh& mesh);
 /// (throws std::invalid_argument otherwise, on size).
 void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,
                              Eigen::SparseMatrix<double>& k);
+
+/// One element's contribution, computed on a worker thread: its matrix into
+/// @a ke and its vector into @a re (either null when the assembly does not
+/// want it). Element matrices use the slot layout of ElasticityIntegrator.h.
+using ElementKernel = std::function<void(std::size_t element, ElementMatrix* ke, ElementVector* re)>;
+
+/**
+ * @brief The element loop every assembly shares: @a kernel on each element,
+ *        @a threads at a time, scattered in element order into @a k's values
+ *        (which must have stiffnessPattern(mesh)'s pattern; zeroed first) and
+ *        into @a r (3N, zeroed first), either of which may be null. The sums
+ *        are bit-identical for any thread count. Rethrows the exception of
+ *        the lowest-numbered failing element.
+ */
+void assembleElements(const Mesh& mesh, int threads, const ElementKernel& kernel, Eigen::SparseMatrix<double>* k,
+                      Eigen::VectorXd* r);
 
 /**
  * @brief Gravity loads (eq. 4.35-4.39): each element's density times

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace caps::fem {
@@ -19,7 +20,18 @@ struct Element {
   std::array<int, kHex20NodeCount> nodes{};
   int region = 0;                        ///< selects the material in a MaterialTable
   ElementKind kind = ElementKind::Hex20;  ///< how the slots are read
+  /// Points per direction of this element's own rule: 0 takes the
+  /// analysis's (AssemblyOptions::gaussPointsPerDirection); 2 is the reduced
+  /// rule (C3D20R's 2x2x2; a wedge's 9 points, CalculiX's C3D15 rule), 3 the
+  /// full one. A deck's element type says which (CalculixReader).
+  std::uint8_t integrationPoints = 0;
 };
+
+/// Points per direction element @a el is integrated with, when the
+/// analysis's default is @a analysisDefault.
+inline int integrationPointsOf(const Element& el, int analysisDefault) {
+  return el.integrationPoints ? int(el.integrationPoints) : analysisDefault;
+}
 
 /**
  * @brief Finite element mesh: node coordinates (mm, one column per node) and

@@ -1,0 +1,80 @@
+#pragma once
+
+#include "fem/ElasticityIntegrator.h"
+#include "fem/ElementGeometry.h"
+#include "fem/HyperelasticMaterial.h"
+#include "fem/Quadrature.h"
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace caps::fem {
+
+/// Displacements of an element's 20 node slots, one per row (mm); rows of
+/// absent slots are ignored.
+using ElementDisplacements = Eigen::Matrix<double, kHex20NodeCount, 3>;
+
+/// An element turned inside out by a trial displacement: det F <= 0 at an
+/// integration point. Newton cuts the step back when it meets one.
+class InvertedElementError : public ElementError {
+public:
+  InvertedElementError(int element, double detF, const Eigen::Vector3d& natural, const std::string& what)
+      : ElementError(element, what), detF_(detF), natural_(natural) {}
+  double detF() const { return detF_; }
+  const Eigen::Vector3d& natural() const { return natural_; }
+
+private:
+  double detF_;
+  Eigen::Vector3d natural_;
+};
+
+/// Kinematics at one integration point of the Total Lagrangian formulation.
+struct FiniteStrainPoint {
+  Eigen::Matrix3d deformationGradient;  ///< F = I + du/dX
+  double detF = 1.0;                    ///< J
+  Vector6d secondPiolaKirchhoff;        ///< S (MPa)
+  Vector6d cauchy;                      ///< sigma = F S F^T / J (MPa)
+  Vector6d greenLagrange;               ///< E = (C - I) / 2, engineering shears
+  Eigen::Vector3d principalStretches;   ///< sqrt of the eigenvalues of C, largest first
+  Eigen::Vector3d world;                ///< X (undeformed position, mm)
+};
+
+/// What one element's evaluation saw, for the checks every prediction carries.
+struct FiniteStrainElementCheck {
+  double minDetF = 1.0;
+  double maxStretch = 1.0;  ///< largest principal stretch
+  double minStretch = 1.0;  ///< smallest principal stretch
+  double energy = 0.0;      ///< strain energy (mJ = N mm)
+};
+
+/**
+ * @brief Total Lagrangian internal forces and consistent tangent of one
+ *        element (Bathe, Finite Element Procedures, 1996, §6.2.3; the
+ *        thesis's §6.1.2 "nonlinear finite element model").
+ *
+ * On the reference geometry @a x displaced by @a u, at each point of
+ * @a rule: F = I + u^T dH/dX, C = F^T F, S and dS/dE from @a material,
+ *   f_int = sum_g w_g det J B_L^T S,
+ *   K_t   = sum_g w_g det J (B_L^T D B_L + G^T S G)   (material + geometric),
+ * B_L the strain-displacement matrix of the Green-Lagrange strain at F. The
+ * same shapes, rules and slot layout as the linear integrator, so wedges,
+ * degenerate bricks and bricks with any mid-side subset work alike.
+ *
+ * @a kt may be null (residual only: the line search). Throws
+ * InvertedElementError when det F <= 0 at a point, ElementError when the
+ * reference Jacobian is bad. @a check gets the smallest det F, the stretches
+ * and the energy.
+ */
+void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
+                                 const ElementDisplacements& u, const HyperelasticMaterial& material,
+                                 const IntegrationRule& rule, int elementIndex, ElementVector& fint,
+                                 ElementMatrix* kt, FiniteStrainElementCheck& check);
+
+/// Kinematics and stresses at natural point @a rst of one element (for
+/// output); throws as assembleElementFiniteStrain().
+FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const ElementCoordinates& x,
+                                            const ElementDisplacements& u, const HyperelasticMaterial& material,
+                                            const Eigen::Vector3d& rst, int elementIndex);
+
+}  // namespace caps::fem

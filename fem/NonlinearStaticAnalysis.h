@@ -1,0 +1,151 @@
+#pragma once
+
+#include "fem/Assembly.h"
+#include "fem/Constraints.h"
+#include "fem/HyperelasticMaterial.h"
+#include "fem/Mesh.h"
+#include "fem/SparseCholeskySolver.h"
+#include "fem/StaticAnalysis.h"
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace caps::fem {
+
+/// Tolerances and safeguards of the Newton-Raphson iteration in one increment.
+struct NewtonOptions {
+  /// Converged when |R| <= residualTolerance * the force scale (the larger
+  /// of |f_ext| and |f_int|, reactions included) ...
+  double residualTolerance = 1e-8;
+  /// ... and the energy of the last correction |dU . R| <= energyTolerance
+  /// times that of the increment's first.
+  double energyTolerance = 1e-14;
+  int maxIterations = 20;
+  /// Line search along each correction (FEBio's): when the energy along it
+  /// has not fallen below lineSearchRatio of its start, the step is cut to
+  /// the secant root, at most maxLineSearchSteps times.
+  bool lineSearch = true;
+  double lineSearchRatio = 0.9;
+  int maxLineSearchSteps = 5;
+};
+
+/// The load increments: fractions of the load, the prescribed displacements
+/// and the suture gaps, applied together from 0 to 1.
+struct IncrementControl {
+  double initial = 1.0;   ///< first increment
+  double minimum = 1e-5;  ///< below it, a failing increment ends the solve
+  double maximum = 1.0;   ///< the largest increment after growing
+  /// Fixed increments of @a initial (CalculiX *STATIC, DIRECT): a failing
+  /// increment ends the solve instead of being cut back.
+  bool fixed = false;
+  int maxIncrements = 1000;
+};
+
+/// What one Newton iteration reached (for the log and the progress bar).
+struct NewtonIteration {
+  int increment = 0;           ///< 1-based, counting accepted increments
+  double loadFraction = 0.0;   ///< the fraction the increment aims at
+  int iteration = 0;           ///< 1-based within the increment
+  double residual = 0.0;       ///< |R| / force scale after the iteration
+  double energy = 0.0;         ///< |dU . R| of the correction / the increment's first
+  double lineSearchStep = 1.0; ///< the fraction of the correction taken
+};
+
+/// One attempted increment, accepted or cut back.
+struct IncrementRecord {
+  int increment = 0;
+  double startFraction = 0.0, endFraction = 0.0;
+  int iterations = 0;
+  double residual = 0.0;  ///< the last relative residual
+  bool accepted = false;
+  std::string rejection;  ///< why it was cut back (empty when accepted)
+};
+
+enum class NonlinearStatus {
+  Converged,     ///< the whole load reached, every increment converged
+  NotConverged,  ///< an increment failed at the smallest size: result is the last converged state, NOT a prediction
+  Cancelled      ///< stopped by the monitor
+};
+
+/// The checks every large-deformation result carries (DESIGN.md).
+struct DeformationCheck {
+  double minDetF = 1.0;
+  int minDetFElement = -1;
+  double maxStretch = 1.0;
+  double minStretch = 1.0;
+  double strainEnergy = 0.0;  ///< N mm
+};
+
+struct NonlinearResult {
+  NonlinearStatus status = NonlinearStatus::NotConverged;
+  std::string message;         ///< empty when converged; otherwise what happened and what to try
+  double loadFraction = 0.0;   ///< the last converged fraction (1 when converged)
+  Eigen::VectorXd displacements;  ///< 3N at loadFraction
+  DeformationCheck check;      ///< of the displacements above
+  std::vector<IncrementRecord> increments;  ///< every attempt, in order
+  std::vector<NewtonIteration> iterations;  ///< every iteration, in order
+  int factorizations = 0;
+};
+
+/// Called after every Newton iteration; returning false cancels the solve.
+using NewtonMonitor = std::function<bool(const NewtonIteration&)>;
+
+/**
+ * @brief Quasi-static large-deformation analysis: Total Lagrangian
+ *        hyperelastic elements (FiniteStrainIntegrator.h), Newton-Raphson
+ *        with line search in load increments that grow when Newton converges
+ *        fast and are cut back when it does not or when an element would turn
+ *        inside out; a step that fails is never accepted.
+ *
+ * Constraints are the linear model's master-slave elimination
+ * U = T Ubar + lambda g, with g (prescribed values, suture gaps) ramped with
+ * the load fraction lambda: a suture is a linear constraint and closes
+ * exactly in large deformation too. Each increment starts from the tangent
+ * of the last converged state with the prescribed increment as load (the
+ * consistent predictor). The pattern of K-bar is analysed once; every
+ * iteration is one numeric factorization. Loads (nodal forces, gravity,
+ * muscles) are dead loads scaled by lambda; face pressures (follower loads
+ * in large deformation) are refused.
+ */
+class NonlinearStaticAnalysis {
+public:
+  NonlinearStaticAnalysis(Mesh mesh, HyperelasticTable materials, Constraints constraints,
+                          AssemblyOptions options = {});
+
+  /// Runs the increments. Throws std::invalid_argument / ElementError on bad
+  /// input (mesh, materials, constraints, a face pressure), naming the culprit.
+  NonlinearResult solve(const LoadCase& load, const IncrementControl& control = {},
+                        const NewtonOptions& newton = {}, const NewtonMonitor& monitor = {});
+
+  /// Full load vector (3N) of @a load at fraction 1.
+  Eigen::VectorXd loadVector(const LoadCase& load) const;
+  /// Internal forces f_int(u) (3N; at constrained DOFs the reactions).
+  /// Throws InvertedElementError where u turns an element inside out.
+  Eigen::VectorXd internalForces(const Eigen::VectorXd& u) const;
+  /// Upper triangle of the tangent K_t(u) (3N x 3N).
+  Eigen::SparseMatrix<double> tangentStiffness(const Eigen::VectorXd& u) const;
+  /// det F, stretches and energy of @a u over every integration point.
+  DeformationCheck deformationCheck(const Eigen::VectorXd& u) const;
+
+  const Mesh& mesh() const { return mesh_; }
+  const HyperelasticTable& materials() const { return materials_; }
+  /// The small-strain limit of each region's material.
+  const MaterialTable& smallStrainMaterials() const { return linear_; }
+
+private:
+  /// f_int and (if @a k) K_t at @a u into @a fint / @a k; returns the checks.
+  DeformationCheck evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) const;
+  void validate(const LoadCase& load) const;
+
+  Mesh mesh_;
+  HyperelasticTable materials_;
+  MaterialTable linear_;
+  Constraints constraints_;
+  AssemblyOptions options_;
+};
+
+}  // namespace caps::fem
