@@ -1,5 +1,8 @@
 #include "fem/Constraints.h"
 
+#include <Eigen/LU>
+#include <Eigen/SparseLU>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -12,18 +15,91 @@ namespace {
 
 const char* axisName(int d) { return d == 0 ? "x" : (d == 1 ? "y" : "z"); }
 
-void checkNode(int node, Eigen::Index n, const std::string& what) {
-  if (node < 0 || node >= n)
-    throw std::invalid_argument(what + " refers to node " + std::to_string(node) +
-                                ", but the mesh has nodes 0.." + std::to_string(n - 1));
+std::string defaultNodeName(int node) { return std::to_string(node); }
+std::string defaultEquationName(int e) { return "equation " + std::to_string(e); }
+
+std::string render(const std::string& pattern, const std::vector<int>& nodes, const std::vector<int>& equations,
+                   const ConstraintError::Naming& naming) {
+  std::string out;
+  out.reserve(pattern.size());
+  for (std::size_t i = 0; i < pattern.size(); ++i) {
+    const char kind = i + 1 < pattern.size() ? pattern[i + 1] : '\0';
+    if (pattern[i] == '{' && (kind == 'N' || kind == 'E')) {
+      const std::size_t close = pattern.find('}', i);
+      const std::string digits = close == std::string::npos ? "" : pattern.substr(i + 2, close - i - 2);
+      const bool number = !digits.empty() && std::all_of(digits.begin(), digits.end(), [](unsigned char ch) { return ch >= '0' && ch <= '9'; });
+      const std::vector<int>& refs = kind == 'N' ? nodes : equations;
+      if (number && std::stoul(digits) < refs.size()) {
+        const int ref = refs[std::stoul(digits)];
+        if (kind == 'N')
+          out += naming.node ? naming.node(ref) : defaultNodeName(ref);
+        else
+          out += naming.equation ? naming.equation(ref) : defaultEquationName(ref);
+        i = close;
+        continue;
+      }
+    }
+    out += pattern[i];
+  }
+  return out;
 }
 
-std::string dofName(int dof) { return "node " + std::to_string(dof / 3) + " " + axisName(dof % 3); }
+/// A node of the mesh, a DOF (3 node + direction) and an equation, as
+/// references in a Message.
+struct NodeRef {
+  int node;
+};
+struct DofRef {
+  int dof;
+};
+struct EquationRef {
+  int equation;
+};
+
+/// Builds a ConstraintError: text, with nodes and equations as references.
+class Message {
+public:
+  Message& operator<<(const std::string& text) {
+    pattern_ += text;
+    return *this;
+  }
+  Message& operator<<(const char* text) { return *this << std::string(text); }
+  Message& operator<<(double x) {
+    std::ostringstream s;
+    s << x;
+    return *this << s.str();
+  }
+  Message& operator<<(NodeRef n) {
+    pattern_ += "{N" + std::to_string(nodes_.size()) + "}";
+    nodes_.push_back(n.node);
+    return *this;
+  }
+  Message& operator<<(DofRef d) { return *this << "node " << NodeRef{d.dof / 3} << " " << axisName(d.dof % 3); }
+  Message& operator<<(EquationRef e) {
+    pattern_ += "{E" + std::to_string(equations_.size()) + "}";
+    equations_.push_back(e.equation);
+    return *this;
+  }
+  ConstraintError error() const { return ConstraintError(pattern_, nodes_, equations_); }
+
+private:
+  std::string pattern_;
+  std::vector<int> nodes_, equations_;
+};
+
+/// Out of range: the number goes into the text, as it names no node.
+void checkNode(int node, Eigen::Index n, Message what) {
+  if (node < 0 || node >= n)
+    throw (what << " refers to node " << std::to_string(node) << ", but the mesh has nodes 0.." +
+                                                                    std::to_string(n - 1))
+        .error();
+}
 
 /// One equation with its terms moved to root DOFs (through sutures), summed,
 /// zeros dropped: lead u_dependent + sum others = value.
 struct RootEquation {
   int dependent = -1;
+  int source = -1;  ///< index into Constraints::equations
   double lead = 0.0;
   std::vector<std::pair<int, double>> others;  ///< (root DOF, coefficient)
   double value = 0.0;
@@ -35,8 +111,27 @@ struct ResolvedRow {
   double constant = 0.0;
 };
 
-/// Substitutes equations into each other, depth first (cascades), detecting
-/// closed loops of dependent DOFs.
+/// Sorts by reduced DOF, sums duplicates, drops exact zeros.
+void mergeTerms(ResolvedRow& r) {
+  std::sort(r.terms.begin(), r.terms.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::pair<int, double>> merged;
+  for (const auto& t : r.terms)
+    if (!merged.empty() && merged.back().first == t.first)
+      merged.back().second += t.second;
+    else
+      merged.push_back(t);
+  merged.erase(std::remove_if(merged.begin(), merged.end(), [](const auto& t) { return t.second == 0.0; }),
+               merged.end());
+  r.terms = std::move(merged);
+}
+
+/// Resolves the dependent DOF of every equation into a row of T.
+///
+/// Equation e refers to equation f when a term of e is f's dependent DOF.
+/// The strongly connected groups of that graph (Tarjan) come out after every
+/// group they refer to, so each group is resolved once the rows it refers to
+/// are known: a single equation by substitution (a cascade, as before), a
+/// group of coupled dependents by solving its square system.
 class EquationResolver {
 public:
   EquationResolver(const std::vector<RootEquation>& equations, const std::vector<int>& equationOf,
@@ -46,21 +141,83 @@ public:
         isPrescribed_(isPrescribed),
         value_(value),
         reduced_(reduced),
-        rows_(equations.size()),
-        state_(equations.size(), 0) {}
+        rows_(equations.size()) {}
 
-  const ResolvedRow& row(int e) {
-    if (state_[std::size_t(e)] == 2) return rows_[std::size_t(e)];
-    const RootEquation& q = equations_[std::size_t(e)];
-    if (state_[std::size_t(e)] == 1) {
-      std::string loop;
-      auto at = std::find(path_.begin(), path_.end(), q.dependent);
-      for (; at != path_.end(); ++at) loop += dofName(*at) + " -> ";
-      throw std::invalid_argument("equations form a closed loop of dependent degrees of freedom: " + loop +
-                                  dofName(q.dependent) + "; begin one of these equations with another term");
+  std::vector<ResolvedRow> resolve() {
+    for (const std::vector<int>& group : stronglyConnectedGroups()) {
+      if (group.size() == 1)
+        substitute(group[0]);
+      else
+        solveGroup(group);
     }
-    state_[std::size_t(e)] = 1;
-    path_.push_back(q.dependent);
+    return std::move(rows_);
+  }
+
+private:
+  /// The equation whose dependent DOF @a dof is, or -1.
+  int dependentOf(int dof) const {
+    return isPrescribed_[std::size_t(dof)] ? -1 : equationOf_[std::size_t(dof)];
+  }
+
+  /// Tarjan's algorithm, without recursion (cascades may be long).
+  std::vector<std::vector<int>> stronglyConnectedGroups() const {
+    const int m = int(equations_.size());
+    std::vector<int> index(std::size_t(m), -1), low(std::size_t(m), 0);
+    std::vector<char> onStack(std::size_t(m), 0);
+    std::vector<int> stack;
+    std::vector<std::vector<int>> groups;
+    std::vector<std::pair<int, std::size_t>> call;  // (equation, next term to visit)
+    int counter = 0;
+    for (int start = 0; start < m; ++start) {
+      if (index[std::size_t(start)] >= 0) continue;
+      call.push_back({start, 0});
+      while (!call.empty()) {
+        auto& [e, next] = call.back();
+        const std::size_t ue = std::size_t(e);
+        if (next == 0 && index[ue] < 0) {
+          index[ue] = low[ue] = counter++;
+          stack.push_back(e);
+          onStack[ue] = 1;
+        }
+        const auto& others = equations_[ue].others;
+        bool descended = false;
+        while (next < others.size()) {
+          const int f = dependentOf(others[next++].first);
+          if (f < 0) continue;
+          if (index[std::size_t(f)] < 0) {
+            call.push_back({f, 0});
+            descended = true;
+            break;
+          }
+          if (onStack[std::size_t(f)]) low[ue] = std::min(low[ue], index[std::size_t(f)]);
+        }
+        if (descended) continue;
+        if (low[ue] == index[ue]) {
+          std::vector<int> group;
+          int f;
+          do {
+            f = stack.back();
+            stack.pop_back();
+            onStack[std::size_t(f)] = 0;
+            group.push_back(f);
+          } while (f != e);
+          std::sort(group.begin(), group.end());
+          groups.push_back(std::move(group));
+        }
+        const int done = e;
+        call.pop_back();
+        if (!call.empty()) {
+          const std::size_t parent = std::size_t(call.back().first);
+          low[parent] = std::min(low[parent], low[std::size_t(done)]);
+        }
+      }
+    }
+    return groups;
+  }
+
+  /// One equation that refers to no dependent of its own group: substitute.
+  void substitute(int e) {
+    const RootEquation& q = equations_[std::size_t(e)];
     ResolvedRow r;
     r.constant = q.value / q.lead;
     for (const auto& [dof, c] : q.others) {
@@ -68,41 +225,137 @@ public:
       if (isPrescribed_[std::size_t(dof)]) {
         r.constant += f * value_[dof];
       } else if (const int other = equationOf_[std::size_t(dof)]; other >= 0) {
-        const ResolvedRow& sub = row(other);
+        const ResolvedRow& sub = rows_[std::size_t(other)];
         r.constant += f * sub.constant;
         for (const auto& [i, ci] : sub.terms) r.terms.push_back({i, f * ci});
       } else {
         r.terms.push_back({reduced_[std::size_t(dof)], f});
       }
     }
-    std::sort(r.terms.begin(), r.terms.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::vector<std::pair<int, double>> merged;
-    for (const auto& t : r.terms)
-      if (!merged.empty() && merged.back().first == t.first)
-        merged.back().second += t.second;
-      else
-        merged.push_back(t);
-    merged.erase(std::remove_if(merged.begin(), merged.end(), [](const auto& t) { return t.second == 0.0; }),
-                 merged.end());
-    r.terms = std::move(merged);
-    path_.pop_back();
-    state_[std::size_t(e)] = 2;
+    mergeTerms(r);
     rows_[std::size_t(e)] = std::move(r);
-    return rows_[std::size_t(e)];
   }
 
-private:
+  /// Coupled dependents: A x = B ubar + b over the group, A square (one row
+  /// per equation, one column per dependent), rows scaled to a largest
+  /// coefficient of 1; x = A^-1 [B b].
+  void solveGroup(const std::vector<int>& group) {
+    const Eigen::Index m = Eigen::Index(group.size());
+    auto local = [&group](int e) {
+      const auto at = std::lower_bound(group.begin(), group.end(), e);
+      return at != group.end() && *at == e ? Eigen::Index(at - group.begin()) : Eigen::Index(-1);
+    };
+    // Columns of the right-hand side: the reduced DOFs the group involves.
+    std::vector<int> columns;
+    for (int e : group)
+      for (const auto& [dof, c] : equations_[std::size_t(e)].others) {
+        if (isPrescribed_[std::size_t(dof)]) continue;
+        const int f = equationOf_[std::size_t(dof)];
+        if (f < 0)
+          columns.push_back(reduced_[std::size_t(dof)]);
+        else if (local(f) < 0)
+          for (const auto& t : rows_[std::size_t(f)].terms) columns.push_back(t.first);
+      }
+    std::sort(columns.begin(), columns.end());
+    columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    const Eigen::Index k = Eigen::Index(columns.size());
+    auto column = [&columns](int i) {
+      return Eigen::Index(std::lower_bound(columns.begin(), columns.end(), i) - columns.begin());
+    };
+    std::vector<Eigen::Triplet<double>> a;
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m, k + 1);  // last column: the constant
+    for (Eigen::Index row = 0; row < m; ++row) {
+      const RootEquation& q = equations_[std::size_t(group[std::size_t(row)])];
+      double scale = std::abs(q.lead);
+      for (const auto& o : q.others)
+        if (!isPrescribed_[std::size_t(o.first)] && local(equationOf_[std::size_t(o.first)]) >= 0)
+          scale = std::max(scale, std::abs(o.second));
+      const double s = 1.0 / scale;
+      a.emplace_back(row, row, s * q.lead);
+      rhs(row, k) = s * q.value;
+      for (const auto& [dof, c] : q.others) {
+        if (isPrescribed_[std::size_t(dof)]) {
+          rhs(row, k) -= s * c * value_[dof];
+        } else if (const int f = equationOf_[std::size_t(dof)]; f < 0) {
+          rhs(row, column(reduced_[std::size_t(dof)])) -= s * c;
+        } else if (const Eigen::Index j = local(f); j >= 0) {
+          a.emplace_back(row, j, s * c);
+        } else {
+          const ResolvedRow& sub = rows_[std::size_t(f)];
+          rhs(row, k) -= s * c * sub.constant;
+          for (const auto& [i, ci] : sub.terms) rhs(row, column(i)) -= s * c * ci;
+        }
+      }
+    }
+    Eigen::SparseMatrix<double> as(m, m);
+    as.setFromTriplets(a.begin(), a.end());  // sums the terms on one dependent
+    Eigen::MatrixXd x;
+    Eigen::Index undetermined = -1;  // local index of a dependent the group leaves free
+    // Relative to the largest pivot (rows scaled to 1): below it the system is
+    // singular for any purpose here.
+    constexpr double kPivotThreshold = 1e-12;
+    constexpr Eigen::Index kDenseGroup = 400;
+    if (m <= kDenseGroup) {
+      const Eigen::MatrixXd dense(as);
+      Eigen::FullPivLU<Eigen::MatrixXd> lu(dense);
+      lu.setThreshold(kPivotThreshold);
+      if (lu.rank() < m)
+        undetermined = lu.permutationQ().indices()[lu.rank()];
+      else
+        x = lu.solve(rhs);
+    } else {
+      Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+      lu.compute(as);
+      if (lu.info() != Eigen::Success) {
+        undetermined = 0;
+      } else {
+        x = lu.solve(rhs);
+        const double residual = (Eigen::MatrixXd(as * x) - rhs).cwiseAbs().maxCoeff();
+        if (!x.allFinite() || residual > 1e-9 * std::max(1.0, rhs.cwiseAbs().maxCoeff())) undetermined = 0;
+      }
+    }
+    if (undetermined >= 0) {
+      const int free = equations_[std::size_t(group[std::size_t(undetermined)])].dependent;
+      Message msg;
+      msg << "equations whose dependent DOFs (first terms) depend on each other (";
+      constexpr std::size_t kListed = 8;
+      for (std::size_t g = 0; g < group.size() && g < kListed; ++g) {
+        const RootEquation& q = equations_[std::size_t(group[g])];
+        msg << (g ? ", " : "") << EquationRef{q.source} << " on " << DofRef{q.dependent};
+      }
+      if (group.size() > kListed) msg << " and " << std::to_string(group.size() - kListed) << " more";
+      msg << ") form a singular system that does not determine " << DofRef{free}
+          << ": they are linearly dependent or contradict each other; drop one or change its coefficients";
+      throw msg.error();
+    }
+    for (Eigen::Index row = 0; row < m; ++row) {
+      ResolvedRow r;
+      r.constant = x(row, k);
+      for (Eigen::Index c = 0; c < k; ++c)
+        if (x(row, c) != 0.0) r.terms.push_back({columns[std::size_t(c)], x(row, c)});
+      rows_[std::size_t(group[std::size_t(row)])] = std::move(r);
+    }
+  }
+
   const std::vector<RootEquation>& equations_;
   const std::vector<int>& equationOf_;
   const std::vector<char>& isPrescribed_;
   const Eigen::VectorXd& value_;
   const std::vector<int>& reduced_;
   std::vector<ResolvedRow> rows_;
-  std::vector<char> state_;  ///< 0 not yet, 1 on the current path, 2 resolved
-  std::vector<int> path_;
 };
 
 }  // namespace
+
+ConstraintError::ConstraintError(std::string pattern, std::vector<int> nodes, std::vector<int> equations)
+    : std::invalid_argument(render(pattern, nodes, equations, {})),
+      pattern_(std::move(pattern)),
+      nodes_(std::move(nodes)),
+      equations_(std::move(equations)) {}
+
+std::string ConstraintError::message(const Naming& naming) const {
+  return render(pattern_, nodes_, equations_, naming);
+}
 
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
   const Eigen::Index n = mesh.nodeCount();
@@ -113,36 +366,35 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
   std::vector<int> sutureTarget(n, -1);
 
   for (const PrescribedDof& p : c.prescribed) {
-    checkNode(p.node, n, "a prescribed displacement");
+    checkNode(p.node, n, Message() << "a prescribed displacement");
     if (p.direction < 0 || p.direction > 2)
-      throw std::invalid_argument("a prescribed displacement of node " + std::to_string(p.node) +
-                                  " has direction " + std::to_string(p.direction) + " (0, 1, 2 for x, y, z)");
+      throw (Message() << "a prescribed displacement of node " << NodeRef{p.node} << " has direction "
+                       << std::to_string(p.direction) << " (0, 1, 2 for x, y, z)")
+          .error();
     if (!std::isfinite(p.value))
-      throw std::invalid_argument("node " + std::to_string(p.node) + " has a non-finite prescribed " +
-                                  axisName(p.direction) + " displacement");
+      throw (Message() << "node " << NodeRef{p.node} << " has a non-finite prescribed " << axisName(p.direction)
+                       << " displacement")
+          .error();
     const Eigen::Index d = 3 * p.node + p.direction;
-    if (isPrescribed[d] && value[d] != p.value) {
-      std::ostringstream m;
-      m << "node " << p.node << " " << axisName(p.direction) << " is prescribed twice, to " << value[d]
-        << " and " << p.value << " mm";
-      throw std::invalid_argument(m.str());
-    }
+    if (isPrescribed[d] && value[d] != p.value)
+      throw (Message() << DofRef{int(d)} << " is prescribed twice, to " << value[d] << " and " << p.value << " mm")
+          .error();
     isPrescribed[d] = 1;
     value[d] = p.value;
   }
   for (const Suture& s : c.sutures) {
-    checkNode(s.node, n, "a suture");
-    checkNode(s.target, n, "a suture");
-    if (s.node == s.target)
-      throw std::invalid_argument("node " + std::to_string(s.node) + " is sutured to itself");
+    checkNode(s.node, n, Message() << "a suture");
+    checkNode(s.target, n, Message() << "a suture");
+    if (s.node == s.target) throw (Message() << "node " << NodeRef{s.node} << " is sutured to itself").error();
     if (sutureTarget[s.node] >= 0 && sutureTarget[s.node] != s.target)
-      throw std::invalid_argument("node " + std::to_string(s.node) + " is sutured to two nodes, " +
-                                  std::to_string(sutureTarget[s.node]) + " and " + std::to_string(s.target));
+      throw (Message() << "node " << NodeRef{s.node} << " is sutured to two nodes, " << NodeRef{sutureTarget[s.node]}
+                       << " and " << NodeRef{s.target})
+          .error();
     for (int d = 0; d < 3; ++d)
       if (isPrescribed[3 * s.node + d])
-        throw std::invalid_argument("node " + std::to_string(s.node) + " is sutured to node " +
-                                    std::to_string(s.target) + " but its " + axisName(d) +
-                                    " displacement is also prescribed; suture the other way round");
+        throw (Message() << "node " << NodeRef{s.node} << " is sutured to node " << NodeRef{s.target} << " but its "
+                         << axisName(d) << " displacement is also prescribed; suture the other way round")
+            .error();
     sutureTarget[s.node] = s.target;
   }
 
@@ -158,9 +410,10 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
       v = sutureTarget[v];
     }
     if (root[v] == -3) {
-      std::string loop;
-      for (int p : path) loop += std::to_string(p) + " -> ";
-      throw std::invalid_argument("sutures form a closed loop: " + loop + std::to_string(v));
+      Message loop;
+      loop << "sutures form a closed loop: ";
+      for (int p : path) loop << NodeRef{p} << " -> ";
+      throw (loop << NodeRef{v}).error();
     }
     const int r = root[v] == -2 ? v : root[v];
     root[v] = r;
@@ -172,38 +425,42 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
   std::vector<int> equationOf(c.equations.empty() ? 0 : std::size_t(ndof), -1);
   for (std::size_t e = 0; e < c.equations.size(); ++e) {
     const LinearConstraint& q = c.equations[e];
-    const std::string which = "equation " + std::to_string(e);
-    if (q.terms.empty()) throw std::invalid_argument(which + " has no terms");
+    const EquationRef which{int(e)};
+    if (q.terms.empty()) throw (Message() << which << " has no terms").error();
     for (const ConstraintTerm& t : q.terms) {
-      checkNode(t.node, n, which);
+      checkNode(t.node, n, Message() << which);
       if (t.direction < 0 || t.direction > 2)
-        throw std::invalid_argument(which + " has a term on node " + std::to_string(t.node) + " in direction " +
-                                    std::to_string(t.direction) + " (0, 1, 2 for x, y, z)");
+        throw (Message() << which << " has a term on node " << NodeRef{t.node} << " in direction "
+                         << std::to_string(t.direction) << " (0, 1, 2 for x, y, z)")
+            .error();
       if (!std::isfinite(t.coefficient))
-        throw std::invalid_argument(which + " has a non-finite coefficient for node " + std::to_string(t.node) +
-                                    " " + axisName(t.direction));
+        throw (Message() << which << " has a non-finite coefficient for " << DofRef{3 * t.node + t.direction})
+            .error();
     }
     const int dependent = 3 * q.terms[0].node + q.terms[0].direction;
-    const std::string name = which + " (dependent DOF " + dofName(dependent) + ")";
-    if (!std::isfinite(q.value)) throw std::invalid_argument(name + " has a non-finite value");
+    const auto name = [&]() { return Message() << which << " (dependent DOF " << DofRef{dependent} << ")"; };
+    if (!std::isfinite(q.value)) throw (name() << " has a non-finite value").error();
     if (q.terms[0].coefficient == 0.0)
-      throw std::invalid_argument(name + " has a zero coefficient in its first term, which is the DOF it "
-                                  "eliminates; begin it with a term whose coefficient is not zero");
+      throw (name() << " has a zero coefficient in its first term, which is the DOF it "
+                       "eliminates; begin it with a term whose coefficient is not zero")
+          .error();
     if (isPrescribed[std::size_t(dependent)])
-      throw std::invalid_argument(dofName(dependent) + " is prescribed and also the dependent DOF (first term) of " +
-                                  which + "; begin the equation with another term");
+      throw (Message() << DofRef{dependent} << " is prescribed and also the dependent DOF (first term) of " << which
+                       << "; begin the equation with another term")
+          .error();
     if (sutureTarget[std::size_t(q.terms[0].node)] >= 0)
-      throw std::invalid_argument(dofName(dependent) + " is sutured to node " +
-                                  std::to_string(sutureTarget[std::size_t(q.terms[0].node)]) +
-                                  " and also the dependent DOF (first term) of " + which +
-                                  "; begin the equation with another term");
+      throw (Message() << DofRef{dependent} << " is sutured to node " << NodeRef{sutureTarget[std::size_t(q.terms[0].node)]}
+                       << " and also the dependent DOF (first term) of " << which
+                       << "; begin the equation with another term")
+          .error();
     if (const int other = equationOf[std::size_t(dependent)]; other >= 0)
-      throw std::invalid_argument(dofName(dependent) + " is the dependent DOF (first term) of two equations, " +
-                                  std::to_string(other) + " and " + std::to_string(e) +
-                                  "; begin one of them with another term");
+      throw (Message() << DofRef{dependent} << " is the dependent DOF (first term) of two equations, "
+                       << EquationRef{other} << " and " << which << "; begin one of them with another term")
+          .error();
     equationOf[std::size_t(dependent)] = int(equations.size());
     RootEquation r;
     r.dependent = dependent;
+    r.source = int(e);
     r.value = q.value;
     for (const ConstraintTerm& t : q.terms) {
       if (t.coefficient == 0.0) continue;
@@ -220,7 +477,7 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
     r.lead = lead->second;
     r.others.erase(lead);
     if (r.lead == 0.0)
-      throw std::invalid_argument(name + ": the terms on its dependent DOF cancel out (coefficients sum to zero)");
+      throw (name() << ": the terms on its dependent DOF cancel out (coefficients sum to zero)").error();
     r.others.erase(std::remove_if(r.others.begin(), r.others.end(), [](const auto& o) { return o.second == 0.0; }),
                    r.others.end());
     equations.push_back(std::move(r));
@@ -244,16 +501,15 @@ ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
       }
     }
   }
-  // Dependent DOFs of equations, substituted in cascade.
+  // Dependent DOFs of equations: substituted in cascade, coupled ones solved together.
   std::vector<const ResolvedRow*> rowOfRoot(equations.empty() ? 0 : std::size_t(ndof), nullptr);
+  std::vector<ResolvedRow> rows;
   if (!equations.empty()) {
-    EquationResolver resolver(equations, equationOf, isPrescribed, value, map.reduced);
+    rows = EquationResolver(equations, equationOf, isPrescribed, value, map.reduced).resolve();
     for (std::size_t e = 0; e < equations.size(); ++e) {
-      const ResolvedRow& r = resolver.row(int(e));
-      map.offset[equations[e].dependent] = r.constant;
+      map.offset[equations[e].dependent] = rows[e].constant;
+      rowOfRoot[std::size_t(equations[e].dependent)] = &rows[e];
     }
-    for (std::size_t e = 0; e < equations.size(); ++e)
-      rowOfRoot[std::size_t(equations[e].dependent)] = &resolver.row(int(e));
     // Rows of T for them and for the DOFs sutured onto them, in DOF order.
     for (int dof = 0; dof < ndof; ++dof) {
       const ResolvedRow* r = rowOfRoot[std::size_t(3 * root[std::size_t(dof / 3)] + dof % 3)];

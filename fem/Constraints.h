@@ -5,7 +5,10 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 
+#include <functional>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace caps::fem {
@@ -127,7 +130,39 @@ private:
 };
 
 /**
- * @brief Builds the map. Throws std::invalid_argument naming the culprit for
+ * @brief An error in the constraints that names nodes and equations by
+ *        reference, so a caller with its own numbering (a deck's node
+ *        numbers) can say it in its terms.
+ *
+ * what() numbers nodes and equations as the model does (from 0); message()
+ * renders the same text with other names. The pattern holds "{N<k>}" for
+ * nodes()[k] (the number alone: "node {N0} x") and "{E<k>}" for
+ * equations()[k] (the whole phrase: "equation 3" by default).
+ */
+class ConstraintError : public std::invalid_argument {
+public:
+  /// How to name a node (index into the mesh) and an equation (index into
+  /// Constraints::equations); an empty function keeps the default.
+  struct Naming {
+    std::function<std::string(int)> node;
+    std::function<std::string(int)> equation;
+  };
+
+  ConstraintError(std::string pattern, std::vector<int> nodes, std::vector<int> equations = {});
+
+  const std::vector<int>& nodes() const { return nodes_; }
+  const std::vector<int>& equations() const { return equations_; }
+  /// The message with nodes and equations named by @a naming.
+  std::string message(const Naming& naming) const;
+
+private:
+  std::string pattern_;
+  std::vector<int> nodes_;
+  std::vector<int> equations_;
+};
+
+/**
+ * @brief Builds the map. Throws ConstraintError naming the culprit for
  *        a node or direction out of range, a DOF prescribed twice with
  *        different values, a suture of a node to itself, a node sutured to two
  *        different targets, a prescribed node that is also sutured onto
@@ -135,11 +170,21 @@ private:
  *        non-finite coefficient or value, a zero first coefficient, a
  *        dependent DOF that is prescribed, sutured onto another node, or
  *        dependent in two equations, and equations whose dependent DOFs depend
- *        on each other in a closed loop.
+ *        on each other (a closed loop) in a singular system: linearly
+ *        dependent or contradictory equations, which leave a dependent DOF
+ *        undetermined. (Out-of-range node numbers come as a ConstraintError
+ *        with the number in its text, as it names no node of the mesh.)
  *
  * Equation terms with zero coefficients are dropped and terms on the same DOF
  * (also through sutures) summed; other terms may be prescribed, sutured or
- * dependent in other equations (resolved in cascade).
+ * dependent in other equations. Equations whose dependents do not refer back
+ * to each other are substituted in cascade. Dependents that do (CalculiX's
+ * coupled dependents, e.g. u_z = u_y on a node whose u_y is another
+ * equation's dependent that involves u_z) are solved together, one strongly
+ * connected group of equations at a time (row-scaled, LU with full pivoting;
+ * sparse LU for groups above a few hundred equations), after the groups they
+ * refer to; each dependent becomes a combination of independent DOFs plus a
+ * constant.
  */
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& constraints);
 
