@@ -107,6 +107,10 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
   std::map<VertexKey, int> shared;
   std::vector<int> displayIndex(std::size_t(mesh.nodeCount()), -1);
   std::vector<Eigen::Triplet<double>> triplets;
+  // The stress rows: one per (display node, region of the vertices' elements).
+  std::map<std::pair<int, int>, int> regionRow;
+  std::vector<int> regionRows;  // mesh node of each
+  std::vector<Eigen::Triplet<double>> regionTriplets;
   ShapeVector h;
 
   for (std::size_t f = 0; f < faces.size(); ++f) {
@@ -163,6 +167,9 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
           displayNodes_.push_back(node);
         }
         triplets.emplace_back(d, v, h[k]);  // repeated nodes of a wedge add up
+        const auto [row, inserted] = regionRow.emplace(std::make_pair(node, el.region), int(regionRows.size()));
+        if (inserted) regionRows.push_back(node);
+        regionTriplets.emplace_back(row->second, v, h[k]);
       }
       return v;
     };
@@ -207,6 +214,8 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
   const Eigen::Index d = Eigen::Index(displayNodes_.size());
   weights_.resize(d, vertices);
   weights_.setFromTriplets(triplets.begin(), triplets.end());
+  regionWeights_.resize(Eigen::Index(regionRows.size()), vertices);
+  regionWeights_.setFromTriplets(regionTriplets.begin(), regionTriplets.end());
   Eigen::Matrix3Xd nodeX(3, d);
   for (Eigen::Index i = 0; i < d; ++i) nodeX.col(i) = mesh.nodes.col(displayNodes_[std::size_t(i)]);
   positions_ = nodeX * weights_;  // eq. 4.13 at every vertex
@@ -218,12 +227,12 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
   // Every element holding a display node contributes to its nodal average,
   // so its Gauss-point derivatives are kept (Jacobians checked once, here).
   hexExtrapolation_ = gaussToNodeExtrapolation(ElementKind::Hex20, 2);
-  displayElementCount_ = Eigen::VectorXi::Zero(d);
+  displayElementCount_ = Eigen::VectorXi::Zero(Eigen::Index(regionRows.size()));
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
     bool touches = false;
     for (int node : el.nodes)
-      touches = touches || (node >= 0 && node < mesh.nodeCount() && displayIndex[std::size_t(node)] >= 0);
+      touches = touches || (node >= 0 && node < mesh.nodeCount() && regionRow.count({node, el.region}));
     if (!touches) continue;
     SupportElement s;
     s.region = el.region;
@@ -233,7 +242,8 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
       wedgeExtrapolation_ = gaussToNodeExtrapolation(ElementKind::Wedge15, 2);
     for (int k = 0; k < kHex20NodeCount; ++k) {
       const int node = el.nodes[std::size_t(k)];
-      s.displaySlot[std::size_t(k)] = node >= 0 ? displayIndex[std::size_t(node)] : -1;
+      const auto row = node >= 0 ? regionRow.find({node, el.region}) : regionRow.end();
+      s.displaySlot[std::size_t(k)] = row == regionRow.end() ? -1 : row->second;
       s.slotWeight[std::size_t(k)] = int(std::count(el.nodes.begin(), el.nodes.end(), node));
     }
     // Each distinct display node counts this element once.
@@ -278,8 +288,8 @@ void DisplaySurface::setSolution(const Eigen::VectorXd& u, const MaterialTable& 
     }
 
   // Nodal averages of the strain and stress extrapolated from the Gauss
-  // points, at the display nodes only.
-  const Eigen::Index d = Eigen::Index(displayNodes_.size());
+  // points, within each region, at the display nodes only.
+  const Eigen::Index d = regionWeights_.rows();
   Matrix6Xd nodalStrain = Matrix6Xd::Zero(6, d), nodalStress = Matrix6Xd::Zero(6, d);
   Eigen::Matrix<double, 3, kHex20NodeCount> ue;
   Matrix6Xd gaussStrain;
@@ -309,12 +319,12 @@ void DisplaySurface::setSolution(const Eigen::VectorXd& u, const MaterialTable& 
     nodalStress.col(i) /= displayElementCount_[i];
   }
 
-  Eigen::Matrix3Xd nodalDisplacement(3, d);
-  for (Eigen::Index i = 0; i < d; ++i)
+  Eigen::Matrix3Xd nodalDisplacement(3, Eigen::Index(displayNodes_.size()));
+  for (Eigen::Index i = 0; i < nodalDisplacement.cols(); ++i)
     nodalDisplacement.col(i) = u.segment<3>(3 * Eigen::Index(displayNodes_[std::size_t(i)]));
   displacements_ = nodalDisplacement * weights_;  // eq. 4.14
-  strains_ = nodalStrain * weights_;
-  stresses_ = nodalStress * weights_;
+  strains_ = nodalStrain * regionWeights_;
+  stresses_ = nodalStress * regionWeights_;
   hasSolution_ = true;
 }
 

@@ -85,8 +85,12 @@ struct DisplayMapping {
  * colours would show the mesh instead of the tissue; the extrapolated and
  * averaged field is continuous, reproduces any stress linear in (r, s, t)
  * exactly, and is the better estimate at the surface (the Gauss points are
- * where the quadratic element's stresses are most accurate). Across two
- * materials the average blurs the jump over one element.
+ * where the quadratic element's stresses are most accurate). The average is
+ * taken within each region (recoverNodalStresses' NodalStressField::valueAt):
+ * a vertex takes the field of its own element's region, so a skin vertex
+ * shows the skin's stress even at a node the fat below shares, and the jump
+ * across two materials is kept, not blurred. A vertex welded on an edge
+ * where faces of two regions meet takes the region of the face that made it.
  *
  * @warning The surface refers to mesh nodes by index: a solution must come
  * from the same mesh (same node count).
@@ -183,7 +187,7 @@ private:
   struct SupportElement {
     int region = 0;
     std::array<int, kHex20NodeCount> nodes{};        ///< mesh node per slot (-1 absent)
-    std::array<int, kHex20NodeCount> displaySlot{};  ///< display node index per slot, -1 if none
+    std::array<int, kHex20NodeCount> displaySlot{};  ///< row of regionWeights_ per slot (its node, this region), -1 if none
     std::array<int, kHex20NodeCount> slotWeight{};   ///< slots sharing this slot's node (>= 1)
     std::vector<Eigen::Matrix<double, kHex20NodeCount, 3>> gradients;  ///< dh/dx per Gauss point
     bool wedge = false;  ///< extrapolated by wedgeExtrapolation_ (else hexExtrapolation_)
@@ -197,11 +201,14 @@ private:
   std::vector<BodyPoint> bodyPoints_;
   std::vector<int> displayNodes_;
   Eigen::SparseMatrix<double> weights_;
+  /// The same weights by (display node, region of the vertex's element) rows,
+  /// for the strain and stress averaged within each region.
+  Eigen::SparseMatrix<double> regionWeights_;
   Eigen::Matrix3Xd positions_, rangeDetail_, displacements_;
   Matrix6Xd strains_, stresses_;
   bool hasSolution_ = false;
   std::vector<SupportElement> support_;
-  Eigen::VectorXi displayElementCount_;  ///< elements averaged at each display node
+  Eigen::VectorXi displayElementCount_;  ///< elements averaged in each row of regionWeights_
   Eigen::MatrixXd hexExtrapolation_, wedgeExtrapolation_;
 };
 

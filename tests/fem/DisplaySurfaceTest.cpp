@@ -241,12 +241,18 @@ TEST(DisplaySurface, EquivalentStrainIsTheStretchOfUniaxialIncompressibleStretch
 }
 
 TEST(DisplaySurface, StressIsTheNodalAverageInterpolatedAndContinuous) {
-  // Two materials and a field that is not linear: at vertices on mesh nodes
-  // the stress is recoverNodalStresses' average there, and a vertex on an
-  // edge between two elements gets the same value from either element.
+  // Two materials in two layers (z < 5 and z > 5, as skin over fat) and a
+  // field that is not linear: at vertices on mesh nodes the stress is
+  // recoverNodalStresses' average there within the vertex's region (a node
+  // of the interface z = 5 has one value per layer), and a vertex on an edge
+  // between two elements of a region gets the same value from either.
   Mesh mesh = boxMesh(2, 2, 2, 20, 20, 10);
+  for (Element& el : mesh.elements) {
+    double z = 0;
+    for (int n : el.nodes) z += mesh.nodes(2, n);
+    el.region = z / kHex20NodeCount < 5 ? 0 : 1;
+  }
   for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) mesh.nodes.col(i) = test::wobble(mesh.nodes.col(i), 0.5);
-  for (std::size_t e = 0; e < mesh.elements.size(); ++e) mesh.elements[e].region = int(e % 2);
   const MaterialTable materials{{0, {0.15, 0.45, 0.0}}, {1, {0.01, 0.45, 0.0}}};
   const Eigen::VectorXd u = nodalField(mesh, [](const Eigen::Vector3d& x) {
     return Eigen::Vector3d(0.1 * std::sin(0.2 * x[1]), 0.002 * x[0] * x[2], 0.05 * std::cos(0.1 * x[0] * x[1] / 10));
@@ -255,7 +261,7 @@ TEST(DisplaySurface, StressIsTheNodalAverageInterpolatedAndContinuous) {
   s.setSolution(u, materials);
   const NodalStressField nodal = recoverNodalStresses(mesh, materials, u, 2);
   const double scale = nodal.stress.cwiseAbs().maxCoeff();
-  int onNodes = 0;
+  int onNodes = 0, onInterface = 0;
   double worst = 0.0;
   for (Eigen::Index v = 0; v < s.vertexCount(); ++v) {
     const BodyPoint& p = s.bodyPoints()[std::size_t(v)];
@@ -263,12 +269,18 @@ TEST(DisplaySurface, StressIsTheNodalAverageInterpolatedAndContinuous) {
     if ((p.rst.cwiseAbs() - Eigen::Vector3d::Ones()).cwiseAbs().maxCoeff() > 0) continue;
     for (int k = 0; k < kHex20CornerCount; ++k)
       if (batheNaturalCoordinates(k) == p.rst) {
-        const int node = mesh.elements[std::size_t(p.element)].nodes[std::size_t(k)];
-        worst = std::max(worst, (s.stresses().col(v) - nodal.stress.col(node)).cwiseAbs().maxCoeff() / scale);
+        const Element& own = mesh.elements[std::size_t(p.element)];
+        const int node = own.nodes[std::size_t(k)];
+        worst = std::max(worst, (s.stresses().col(v) - nodal.valueAt(own.region, node)).cwiseAbs().maxCoeff() / scale);
         ++onNodes;
+        if (nodal.layout.column(1 - own.region, node) >= 0) {
+          ++onInterface;  // the other layer's value differs: the jump is kept
+          EXPECT_GT((nodal.valueAt(1 - own.region, node) - s.stresses().col(v)).cwiseAbs().maxCoeff(), 1e-3 * scale);
+        }
       }
   }
   EXPECT_GT(onNodes, 20);
+  EXPECT_GT(onInterface, 4);
   EXPECT_LT(worst, 1e-12);
 
   // The same vertex seen from the other element: the boundary faces of
@@ -290,7 +302,7 @@ TEST(DisplaySurface, StressIsTheNodalAverageInterpolatedAndContinuous) {
       ShapeVector h;
       ElementShape::fromConnectivity(el.kind, el.nodes).values(other, h);
       Vector6d sigma = Vector6d::Zero();
-      for (int k = 0; k < kHex20NodeCount; ++k) sigma += h[k] * nodal.stress.col(el.nodes[std::size_t(k)]);
+      for (int k = 0; k < kHex20NodeCount; ++k) sigma += h[k] * nodal.valueAt(el.region, el.nodes[std::size_t(k)]);
       EXPECT_LT((worldPoint(mesh, {int(e), other}) - s.undeformedPositions().col(v)).norm(), 1e-12);
       jump = std::max(jump, std::abs(vonMisesStress(sigma) - displayed[v]) / displayed.maxCoeff());
       ++shared;

@@ -2,7 +2,9 @@
 // linear (pure bending) stress fields.
 
 #include "FemTestMeshes.h"
+#include "fem/Constraints.h"
 #include "fem/NodalStress.h"
+#include "fem/StaticAnalysis.h"
 
 #include <gtest/gtest.h>
 
@@ -102,4 +104,112 @@ TEST(NodalStress, PrincipalStressesAndVonMises) {
   EXPECT_NEAR(q.sum(), 6.0, 1e-12);
   EXPECT_GE(q[0], q[1]);
   EXPECT_GE(q[1], q[2]);
+}
+
+// A 40 x 8 x 6 bar of two materials side by side (y < 4: E = 0.15 MPa, the
+// skin; y > 4: E = 0.01 MPa, the fat; the same nu = 0.45), its ends pulled
+// apart by 1 % with lateral contraction free. Closed form: u = (e x,
+// -nu e y, -nu e z) in both halves (continuous at y = 4, traction-free there
+// and on the sides), so sigma_xx = E_i e in region i and every other stress
+// zero. The nodes of the interface y = 4 carry both values, one per region;
+// the old mean over all elements gave (E_0 + E_1) e / 2 at them.
+TEST(NodalStress, ABarOfTwoMaterialsSideBySideKeepsEachRegionsStressAtTheInterface) {
+  const double length = 40, width = 8, height = 6, strain = 0.01, nu = 0.45;
+  const double stiff = 0.15, soft = 0.01;
+  for (bool wedges : {false, true}) {
+    Mesh mesh = boxMesh(4, 2, 1, length, width, height, Eigen::Vector3d::Zero(), wedges);
+    for (Element& el : mesh.elements) {
+      double y = 0;  // the element's centroid side
+      int count = 0;
+      for (int n : el.nodes)
+        if (n >= 0) {
+          y += mesh.nodes(1, n);
+          ++count;
+        }
+      el.region = y / count < width / 2 ? 0 : 1;
+    }
+    const MaterialTable materials{{0, {stiff, nu, 0.0}}, {1, {soft, nu, 0.0}}};
+    Constraints c;
+    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+      const Eigen::Vector3d x = mesh.nodes.col(i);
+      if (x[0] < 1e-9) c.fix(int(i), 0);
+      if (x[0] > length - 1e-9) c.prescribe(int(i), 0, strain * length);
+      if (x[0] < 1e-9 && x[1] < 1e-9 && x[2] < 1e-9) {
+        c.fix(int(i), 1);
+        c.fix(int(i), 2);
+      }
+      if (x[0] < 1e-9 && x[1] > width - 1e-9 && x[2] < 1e-9) c.fix(int(i), 2);
+    }
+    LinearStaticAnalysis analysis(mesh, materials, c);
+    ASSERT_EQ(analysis.prepare(), SolverStatus::Success) << analysis.message();
+    const Eigen::VectorXd u = analysis.solve(LoadCase{});
+    for (int n : {2, 3}) {
+      const NodalStressField f = recoverNodalStresses(mesh, materials, u, n);
+      const std::string what = std::string(wedges ? "wedges" : "hexes") + ", " + std::to_string(n) + " points";
+      ASSERT_EQ(f.regionStress.cols(), f.layout.size());
+      int interface = 0;
+      double worst = 0;
+      for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+        const double y = mesh.nodes(1, i);
+        const bool onInterface = std::abs(y - width / 2) < 1e-9;
+        const int columns = f.layout.firstColumn[i + 1] - f.layout.firstColumn[i];
+        EXPECT_EQ(columns, onInterface ? 2 : 1) << what << ", node " << i;
+        for (int col = f.layout.firstColumn[i]; col < f.layout.firstColumn[i + 1]; ++col) {
+          const int region = f.layout.regionOf[col];
+          EXPECT_EQ(f.layout.nodeOf[col], i);
+          EXPECT_EQ(region, y < width / 2 - 1e-9 ? 0 : y > width / 2 + 1e-9 ? 1 : region) << what;
+          Vector6d exact = Vector6d::Zero();
+          exact[0] = (region == 0 ? stiff : soft) * strain;
+          worst = std::max(worst, (f.valueAt(region, int(i)) - exact).cwiseAbs().maxCoeff());
+        }
+        if (onInterface) {
+          ++interface;
+          EXPECT_NEAR(f.valueAt(0, int(i))[0], stiff * strain, 1e-9 * stiff * strain) << what;
+          EXPECT_NEAR(f.valueAt(1, int(i))[0], soft * strain, 1e-9 * stiff * strain) << what;
+          // One value per node: the stiffer region's.
+          EXPECT_EQ(f.regionAt(int(i)), 0);
+          EXPECT_EQ(f.stress.col(i), f.valueAt(0, int(i)));
+          EXPECT_EQ(f.elementCount[i], f.layout.elementCount[f.layout.column(0, int(i))]);
+        } else {
+          EXPECT_EQ(f.stress.col(i), f.regionStress.col(f.layout.firstColumn[i])) << what;
+        }
+      }
+      EXPECT_GE(interface, 9) << what;
+      EXPECT_LT(worst / (stiff * strain), 1e-9) << what;
+      for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)  // the side y = 0 lies in the stiff half only
+        if (mesh.nodes(1, i) < 1e-9) EXPECT_THROW(f.valueAt(1, int(i)), std::out_of_range) << i;
+      EXPECT_NEAR(f.vonMises().maxCoeff(), stiff * strain, 1e-9 * stiff * strain);
+    }
+  }
+}
+
+TEST(NodalStress, TheLayoutCountsEachRegionsElementsAtANodeOnce) {
+  // 2 x 2 x 1 bricks, regions by quadrant {0, 1; 1, 2}; the centre line
+  // x = 10, y = 10 touches all four elements: regions 0, 1 (twice), 2.
+  Mesh mesh = boxMesh(2, 2, 1, 20, 20, 5);
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+    double x = 0, y = 0;
+    for (int n : mesh.elements[e].nodes) {
+      x += mesh.nodes(0, n);
+      y += mesh.nodes(1, n);
+    }
+    mesh.elements[e].region = (x / 20 < 10 ? 0 : 1) + (y / 20 < 10 ? 0 : 1);
+  }
+  // Region 2 the stiffest, then 0; region 1 has no stiffness given (ranks 0).
+  const RegionNodeLayout layout = RegionNodeLayout::of(mesh, {{0, 1.0}, {2, 5.0}});
+  int centre = -1;
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+    if (std::abs(mesh.nodes(0, i) - 10) < 1e-9 && std::abs(mesh.nodes(1, i) - 10) < 1e-9 && mesh.nodes(2, i) < 1e-9)
+      centre = int(i);
+  ASSERT_GE(centre, 0);
+  ASSERT_EQ(layout.firstColumn[centre + 1] - layout.firstColumn[centre], 3);
+  for (int r = 0; r < 3; ++r) {
+    const int c = layout.column(r, centre);
+    ASSERT_GE(c, 0);
+    EXPECT_EQ(layout.regionOf[c], r);
+    EXPECT_EQ(layout.elementCount[c], r == 1 ? 2 : 1);
+  }
+  EXPECT_EQ(layout.regionOf[layout.representative[centre]], 2);
+  EXPECT_EQ(layout.column(3, centre), -1);
+  EXPECT_EQ(layout.firstColumn[mesh.nodeCount()], layout.size());
 }
