@@ -41,9 +41,23 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
   if (prediction.hole.points.empty())
     throw std::invalid_argument("the prediction has no hole loop: there is no wound to measure from");
 
-  // §4.7: σ at the Gauss points, extrapolated to the nodes, averaged.
+  // §4.7: σ at the Gauss points, extrapolated to the nodes, averaged within
+  // each region; a skin node takes the skin's value (the top layer's region),
+  // not the fat's below it, where the skin is one element thick.
   const fem::NodalStressField field =
     fem::recoverNodalStresses(prediction.continuum.mesh, prediction.materials, prediction.displacements);
+  const fem::ContinuumMesh& continuum = prediction.continuum;
+  int skinRegion = -1;
+  for (std::size_t e = 0; e < continuum.elementLayer.size() && e < continuum.mesh.elements.size(); ++e)
+    if (continuum.elementLayer[e] == 0)
+    {
+      skinRegion = continuum.mesh.elements[e].region;
+      break;
+    }
+  auto skinStress = [&](int node) -> fem::Vector6d {
+    const int column = field.layout.column(skinRegion, node);
+    return column >= 0 ? fem::Vector6d(field.regionStress.col(column)) : fem::Vector6d(field.stress.col(node));
+  };
 
   // Each vertex's share of the chart area of its polygons, for the mean.
   std::vector<double> area(vertexCount, 0.0);
@@ -71,7 +85,7 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
     if (distance > radius)
       continue;
     const int node = skin.nodes[v];
-    const fem::Vector6d sigma = field.stress.col(node);
+    const fem::Vector6d sigma = skinStress(node);
     const double vonMises = fem::vonMisesStress(sigma);
     const double maxPrincipal = fem::principalStresses(sigma)[0];
     ++out.vertexCount;

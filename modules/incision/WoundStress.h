@@ -40,9 +40,10 @@ struct WoundStress
 ///
 /// The skin is the FE skin node under each surface-mesh vertex
 /// (PlanPrediction::skin). Its stress is the nodal average of the stresses
-/// extrapolated from the 2 × 2 × 2 Gauss points of the elements around it
-/// (fem::recoverNodalStresses()), the smoothed field a surgeon sees on the
-/// display. A vertex is in the band when its chart point lies within
+/// extrapolated from the 2 × 2 × 2 Gauss points of the skin elements around
+/// it (fem::recoverNodalStresses(), averaged within the skin's region: the
+/// stiffer skin's stress is not diluted by the fat's where they meet), the
+/// smoothed field a surgeon sees on the display. A vertex is in the band when its chart point lies within
 /// @a radius of an edge of the refined hole loop (PlanPrediction::hole),
 /// i.e. the distance is measured on the skin before the operation; the
 /// border vertices themselves are at distance 0.
