@@ -10,11 +10,25 @@
 
 namespace caps::fem {
 
+/// How the finite-strain elements treat the volume (NonlinearStaticAnalysis;
+/// the linear assembly ignores it).
+enum class VolumetricFormulation {
+  /// The plain Total Lagrangian displacement element (assembleElementFiniteStrain):
+  /// locks when nearly incompressible (nu -> 0.5).
+  Displacement,
+  /// The three-field u/p~/J~ element with the pressure and dilatation
+  /// condensed per element (assembleElementMixedFiniteStrain): does not lock;
+  /// needs a split law (not St. Venant-Kirchhoff).
+  MixedPressure,
+};
+
 struct AssemblyOptions {
   int threads = 2;                 ///< worker threads over elements (>= 1)
   /// 3 (Table 4.6, default) or 2. Native wedges take wedgeRule() of the same
   /// level: 3 -> 18 points (full), 2 -> 9 points (lower, CalculiX C3D15).
   int gaussPointsPerDirection = 3;
+  /// Finite-strain element formulation (nonlinear analysis only).
+  VolumetricFormulation volumetric = VolumetricFormulation::Displacement;
 };
 
 /**

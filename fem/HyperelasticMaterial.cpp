@@ -48,7 +48,8 @@ struct EnergyDerivatives {
   double w11 = 0.0, w22 = 0.0, w12 = 0.0, wjj = 0.0;
 };
 
-EnergyDerivatives invariantDerivatives(const HyperelasticMaterial& m, double i1b, double i2b, double j) {
+EnergyDerivatives invariantDerivatives(const HyperelasticMaterial& m, double i1b, double i2b, double j,
+                                       bool volumetric) {
   EnergyDerivatives d;
   switch (m.law) {
     case HyperelasticLaw::NeoHookean:
@@ -68,6 +69,7 @@ EnergyDerivatives invariantDerivatives(const HyperelasticMaterial& m, double i1b
     case HyperelasticLaw::StVenantKirchhoff:
       break;  // not an invariant law; handled apart
   }
+  if (!volumetric) return d;
   // U(J) = (J - 1)^2 / D1.
   d.w += (j - 1.0) * (j - 1.0) / m.d1;
   d.wj = 2.0 * (j - 1.0) / m.d1;
@@ -199,15 +201,12 @@ void HyperelasticMaterial::validate(const std::string& context) const {
   if (!m.str().empty()) throw std::invalid_argument(m.str());
 }
 
-MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double j) const {
-  if (!(j > 0.0)) {
-    std::ostringstream m;
-    m << "the " << lawName(law) << " material was asked for its stress at det F = " << j
-      << " (an inverted or collapsed element)";
-    throw std::domain_error(m.str());
-  }
-  if (law == HyperelasticLaw::StVenantKirchhoff) return stVenantKirchhoffResponse(*this, c);
+namespace {
 
+/// S, dS/dE and W of a split law at C; the volumetric part U(J) only if
+/// @a volumetric (response() and deviatoricResponse() share every operation).
+MaterialResponse splitLawResponse(const HyperelasticMaterial& m, const Eigen::Matrix3d& c, double j,
+                                  bool volumetric) {
   // Invariants and their first derivatives with respect to C:
   //   dI1b/dC = J^(-2/3) (I - I1/3 C^-1),
   //   dI2b/dC = J^(-4/3) (I1 I - C - 2/3 I2 C^-1),   dJ/dC = J C^-1 / 2,
@@ -225,7 +224,7 @@ MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double
   const Vector6d a2 = jm43 * (b2 - (2.0 / 3.0) * i2 * vci);
   const Vector6d aj = 0.5 * j * vci;
 
-  const EnergyDerivatives w = invariantDerivatives(*this, i1b, i2b, j);
+  const EnergyDerivatives w = invariantDerivatives(m, i1b, i2b, j, volumetric);
   MaterialResponse r;
   r.energy = w.w;
   r.stress = 2.0 * (w.w1 * a1 + w.w2 * a2 + w.wj * aj);
@@ -245,6 +244,50 @@ MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double
   h += w.wj * (0.25 * j * ciCi + 0.5 * j * dci);
   r.tangent = 4.0 * h;
   return r;
+}
+
+void requireSplit(const HyperelasticMaterial& m, const char* what) {
+  if (m.law == HyperelasticLaw::StVenantKirchhoff)
+    throw std::invalid_argument(std::string("the St. Venant-Kirchhoff material has no deviatoric/volumetric split (") +
+                                what + "); use neo-Hookean, Mooney-Rivlin or Veronda-Westmann");
+}
+
+[[noreturn]] void throwNonPositive(const HyperelasticMaterial& m, double j) {
+  std::ostringstream s;
+  s << "the " << lawName(m.law) << " material was asked for its stress at det F = " << j
+    << " (an inverted or collapsed element)";
+  throw std::domain_error(s.str());
+}
+
+}  // namespace
+
+MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double j) const {
+  if (!(j > 0.0)) {
+    std::ostringstream m;
+    m << "the " << lawName(law) << " material was asked for its stress at det F = " << j
+      << " (an inverted or collapsed element)";
+    throw std::domain_error(m.str());
+  }
+  if (law == HyperelasticLaw::StVenantKirchhoff) return stVenantKirchhoffResponse(*this, c);
+  return splitLawResponse(*this, c, j, true);
+}
+
+bool HyperelasticMaterial::hasVolumetricSplit() const { return law != HyperelasticLaw::StVenantKirchhoff; }
+
+MaterialResponse HyperelasticMaterial::deviatoricResponse(const Eigen::Matrix3d& c, double j) const {
+  requireSplit(*this, "deviatoric response");
+  if (!(j > 0.0)) throwNonPositive(*this, j);
+  return splitLawResponse(*this, c, j, false);
+}
+
+VolumetricResponse HyperelasticMaterial::volumetricResponse(double j) const {
+  requireSplit(*this, "volumetric response");
+  // U(J) = (J - 1)^2 / D1, as invariantDerivatives().
+  VolumetricResponse v;
+  v.energy = (j - 1.0) * (j - 1.0) / d1;
+  v.pressure = 2.0 * (j - 1.0) / d1;
+  v.stiffness = 2.0 / d1;
+  return v;
 }
 
 }  // namespace caps::fem

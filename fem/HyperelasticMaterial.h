@@ -37,6 +37,14 @@ struct MaterialResponse {
   double energy = 0.0;  ///< strain energy per reference volume (mJ/mm^3 = MPa)
 };
 
+/// The volumetric part U(J) of a split law and its first two derivatives
+/// (for the mixed u/p/J element, which evaluates it at an independent J~).
+struct VolumetricResponse {
+  double energy = 0.0;     ///< U (MPa)
+  double pressure = 0.0;   ///< U'(J) (MPa; positive in tension)
+  double stiffness = 0.0;  ///< U''(J) (MPa)
+};
+
 /**
  * @brief An isotropic hyperelastic material for the Total Lagrangian
  *        formulation (thesis §1.4 and §6.1.2: the linear model's limits).
@@ -84,6 +92,25 @@ struct HyperelasticMaterial {
    * @a jacobian <= 0 (the caller checks first, to cut the step back).
    */
   MaterialResponse response(const Eigen::Matrix3d& c, double jacobian) const;
+
+  /// True if the law is split W = W_dev(I1b, I2b) + U(J) (every law but
+  /// St. Venant-Kirchhoff), which the mixed formulation needs.
+  bool hasVolumetricSplit() const;
+
+  /**
+   * @brief The deviatoric part alone: S_dev = 2 dW_dev/dC, dS_dev/dE and
+   *        W_dev at @a c, with the volumetric part left out, so that
+   *        response(c, J) = deviatoricResponse(c, J) + the U(J) terms.
+   *
+   * Throws std::domain_error as response() and std::invalid_argument for
+   * St. Venant-Kirchhoff (no split).
+   */
+  MaterialResponse deviatoricResponse(const Eigen::Matrix3d& c, double jacobian) const;
+
+  /// U(J) = (J - 1)^2 / D1 and its derivatives at @a jacobian (any value;
+  /// the caller checks its sign). Throws std::invalid_argument for St.
+  /// Venant-Kirchhoff.
+  VolumetricResponse volumetricResponse(double jacobian) const;
 };
 
 /// Hyperelastic material of each region id, as MaterialTable.

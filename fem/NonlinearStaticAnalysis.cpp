@@ -1,6 +1,7 @@
 #include "fem/NonlinearStaticAnalysis.h"
 
 #include "fem/FiniteStrainIntegrator.h"
+#include "fem/MixedFiniteStrainIntegrator.h"
 #include "fem/MuscleLoad.h"
 
 #include <algorithm>
@@ -44,6 +45,12 @@ NonlinearStaticAnalysis::NonlinearStaticAnalysis(Mesh mesh, HyperelasticTable ma
 
 void NonlinearStaticAnalysis::validate(const LoadCase& load) const {
   for (const auto& [region, material] : materials_) material.validate("material of region " + std::to_string(region));
+  if (options_.volumetric == VolumetricFormulation::MixedPressure)  // the mixed element needs the split law
+    for (const auto& [region, material] : materials_)
+      if (!material.hasVolumetricSplit())
+        throw std::invalid_argument("material of region " + std::to_string(region) +
+                                    ": the mixed u/p/J formulation needs a deviatoric/volumetric split, which " +
+                                    lawName(material.law) + " has not");
   validateMesh(mesh_, linear_);
   for (const Element& el : mesh_.elements)
     integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection));
@@ -78,10 +85,15 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     for (int a = 0; a < kHex20NodeCount; ++a)
       if (el.nodes[std::size_t(a)] >= 0) ue.row(a) = u.segment<3>(3 * el.nodes[std::size_t(a)]).transpose();
     ElementVector local;
-    assembleElementFiniteStrain(ElementShape::fromConnectivity(el.kind, el.nodes), mesh_.elementCoordinates(e), ue,
-                                materials_.at(el.region),
-                                integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)),
-                                int(e), re ? *re : local, ke, checks[e]);
+    // Formulation switch (AssemblyOptions::volumetric): the mixed u/p/J element or the displacement one.
+    const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
+    const IntegrationRule& rule = integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection));
+    if (options_.volumetric == VolumetricFormulation::MixedPressure)
+      assembleElementMixedFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
+                                       re ? *re : local, ke, checks[e]);
+    else
+      assembleElementFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
+                                  re ? *re : local, ke, checks[e]);
   };
   Eigen::VectorXd scratch;
   assembleElements(mesh_, options_.threads, kernel, k, fint ? fint : &scratch);
