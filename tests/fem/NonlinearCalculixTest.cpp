@@ -10,6 +10,7 @@
 #include "fem/CalculixIO.h"
 #include "fem/HyperelasticMaterial.h"
 #include "fem/NonlinearStaticAnalysis.h"
+#include "fem/StaticAnalysis.h"
 
 #include "CcxRunner.h"
 #include "FemTestMeshes.h"
@@ -56,6 +57,9 @@ struct Model {
 struct Comparison {
   double relativeDifference = 0.0;
   double maxDisplacement = 0.0;  ///< largest |u| component of ours, mm
+  /// ccx against the small-strain solve of the same model: how far from
+  /// linear the case is, i.e. what the agreement above resolves.
+  double linearDifference = 0.0;
   Eigen::VectorXd ours;
   Eigen::Matrix3Xd ccx;
 };
@@ -92,13 +96,18 @@ Comparison compare(const Model& m) {
   const double ccxSeconds = secondsSince(start);
 
   out.relativeDifference = test::relativeDifference(out.ccx, out.ours);
+  LinearStaticAnalysis small(m.mesh, linear, m.constraints, AssemblyOptions{2, m.integrationPoints});
+  EXPECT_EQ(small.prepare(), SolverStatus::Success) << m.name << ": " << small.message();
+  out.linearDifference = test::relativeDifference(out.ccx, small.solve(m.load));
   out.maxDisplacement = out.ours.cwiseAbs().maxCoeff();
   int accepted = 0;
   for (const IncrementRecord& inc : r.increments) accepted += inc.accepted;
   std::cout << m.name << ": max |u| " << out.maxDisplacement << " mm, relative difference to ccx "
-            << out.relativeDifference << " (ours " << accepted << " increments, " << r.iterations.size()
+            << out.relativeDifference << ", small-strain solve to ccx " << out.linearDifference << " (ours "
+            << accepted << " increments, " << r.iterations.size()
             << " iterations, " << oursSeconds << " s; ccx " << ccxSeconds << " s; min det F " << r.check.minDetF
             << ", stretches " << r.check.minStretch << " .. " << r.check.maxStretch << ")\n";
+  EXPECT_GT(out.linearDifference, 100.0 * kAgreement) << m.name << ": too close to linear to test the nonlinear path";
   return out;
 }
 
