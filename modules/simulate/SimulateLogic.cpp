@@ -5,6 +5,7 @@
 #include <iomanip>
 
 #include "fem/CalculixReader.h"
+#include "fem/ElementGeometry.h"
 #include "fem/NodalStress.h"
 #include "fem/StressRecovery.h"
 #include "fem/VtuWriter.h"
@@ -16,6 +17,49 @@ namespace fs = std::filesystem;
 
 namespace caps {
 namespace {
+
+/// The deck's number of CAPS node @a node (0-based), or the index if out of range.
+std::string deckNode(const fem::CalculixModel& model, int node)
+{
+  if (node >= 0 && std::size_t(node) < model.nodeIds.size())
+    return std::to_string(model.nodeIds[std::size_t(node)]);
+  return "(index " + std::to_string(node) + ")";
+}
+
+/// The text of @a e with the deck's node and element numbers in place of
+/// CAPS's 0-based indices (constraint and element errors carry them).
+std::string deckMessage(const std::exception& e, const fem::CalculixModel& model)
+{
+  if (const auto* c = dynamic_cast<const fem::ConstraintError*>(&e))
+  {
+    fem::ConstraintError::Naming naming;
+    naming.node = [&model](int node) { return deckNode(model, node); };
+    // Ties read as sutures leave the list, so its order is not the deck's:
+    // an equation is named by its first term (the DOF it eliminates).
+    naming.equation = [&model](int k) {
+      const auto& equations = model.constraints.equations;
+      if (k < 0 || std::size_t(k) >= equations.size() || equations[std::size_t(k)].terms.empty())
+        return "equation " + std::to_string(k);
+      const fem::ConstraintTerm& t = equations[std::size_t(k)].terms.front();
+      return "the *EQUATION " + deckNode(model, t.node) + "," + std::to_string(t.direction + 1) + ",...";
+    };
+    return c->message(naming);
+  }
+  if (const auto* el = dynamic_cast<const fem::ElementError*>(&e))
+  {
+    // ElementError's text begins "element <index> ...": the deck's number instead.
+    const int i = el->element();
+    const std::string text = e.what();
+    if (i < 0 || std::size_t(i) >= model.elementIds.size())
+      return text;
+    const std::string ours = "element " + std::to_string(i);
+    const std::string deck = "element " + std::to_string(model.elementIds[std::size_t(i)]);
+    if (text.rfind(ours + " ", 0) == 0)
+      return deck + text.substr(ours.size());
+    return deck + " of the deck: " + text;
+  }
+  return e.what();
+}
 
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0)
@@ -127,7 +171,18 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
       report.status = status == fem::SolverStatus::NotPositiveDefinite ? FemRunStatus::Unconstrained
                                                                        : FemRunStatus::SolverFailed;
       report.message = analysis.message();
-      // The reduced system numbers CAPS nodes from 0: name the deck's node too.
+      // The analysis numbers CAPS nodes from 0: name the deck's node.
+      const Eigen::Index col = analysis.solver().failedColumn();
+      const fem::ConstraintMap& map = analysis.constraintMap();
+      if (status == fem::SolverStatus::NotPositiveDefinite && col >= 0 && col < map.reducedCount())
+      {
+        const int dof = map.masterOf[std::size_t(col)];
+        report.message = "the model is not sufficiently constrained (rigid-body motion or a loose part): node " +
+                         deckNode(model, dof / 3) + " of the deck is free to move in " + "xyz"[dof % 3] +
+                         "; fix or suture more nodes" +
+                         (map.hasGeneralRows() ? " (or check that the equations do not leave it free)" : "") +
+                         " [solver: " + analysis.solver().message() + "]";
+      }
       return report;
     }
     u = analysis.solve(model.load);
@@ -136,7 +191,7 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   catch (const std::exception& e)
   {
     report.status = FemRunStatus::InvalidInput;
-    report.message = e.what();
+    report.message = deckMessage(e, model);
     return report;
   }
 
@@ -149,7 +204,7 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   catch (const std::exception& e)
   {
     report.status = FemRunStatus::InvalidInput;
-    report.message = e.what();
+    report.message = deckMessage(e, model);
     return report;
   }
   const Eigen::VectorXd vonMises = stress.vonMises();
