@@ -111,6 +111,7 @@ FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const Ele
   PointGeometry g;
   evaluateGeometry(shape, x, rst, elementIndex, g);
   FiniteStrainPoint p;
+  p.natural = rst;
   p.world = g.world;
   p.deformationGradient = deformationGradient(u, g.dhWorld);
   p.detF = p.deformationGradient.determinant();

@@ -37,6 +37,7 @@ struct FiniteStrainPoint {
   Vector6d cauchy;                      ///< sigma = F S F^T / J (MPa)
   Vector6d greenLagrange;               ///< E = (C - I) / 2, engineering shears
   Eigen::Vector3d principalStretches;   ///< sqrt of the eigenvalues of C, largest first
+  Eigen::Vector3d natural;              ///< (r, s, t) of the point in its element
   Eigen::Vector3d world;                ///< X (undeformed position, mm)
 };
 

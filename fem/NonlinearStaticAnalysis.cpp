@@ -339,6 +339,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     return result;
   }
   result.status = NonlinearStatus::NotConverged;
+  result.failedElement = lastWorst;
   std::ostringstream m;
   m << "the large-deformation solve did not converge: increment " << accepted + 1 << ", from load fraction "
     << percent(lambda) << ", failed at the smallest allowed size";

@@ -86,6 +86,7 @@ struct NonlinearResult {
   double loadFraction = 0.0;   ///< the last converged fraction (1 when converged)
   Eigen::VectorXd displacements;  ///< 3N at loadFraction
   DeformationCheck check;      ///< of the displacements above
+  int failedElement = -1;      ///< the element that inverted in the last failed try, if that was why
   std::vector<IncrementRecord> increments;  ///< every attempt, in order
   std::vector<NewtonIteration> iterations;  ///< every iteration, in order
   int factorizations = 0;

@@ -16,6 +16,8 @@
 #include "fem/CalculixIO.h"
 #include "fem/StaticAnalysis.h"
 
+#include "SkinPatch.h"
+
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -33,32 +35,8 @@
 namespace {
 
 using namespace caps::fem;
+using caps::bench::skinPatch;
 using Clock = std::chrono::steady_clock;
-
-// n x n x layers bricks over 80 x 80 x 8 mm; nodes on the doubled grid.
-Mesh skinPatch(int n, int layers) {
-  Mesh mesh;
-  std::map<std::array<int, 3>, int> ids;
-  std::vector<Eigen::Vector3d> xs;
-  const double hx = 80.0 / (2 * n), hz = 8.0 / (2 * layers);
-  for (int k = 0; k < layers; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        Element el;
-        el.region = k;
-        for (int b = 0; b < kHex20NodeCount; ++b) {
-          const Eigen::Vector3d r = batheNaturalCoordinates(b);
-          const std::array<int, 3> key{2 * i + 1 + int(r[0]), 2 * j + 1 + int(r[1]), 2 * k + 1 + int(r[2])};
-          auto [it, inserted] = ids.emplace(key, int(xs.size()));
-          if (inserted) xs.emplace_back(key[0] * hx, key[1] * hx, key[2] * hz);
-          el.nodes[std::size_t(b)] = it->second;
-        }
-        mesh.elements.push_back(el);
-      }
-  mesh.nodes.resize(3, Eigen::Index(xs.size()));
-  for (std::size_t i = 0; i < xs.size(); ++i) mesh.nodes.col(Eigen::Index(i)) = xs[i];
-  return mesh;
-}
 
 double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 

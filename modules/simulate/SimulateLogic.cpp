@@ -6,7 +6,9 @@
 
 #include "fem/CalculixReader.h"
 #include "fem/ElementGeometry.h"
+#include "fem/FiniteStrainStress.h"
 #include "fem/NodalStress.h"
+#include "fem/NonlinearStaticAnalysis.h"
 #include "fem/StressRecovery.h"
 #include "fem/VtuWriter.h"
 
@@ -100,6 +102,248 @@ std::vector<std::size_t> ccxPointOrder(const std::vector<fem::StressPoint>& poin
   return order;
 }
 
+/// Each region's law in a large-deformation step, as CalculiX reads the
+/// deck: its *HYPERELASTIC material, or St. Venant-Kirchhoff for *ELASTIC.
+fem::HyperelasticTable largeDeformationMaterials(const fem::CalculixModel& model)
+{
+  fem::HyperelasticTable table;
+  for (const auto& [region, linear] : model.materials)
+  {
+    const auto it = model.hyperelastic.find(region);
+    table[region] = it != model.hyperelastic.end()
+                        ? it->second
+                        : fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::StVenantKirchhoff, linear);
+  }
+  return table;
+}
+
+/// The deck's *STATIC increments as fractions of the step.
+fem::IncrementControl incrementsOf(const fem::StaticStep& step)
+{
+  fem::IncrementControl c;
+  const double period = step.period > 0.0 ? step.period : 1.0;
+  c.initial = std::clamp(step.initialIncrement / period, 1e-12, 1.0);
+  c.minimum = std::min(c.initial, std::max(step.minimumIncrement / period, 1e-12));
+  c.maximum = std::max(c.initial, std::min(step.maximumIncrement / period, 1.0));
+  c.fixed = step.direct;
+  return c;
+}
+
+/// increments.csv: every attempted increment, accepted or cut back.
+fs::path writeIncrementLog(const fs::path& outDir, const fem::NonlinearResult& r)
+{
+  fs::create_directories(outDir);
+  const fs::path path = outDir / "increments.csv";
+  auto f = openForWriting(path);
+  f << "increment,start_fraction,end_fraction,iterations,residual,accepted,reason\n";
+  for (const auto& i : r.increments)
+  {
+    std::string reason = i.rejection;
+    std::replace(reason.begin(), reason.end(), '"', '\'');
+    f << i.increment << ',' << i.startFraction << ',' << i.endFraction << ',' << i.iterations << ','
+      << i.residual << ',' << (i.accepted ? 1 : 0) << ",\"" << reason << "\"\n";
+  }
+  if (!f)
+    throw std::runtime_error("error while writing " + path.string());
+  return path;
+}
+
+/// What a solve of a deck hands to the writers.
+struct DeckResults
+{
+  fem::NodalStressMatrix nodalStress;                      ///< 6 x N (Cauchy in large deformation), MPa
+  std::vector<std::vector<fem::StressPoint>> gaussStress;  ///< per element, its rule's points
+  std::vector<fem::VtuArray> extraArrays;                  ///< more point data for result.vtu
+  std::vector<fs::path> extraFiles;                        ///< written before (the increment log)
+};
+
+/// displacements.csv, stresses.csv, gauss_stresses.csv and result.vtu into
+/// @a outDir; fills the report's maxima and files.
+FemRunReport writeResults(const fem::CalculixModel& model, const Eigen::VectorXd& u, const DeckResults& results,
+                          const fs::path& outDir, FemRunReport& report)
+{
+  const Eigen::Index n = model.mesh.nodeCount();
+  Eigen::VectorXd vonMises(n), mean(n);
+  Eigen::Matrix3Xd principal(3, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+  {
+    const fem::Vector6d s = results.nodalStress.col(i);
+    vonMises[i] = fem::vonMisesStress(s);
+    mean[i] = s.head<3>().sum() / 3.0;
+    principal.col(i) = fem::principalStresses(s);
+  }
+  for (Eigen::Index i = 0; i < n; ++i)
+  {
+    const double norm = u.segment<3>(3 * i).norm();
+    if (norm > report.maxDisplacement || i == 0)
+    {
+      report.maxDisplacement = norm;
+      report.maxDisplacementNode = model.nodeIds[std::size_t(i)];
+    }
+  }
+  report.maxVonMises = n ? vonMises.maxCoeff() : 0.0;
+
+  const auto t0 = Clock::now();
+  try
+  {
+    fs::create_directories(outDir);
+    const fs::path displacements = outDir / "displacements.csv";
+    {
+      auto f = openForWriting(displacements);
+      f << "node,x,y,z,ux,uy,uz\n";
+      for (Eigen::Index i = 0; i < n; ++i)
+        f << model.nodeIds[std::size_t(i)] << ',' << model.mesh.nodes(0, i) << ',' << model.mesh.nodes(1, i) << ','
+          << model.mesh.nodes(2, i) << ',' << u[3 * i] << ',' << u[3 * i + 1] << ',' << u[3 * i + 2] << '\n';
+      if (!f)
+        throw std::runtime_error("error while writing " + displacements.string());
+    }
+    const fs::path stresses = outDir / "stresses.csv";
+    {
+      auto f = openForWriting(stresses);
+      f << "node,sxx,syy,szz,sxy,syz,szx,von_mises\n";
+      for (Eigen::Index i = 0; i < n; ++i)
+      {
+        f << model.nodeIds[std::size_t(i)];
+        for (int c = 0; c < 6; ++c)
+          f << ',' << results.nodalStress(c, i);
+        f << ',' << vonMises[i] << '\n';
+      }
+      if (!f)
+        throw std::runtime_error("error while writing " + stresses.string());
+    }
+    // Stress at each element's own integration points, in the order and
+    // columns of ccx's *EL PRINT S, for comparison with its .dat.
+    const fs::path gaussStresses = outDir / "gauss_stresses.csv";
+    {
+      auto f = openForWriting(gaussStresses);
+      f << "element,point,sxx,syy,szz,sxy,sxz,syz\n";
+      for (std::size_t e = 0; e < results.gaussStress.size(); ++e)
+      {
+        const auto& points = results.gaussStress[e];
+        const auto order = ccxPointOrder(points, model.mesh.elements[e].kind);
+        for (std::size_t k = 0; k < order.size(); ++k)
+        {
+          const fem::Vector6d& s = points[order[k]].stress; // xx yy zz xy yz zx
+          f << model.elementIds[e] << ',' << k + 1 << ',' << s[0] << ',' << s[1] << ',' << s[2] << ',' << s[3]
+            << ',' << s[5] << ',' << s[4] << '\n';
+        }
+      }
+      if (!f)
+        throw std::runtime_error("error while writing " + gaussStresses.string());
+    }
+    const fs::path vtu = outDir / "result.vtu";
+    Eigen::MatrixXd ids(1, n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      ids(0, i) = double(model.nodeIds[std::size_t(i)]);
+    std::vector<fem::VtuArray> arrays = {{"displacement", Eigen::Map<const Eigen::MatrixXd>(u.data(), 3, n)},
+                                         {"stress", results.nodalStress},
+                                         {"von_mises", vonMises.transpose()},
+                                         {"mean_stress", mean.transpose()},
+                                         {"principal_stress", principal},
+                                         {"node_id", ids}};
+    arrays.insert(arrays.end(), results.extraArrays.begin(), results.extraArrays.end());
+    fem::writeVtu(vtu.string(), model.mesh, arrays);
+    report.files = {displacements, stresses, gaussStresses, vtu};
+    report.files.insert(report.files.end(), results.extraFiles.begin(), results.extraFiles.end());
+  }
+  catch (const std::exception& e)
+  {
+    report.status = FemRunStatus::WriteFailed;
+    report.message = e.what();
+    return report;
+  }
+  report.writeSeconds = secondsSince(t0);
+  report.status = FemRunStatus::Success;
+  return report;
+}
+
+/// Cauchy stress, det F and the largest stretch at the nodes (averaged
+/// within each region, fem::recoverFiniteStrainNodalField), and the Cauchy
+/// stress at each element's integration points for gauss_stresses.csv.
+DeckResults largeDeformationStresses(const fem::Mesh& mesh, const fem::HyperelasticTable& materials,
+                                     const Eigen::VectorXd& u, int defaultPoints, int nodalPoints)
+{
+  DeckResults out;
+  const fem::FiniteStrainNodalField field = fem::recoverFiniteStrainNodalField(mesh, materials, u, nodalPoints);
+  out.nodalStress = field.cauchy;
+  out.extraArrays = {{"det_F", field.detF.transpose()}, {"largest_stretch", field.maxStretch().transpose()}};
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+  {
+    std::vector<fem::StressPoint> points;
+    for (const fem::FiniteStrainPoint& p :
+         fem::recoverFiniteStrainAtGaussPoints(mesh, materials, u, int(e), defaultPoints))
+      points.push_back({p.natural, p.world, p.greenLagrange, p.cauchy});
+    out.gaussStress.push_back(std::move(points));
+  }
+  return out;
+}
+
+/// The deck's large-deformation step (*STEP, NLGEOM): Newton in the deck's
+/// increments; only a converged step is written as a result, a failed one
+/// leaves its increment log and a message.
+FemRunReport solveLargeDeformation(const fem::CalculixModel& model, const fs::path& outDir,
+                                   const FemRunOptions& options, FemRunReport& report)
+{
+  fem::AssemblyOptions assembly;
+  assembly.threads = options.threads;
+  const fem::HyperelasticTable materials = largeDeformationMaterials(model);
+  fem::NonlinearStaticAnalysis analysis(model.mesh, materials, model.constraints, assembly);
+  fem::NewtonOptions newton;
+  fem::NonlinearResult r;
+  const auto t0 = Clock::now();
+  try
+  {
+    r = analysis.solve(model.load, incrementsOf(model.step), newton, [&](const fem::NewtonIteration& it) {
+      if (options.progress)
+        options.progress(it);
+      return !(options.cancel && options.cancel());
+    });
+  }
+  catch (const std::exception& e)
+  {
+    report.status = FemRunStatus::InvalidInput;
+    report.message = deckMessage(e, model);
+    return report;
+  }
+  report.times.factor = secondsSince(t0); // the whole Newton solve
+  report.largeDeformation = true;
+  report.increments = 0;
+  for (const auto& i : r.increments)
+    report.increments += i.accepted ? 1 : 0;
+  report.iterations = int(r.iterations.size());
+  report.check = r.check;
+  DeckResults results;
+  try
+  {
+    const fs::path log = writeIncrementLog(outDir, r);
+    if (r.status != fem::NonlinearStatus::Converged)
+    {
+      report.status = r.status == fem::NonlinearStatus::Cancelled ? FemRunStatus::Cancelled
+                                                                  : FemRunStatus::NotConverged;
+      const int worst = r.failedElement >= 0 ? r.failedElement : r.check.minDetFElement;
+      report.message = r.message;
+      if (worst >= 0 && std::size_t(worst) < model.elementIds.size())
+        report.message += " [element " + std::to_string(worst) + " is element " +
+                          std::to_string(model.elementIds[std::size_t(worst)]) + " of the deck]";
+      report.message += " (the increments are in " + log.string() + "; no result was written)";
+      report.files = {log};
+      return report;
+    }
+    const auto t1 = Clock::now();
+    results = largeDeformationStresses(model.mesh, materials, r.displacements, assembly.gaussPointsPerDirection,
+                                       options.stressPointsPerDirection);
+    report.recoverSeconds = secondsSince(t1);
+    results.extraFiles = {log};
+  }
+  catch (const std::exception& e)
+  {
+    report.status = FemRunStatus::WriteFailed;
+    report.message = e.what();
+    return report;
+  }
+  return writeResults(model, r.displacements, results, outDir, report);
+}
+
 } // namespace
 
 FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outDir,
@@ -151,12 +395,7 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
       model.constraints.fix(int(k / 3), int(k % 3));
 
   if (model.step.nlgeom)
-  {
-    // Read, but the linear solver would give the small-strain answer.
-    report.message = deck.string() + ": a large-deformation step (*STEP, NLGEOM, or a *HYPERELASTIC material, "
-                                     "which CalculiX solves nonlinearly) is not solved by caps fem yet";
-    return report;
-  }
+    return solveLargeDeformation(model, outDir, options, report);
 
   fem::AssemblyOptions assembly;
   assembly.threads = options.threads;
@@ -196,10 +435,14 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   }
 
   t0 = Clock::now();
-  fem::NodalStressField stress;
+  DeckResults results;
   try
   {
-    stress = fem::recoverNodalStresses(model.mesh, model.materials, u, options.stressPointsPerDirection);
+    results.nodalStress =
+        fem::recoverNodalStresses(model.mesh, model.materials, u, options.stressPointsPerDirection).stress;
+    for (std::size_t e = 0; e < model.mesh.elements.size(); ++e)
+      results.gaussStress.push_back(
+          fem::recoverStressAtGaussPoints(model.mesh, model.materials, u, int(e), assembly.gaussPointsPerDirection));
   }
   catch (const std::exception& e)
   {
@@ -207,92 +450,8 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
     report.message = deckMessage(e, model);
     return report;
   }
-  const Eigen::VectorXd vonMises = stress.vonMises();
   report.recoverSeconds = secondsSince(t0);
-  for (Eigen::Index i = 0; i < model.mesh.nodeCount(); ++i)
-  {
-    const double norm = u.segment<3>(3 * i).norm();
-    if (norm > report.maxDisplacement || i == 0)
-    {
-      report.maxDisplacement = norm;
-      report.maxDisplacementNode = model.nodeIds[std::size_t(i)];
-    }
-  }
-  report.maxVonMises = vonMises.size() ? vonMises.maxCoeff() : 0.0;
-
-  t0 = Clock::now();
-  try
-  {
-    fs::create_directories(outDir);
-    const fs::path displacements = outDir / "displacements.csv";
-    {
-      auto f = openForWriting(displacements);
-      f << "node,x,y,z,ux,uy,uz\n";
-      for (Eigen::Index i = 0; i < model.mesh.nodeCount(); ++i)
-        f << model.nodeIds[std::size_t(i)] << ',' << model.mesh.nodes(0, i) << ','
-          << model.mesh.nodes(1, i) << ',' << model.mesh.nodes(2, i) << ',' << u[3 * i] << ','
-          << u[3 * i + 1] << ',' << u[3 * i + 2] << '\n';
-      if (!f)
-        throw std::runtime_error("error while writing " + displacements.string());
-    }
-    const fs::path stresses = outDir / "stresses.csv";
-    {
-      auto f = openForWriting(stresses);
-      f << "node,sxx,syy,szz,sxy,syz,szx,von_mises\n";
-      for (Eigen::Index i = 0; i < model.mesh.nodeCount(); ++i)
-      {
-        f << model.nodeIds[std::size_t(i)];
-        for (int c = 0; c < 6; ++c)
-          f << ',' << stress.stress(c, i);
-        f << ',' << vonMises[i] << '\n';
-      }
-      if (!f)
-        throw std::runtime_error("error while writing " + stresses.string());
-    }
-    // Stress at each element's own integration points, in the order and
-    // columns of ccx's *EL PRINT S, for comparison with its .dat.
-    const fs::path gaussStresses = outDir / "gauss_stresses.csv";
-    {
-      auto f = openForWriting(gaussStresses);
-      f << "element,point,sxx,syy,szz,sxy,sxz,syz\n";
-      for (std::size_t e = 0; e < model.mesh.elements.size(); ++e)
-      {
-        const auto points = fem::recoverStressAtGaussPoints(model.mesh, model.materials, u, int(e),
-                                                            assembly.gaussPointsPerDirection);
-        const auto order = ccxPointOrder(points, model.mesh.elements[e].kind);
-        for (std::size_t k = 0; k < order.size(); ++k)
-        {
-          const fem::Vector6d& s = points[order[k]].stress; // xx yy zz xy yz zx
-          f << model.elementIds[e] << ',' << k + 1 << ',' << s[0] << ',' << s[1] << ',' << s[2] << ','
-            << s[3] << ',' << s[5] << ',' << s[4] << '\n';
-        }
-      }
-      if (!f)
-        throw std::runtime_error("error while writing " + gaussStresses.string());
-    }
-    const fs::path vtu = outDir / "result.vtu";
-    Eigen::MatrixXd displacement = Eigen::Map<const Eigen::MatrixXd>(u.data(), 3, model.mesh.nodeCount());
-    Eigen::MatrixXd ids(1, model.mesh.nodeCount());
-    for (Eigen::Index i = 0; i < ids.cols(); ++i)
-      ids(0, i) = double(model.nodeIds[std::size_t(i)]);
-    fem::writeVtu(vtu.string(), model.mesh,
-                  {{"displacement", displacement},
-                   {"stress", stress.stress},
-                   {"von_mises", vonMises.transpose()},
-                   {"mean_stress", stress.meanStress().transpose()},
-                   {"principal_stress", stress.principal()},
-                   {"node_id", ids}});
-    report.files = {displacements, stresses, gaussStresses, vtu};
-  }
-  catch (const std::exception& e)
-  {
-    report.status = FemRunStatus::WriteFailed;
-    report.message = e.what();
-    return report;
-  }
-  report.writeSeconds = secondsSince(t0);
-  report.status = FemRunStatus::Success;
-  return report;
+  return writeResults(model, u, results, outDir, report);
 }
 
 } // namespace caps

@@ -7,7 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <iostream>
 #include <fstream>
 #include <sstream>
 #include <unistd.h>
@@ -31,6 +33,27 @@ caps::test::ProcessResult runCaps(const std::string& args) { return runProcess(q
 void write(const fs::path& path, const std::string& text) {
   std::ofstream f(path);
   f << text;
+}
+
+/// displacements.csv as written by caps fem (deck node numbers 1..n).
+Eigen::Matrix3Xd readDisplacementsCsv(const fs::path& path, Eigen::Index nodeCount) {
+  std::ifstream csv(path);
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "node,x,y,z,ux,uy,uz");
+  Eigen::Matrix3Xd u = Eigen::Matrix3Xd::Zero(3, nodeCount);
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream in(line);
+    long id;
+    double x, y, z, ux, uy, uz;
+    EXPECT_TRUE(in >> id >> x >> y >> z >> ux >> uy >> uz) << line;
+    ++rows;
+    if (id >= 1 && id <= nodeCount) u.col(id - 1) = Eigen::Vector3d(ux, uy, uz);
+  }
+  EXPECT_EQ(rows, nodeCount);
+  return u;
 }
 
 }  // namespace
@@ -63,27 +86,13 @@ TEST(FemCommand, MatchesCcxOnTheSameDeck) {
   ASSERT_EQ(std::system(("cd " + quoted(dir.string()) + " && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1").c_str()), 0);
   const Eigen::Matrix3Xd ccx = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
 
-  std::ifstream csv(dir / "out" / "displacements.csv");
-  std::string line;
-  std::getline(csv, line);
-  EXPECT_EQ(line, "node,x,y,z,ux,uy,uz");
-  Eigen::Matrix3Xd ours = Eigen::Matrix3Xd::Zero(3, mesh.nodeCount());
-  int rows = 0;
-  while (std::getline(csv, line)) {
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream in(line);
-    long id;
-    double x, y, z, ux, uy, uz;
-    ASSERT_TRUE(in >> id >> x >> y >> z >> ux >> uy >> uz) << line;
-    ++rows;
-    if (id >= 1 && id <= mesh.nodeCount()) ours.col(id - 1) = Eigen::Vector3d(ux, uy, uz);
-  }
-  EXPECT_EQ(rows, mesh.nodeCount());
+  const Eigen::Matrix3Xd ours = readDisplacementsCsv(dir / "out" / "displacements.csv", mesh.nodeCount());
   const double diff = (ours - ccx).cwiseAbs().maxCoeff() / ccx.cwiseAbs().maxCoeff();
   std::cout << "caps fem vs ccx: max |u| " << ccx.cwiseAbs().maxCoeff() << " mm, relative difference " << diff << "\n";
   EXPECT_LT(diff, 1e-5);
 
   std::ifstream stresses(dir / "out" / "stresses.csv");
+  std::string line;
   std::getline(stresses, line);
   EXPECT_EQ(line, "node,sxx,syy,szz,sxy,syz,szx,von_mises");
   if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
@@ -110,7 +119,7 @@ TEST(FemCommand, ErrorsAndUsage) {
                               "*SOLID SECTION, ELSET=E, MATERIAL=M\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n");
   r = runCaps("fem " + quoted((dir / "inverted.inp").string()) + " --out " + quoted(dir.string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_NE(r.output.find("element 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("element 1 "), std::string::npos) << r.output;  // the deck's number, not CAPS's index 0
 
   r = runCaps("fem " + quoted((dir / "missing.inp").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
@@ -123,5 +132,73 @@ TEST(FemCommand, ErrorsAndUsage) {
   }
   r = runCaps("fem --help");
   EXPECT_EQ(r.exitCode, 0) << r.output;
+  fs::remove_all(dir);
+}
+
+TEST(FemCommand, ALargeDeformationDeckMatchesCcxNlgeom) {
+  // A neo-Hookean cantilever bent by a tip load until the tip moves about a
+  // third of its length: *STEP, NLGEOM with *STATIC increments, solved by
+  // caps fem and by ccx (tight *CONTROLS) from the same deck.
+  ASSERT_EQ(std::system("command -v ccx > /dev/null 2>&1"), 0) << "install calculix-ccx";
+  const Mesh mesh = test::boxMesh(6, 1, 1, 30, 4, 4);
+  Constraints c;
+  LoadCase load;
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+    if (mesh.nodes(0, i) < 1e-9) c.fixNode(int(i));
+    if (mesh.nodes(0, i) > 30 - 1e-9) load.nodalForces.push_back({int(i), Eigen::Vector3d(0, 0, -0.0004)});
+  }
+  const HyperelasticMaterial skin = HyperelasticMaterial::neoHookean(0.02, 5.0);
+  CalculixExportOptions options;
+  options.step.nlgeom = true;
+  // Small increments: ccx's criteria, even tightened, leave 2e-5 of the
+  // displacement behind on this soft model at 0.2..0.5 (measured), ours not.
+  options.step.initialIncrement = 0.05;
+  options.step.minimumIncrement = 1e-4;
+  options.step.maximumIncrement = 0.1;
+  options.hyperelastic = {{0, skin}};
+  options.tightControls = true;
+  const fs::path dir = freshDir("nlgeom");
+  writeCalculixInput((dir / "job.inp").string(), mesh, {{0, skin.smallStrainLimit()}}, c, load, options);
+
+  const auto r = runCaps("fem " + quoted((dir / "job.inp").string()) + " --out " + quoted((dir / "out").string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("large deformation:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("iteration 1: residual"), std::string::npos) << r.output;
+  for (const char* f : {"displacements.csv", "stresses.csv", "gauss_stresses.csv", "result.vtu", "increments.csv"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  std::ifstream log(dir / "out" / "increments.csv");
+  std::string header;
+  std::getline(log, header);
+  EXPECT_EQ(header, "increment,start_fraction,end_fraction,iterations,residual,accepted,reason");
+
+  ASSERT_EQ(std::system(("cd " + quoted(dir.string()) + " && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1").c_str()), 0);
+  const Eigen::Matrix3Xd ccx = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
+  const Eigen::Matrix3Xd ours = readDisplacementsCsv(dir / "out" / "displacements.csv", mesh.nodeCount());
+  const double tip = ccx.row(2).cwiseAbs().maxCoeff();
+  const double diff = (ours - ccx).cwiseAbs().maxCoeff() / ccx.cwiseAbs().maxCoeff();
+  std::cout << "caps fem vs ccx NLGEOM: tip deflection " << tip << " mm of 30, relative difference " << diff << "\n";
+  EXPECT_GT(tip, 6.0) << "not a large deformation";
+  EXPECT_LT(diff, 1e-5);
+  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
+}
+
+TEST(FemCommand, ALargeDeformationStepThatCannotConvergeWritesNoResult) {
+  // A cube whose top is pushed 150 % of its height down through its base.
+  const fs::path dir = freshDir("nonconverging");
+  std::string deck =
+      "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n"
+      "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n*MATERIAL,NAME=M\n*HYPERELASTIC, NEO HOOKE\n0.02, 2.0\n"
+      "*SOLID SECTION, ELSET=E, MATERIAL=M\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n"
+      "*STEP, NLGEOM\n*STATIC\n0.5, 1.0, 0.01, 1.0\n*BOUNDARY\n5,3,3,-1.5\n6,3,3,-1.5\n7,3,3,-1.5\n8,3,3,-1.5\n"
+      "*END STEP\n";
+  write(dir / "push.inp", deck);
+  const auto r = runCaps("fem " + quoted((dir / "push.inp").string()) + " --out " + quoted((dir / "out").string()));
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("not a prediction"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no result was written"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(dir / "out" / "increments.csv"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "displacements.csv"));
+  EXPECT_FALSE(fs::exists(dir / "out" / "result.vtu"));
   fs::remove_all(dir);
 }
