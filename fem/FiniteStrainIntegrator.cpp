@@ -1,5 +1,6 @@
 #include "fem/FiniteStrainIntegrator.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
@@ -56,6 +57,16 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
   check.energy = 0.0;
   PointGeometry g;
   StrainDisplacement b;
+  // The material part sum_g B^T (w D) B as one symmetric rank update W W^T,
+  // W = [B^T L_g ...] with w D = L L^T (Cholesky; the tangent of a stable
+  // material is positive definite), which halves the work against the
+  // product per point; a point whose D is not positive definite adds its
+  // product directly. The geometric part is summed per node pair.
+  thread_local Eigen::MatrixXd factors;  // 60 x 6 per point; kept, so no allocation per element
+  if (kt) factors.resize(kHex20DofCount, Eigen::Index(6 * rule.size()));
+  Eigen::Index used = 0;
+  Eigen::Matrix<double, kHex20NodeCount, kHex20NodeCount> geometric;
+  geometric.setZero();
   for (std::size_t q = 0; q < rule.size(); ++q) {
     evaluateGeometry(shape, x, rule.points[q], elementIndex, g);
     const ShapeDerivatives& dh = g.dhWorld;  // dH/dX on the reference geometry
@@ -85,24 +96,35 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
 
     check.energy += w * response.energy;
     check.minDetF = std::min(check.minDetF, detF);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c, Eigen::EigenvaluesOnly);
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(c, Eigen::EigenvaluesOnly);  // closed form: the iterative solver cost as much as the rest
     check.maxStretch = std::max(check.maxStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[2])));
     check.minStretch = std::min(check.minStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
 
     if (!kt) continue;
-    // Material part B^T D B, then the geometric part (dh_a . S dh_b) I3.
-    const Eigen::Matrix<double, 6, kHex20DofCount> db = (w * response.tangent) * b;
-    kt->noalias() += b.transpose() * db;
-    const Eigen::Matrix<double, kHex20NodeCount, 3> ds = dh * (w * tensorOf(response.stress));
-    const Eigen::Matrix<double, kHex20NodeCount, kHex20NodeCount> geometric = ds * dh.transpose();
-    for (int a = 0; a < slots; ++a)
-      for (int bb = 0; bb < slots; ++bb) {
-        const double v = geometric(a, bb);
-        for (int k = 0; k < 3; ++k) (*kt)(3 * a + k, 3 * bb + k) += v;
-      }
+    const Matrix6d wd = w * response.tangent;
+    const Eigen::LLT<Matrix6d> llt(wd);
+    if (llt.info() == Eigen::Success) {
+      factors.middleCols<6>(used) = b.transpose() * llt.matrixL();
+      used += 6;
+    } else {
+      kt->noalias() += b.transpose() * (wd * b);
+    }
+    geometric.noalias() += dh * (w * tensorOf(response.stress)) * dh.transpose();
   }
+  if (!kt) return;
+  if (used > 0) {
+    ElementMatrix materialPart = ElementMatrix::Zero();
+    materialPart.selfadjointView<Eigen::Upper>().rankUpdate(factors.leftCols(used));
+    *kt += materialPart.selfadjointView<Eigen::Upper>();
+  }
+  for (int a = 0; a < slots; ++a)
+    for (int bb = 0; bb < slots; ++bb) {
+      const double v = geometric(a, bb);
+      for (int k = 0; k < 3; ++k) (*kt)(3 * a + k, 3 * bb + k) += v;
+    }
   // Symmetric by construction; even out the rounding of the two halves.
-  if (kt) *kt = 0.5 * (*kt + kt->transpose()).eval();
+  *kt = 0.5 * (*kt + kt->transpose()).eval();
 }
 
 FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const ElementCoordinates& x,

@@ -5,6 +5,7 @@
 #include "fem/MuscleLoad.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -15,6 +16,10 @@ namespace caps::fem {
 namespace {
 
 struct Cancelled {};
+
+double secondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 /// How one increment ended.
 struct IncrementOutcome {
@@ -164,10 +169,23 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     return map.expand(reduced).col(0) + (lambda - 1.0) * map.offset;
   };
 
+  // Forces (and tangent) at u, timed.
+  auto timedEvaluate = [&](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces) {
+    const auto t0 = std::chrono::steady_clock::now();
+    struct Tally {
+      double& total;
+      std::chrono::steady_clock::time_point start;
+      ~Tally() { total += secondsSince(start); }
+    } tally{result.assembleSeconds, t0};
+    evaluate(u, tangent, forces);
+    ++result.assemblies;
+  };
   // Factor K-bar of the current k; false (with a reason) when it is not positive definite.
   auto factor = [&](std::string& reason) {
+    const auto t0 = std::chrono::steady_clock::now();
     map.reduceValues(k, kbar);
     solver.factorize(kbar);
+    result.factorSeconds += secondsSince(t0);
     ++result.factorizations;
     if (solver.status() == SolverStatus::Success) return true;
     reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
@@ -185,7 +203,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     Eigen::VectorXd fint;
     // The predictor: the tangent of the converged state, the prescribed
     // increment (lambda1 - lambda0) g as a load.
-    evaluate(expand(state, lambda0), &k, &fint);
+    timedEvaluate(expand(state, lambda0), &k, &fint);
     const Eigen::VectorXd dg = (lambda1 - lambda0) * map.offset;
     Eigen::VectorXd rbar = map.reduceVector(fint - lambda1 * fext + k.selfadjointView<Eigen::Upper>() * dg).col(0);
     Eigen::VectorXd trial = state;
@@ -195,7 +213,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
       out.iterations = it;
       if (!tangentCurrent) {
         try {
-          evaluate(expand(trial, lambda1), &k, &fint);
+          timedEvaluate(expand(trial, lambda1), &k, &fint);
         } catch (const InvertedElementError& e) {  // cannot happen after an accepted line search, but be safe
           out.rejection = e.what();
           out.worstElement = e.element();
@@ -216,7 +234,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
         next = trial + alpha * delta;
         try {
           // The first trial also builds the tangent for the next iteration.
-          evaluate(expand(next, lambda1), ls == 0 ? &k : nullptr, &nextFint);
+          timedEvaluate(expand(next, lambda1), ls == 0 ? &k : nullptr, &nextFint);
         } catch (const InvertedElementError& e) {
           if (it == 1 || ls >= newton.maxLineSearchSteps + 6) {
             // The predictor itself inverts an element: the increment is too large.

@@ -90,6 +90,9 @@ struct NonlinearResult {
   std::vector<IncrementRecord> increments;  ///< every attempt, in order
   std::vector<NewtonIteration> iterations;  ///< every iteration, in order
   int factorizations = 0;
+  int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
+  double assembleSeconds = 0.0; ///< in those evaluations
+  double factorSeconds = 0.0;   ///< reducing and factoring K-bar
 };
 
 /// Called after every Newton iteration; returning false cancels the solve.
