@@ -2,7 +2,6 @@
 
 #include "fem/FiniteStrainIntegrator.h"
 #include "fem/MixedFiniteStrainIntegrator.h"
-#include "fem/MuscleLoad.h"
 
 #include <algorithm>
 #include <chrono>
@@ -66,16 +65,10 @@ void NonlinearStaticAnalysis::validate(const LoadCase& load) const {
 }
 
 Eigen::VectorXd NonlinearStaticAnalysis::loadVector(const LoadCase& load) const {
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(mesh_.dofCount());
-  for (const auto& [node, f] : load.nodalForces) {
-    if (node < 0 || node >= mesh_.nodeCount())
-      throw std::invalid_argument("a nodal force is applied to node " + std::to_string(node) +
-                                  ", but the mesh has nodes 0.." + std::to_string(mesh_.nodeCount() - 1));
-    r.segment<3>(3 * node) += f;
-  }
-  if (!load.gravity.isZero(0.0)) r += assembleGravityLoad(mesh_, linear_, load.gravity, options_);
-  if (!load.muscles.empty()) r += assembleMuscleLoad(mesh_, load.muscles, options_).load;
-  return r;
+  // Dead loads only (validate() refuses face pressures, which follow the surface).
+  LoadCase dead = load;
+  dead.facePressures.clear();
+  return assembleLoadVector(mesh_, linear_, dead, options_);
 }
 
 DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k,
@@ -147,11 +140,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
   Eigen::SparseMatrix<double> k = stiffnessPattern(mesh_);
   Eigen::SparseMatrix<double> kbar = map.reduceMatrix(k);
   SparseCholeskySolver solver;
-  {
-    std::vector<int> nodeOfDof(map.masterOf.size());
-    for (std::size_t d = 0; d < nodeOfDof.size(); ++d) nodeOfDof[d] = map.masterOf[d] / 3;
-    solver.setColumnGroups(std::move(nodeOfDof));
-  }
+  useNodeGroupedOrdering(mesh_, map, solver);
   if (map.reducedCount() > 0) solver.analyzePattern(kbar);
 
   // The residual cannot fall below the rounding of stresses that cancel at

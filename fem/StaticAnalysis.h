@@ -34,6 +34,19 @@ struct PhaseTimes {
   double solve = 0.0;      ///< loads, reduction, substitution, expansion (last solve())
 };
 
+/// Full load vector R (3N) of @a load on @a mesh (eq. 4.35-4.42): nodal
+/// forces, gravity (each region's density from @a materials), face
+/// pressures on the undeformed faces, muscle forces. Throws
+/// std::invalid_argument for a force on a node the mesh does not have.
+Eigen::VectorXd assembleLoadVector(const Mesh& mesh, const MaterialTable& materials, const LoadCase& load,
+                                   const AssemblyOptions& options = {});
+
+/// Tells @a solver to order the reduced system of @a map on @a mesh by nodes
+/// (a node's DOFs together), nested dissection on the element vertices only,
+/// each mid-edge node beside its edge: far cheaper to analyse than the DOF
+/// graph, with the same fill. Shared by the linear and nonlinear analyses.
+void useNodeGroupedOrdering(const Mesh& mesh, const ConstraintMap& map, SparseCholeskySolver& solver);
+
 /**
  * @brief Linear static analysis K U = R with constraints by master-slave
  *        elimination, factored once and solved for any number of load cases.
