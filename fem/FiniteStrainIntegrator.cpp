@@ -43,6 +43,39 @@ Eigen::Matrix3d deformationGradient(const ElementDisplacements& u, const ShapeDe
 
 }  // namespace
 
+void greenLagrangeStrainDisplacement(const Eigen::Matrix3d& f, const ShapeDerivatives& dh, int slots,
+                                     StrainDisplacement& b) {
+  b.setZero();
+  for (int a = 0; a < slots; ++a) {
+    const double gx = dh(a, 0), gy = dh(a, 1), gz = dh(a, 2);
+    for (int k = 0; k < 3; ++k) {
+      const int col = 3 * a + k;
+      b(0, col) = f(k, 0) * gx;
+      b(1, col) = f(k, 1) * gy;
+      b(2, col) = f(k, 2) * gz;
+      b(3, col) = f(k, 0) * gy + f(k, 1) * gx;
+      b(4, col) = f(k, 1) * gz + f(k, 2) * gy;
+      b(5, col) = f(k, 2) * gx + f(k, 0) * gz;
+    }
+  }
+}
+
+void resetCheck(FiniteStrainElementCheck& check) {
+  check.minDetF = std::numeric_limits<double>::infinity();
+  check.maxStretch = 0.0;
+  check.minStretch = std::numeric_limits<double>::infinity();
+  check.energy = 0.0;
+}
+
+void addToCheck(FiniteStrainElementCheck& check, const Eigen::Matrix3d& c, double detF, double energy) {
+  check.energy += energy;
+  check.minDetF = std::min(check.minDetF, detF);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(c, Eigen::EigenvaluesOnly);  // closed form: the iterative solver cost as much as the rest
+  check.maxStretch = std::max(check.maxStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[2])));
+  check.minStretch = std::min(check.minStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
+}
+
 void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
                                  const ElementDisplacements& u, const HyperelasticMaterial& material,
                                  const IntegrationRule& rule, int elementIndex, ElementVector& fint,
@@ -51,10 +84,7 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
   const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
   fint.setZero();
   if (kt) kt->setZero();
-  check.minDetF = std::numeric_limits<double>::infinity();
-  check.maxStretch = 0.0;
-  check.minStretch = std::numeric_limits<double>::infinity();
-  check.energy = 0.0;
+  resetCheck(check);
   PointGeometry g;
   StrainDisplacement b;
   // The material part sum_g B^T (w D) B as one symmetric rank update W W^T,
@@ -77,29 +107,10 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
     const MaterialResponse response = material.response(c, detF);
     const double w = rule.weights[q] * g.detJ;
 
-    // B_L: row (ij) of E = sym(F^T dU/dX) per node DOF (a, k):
-    //   E_ii: F_ki dh_a,i;   2E_ij: F_ki dh_a,j + F_kj dh_a,i.
-    b.setZero();
-    for (int a = 0; a < slots; ++a) {
-      const double gx = dh(a, 0), gy = dh(a, 1), gz = dh(a, 2);
-      for (int k = 0; k < 3; ++k) {
-        const int col = 3 * a + k;
-        b(0, col) = f(k, 0) * gx;
-        b(1, col) = f(k, 1) * gy;
-        b(2, col) = f(k, 2) * gz;
-        b(3, col) = f(k, 0) * gy + f(k, 1) * gx;
-        b(4, col) = f(k, 1) * gz + f(k, 2) * gy;
-        b(5, col) = f(k, 2) * gx + f(k, 0) * gz;
-      }
-    }
+    greenLagrangeStrainDisplacement(f, dh, slots, b);
     fint.noalias() += w * (b.transpose() * response.stress);
 
-    check.energy += w * response.energy;
-    check.minDetF = std::min(check.minDetF, detF);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(c, Eigen::EigenvaluesOnly);  // closed form: the iterative solver cost as much as the rest
-    check.maxStretch = std::max(check.maxStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[2])));
-    check.minStretch = std::min(check.minStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
+    addToCheck(check, c, detF, w * response.energy);
 
     if (!kt) continue;
     const Matrix6d wd = w * response.tangent;

@@ -49,6 +49,18 @@ struct FiniteStrainElementCheck {
   double energy = 0.0;      ///< strain energy (mJ = N mm)
 };
 
+/// B_L at one point: row (ij) of the Green-Lagrange strain's variation per
+/// node DOF (a, k), E_ii: F_ki dh_a,i; 2 E_ij: F_ki dh_a,j + F_kj dh_a,i,
+/// for slots 0..@a slots - 1 (the rest zero). Shared by the displacement and
+/// the mixed elements.
+void greenLagrangeStrainDisplacement(const Eigen::Matrix3d& f, const ShapeDerivatives& dh, int slots,
+                                     StrainDisplacement& b);
+
+/// Starts @a check for an element (no point seen yet).
+void resetCheck(FiniteStrainElementCheck& check);
+/// Adds one integration point (C = F^T F, det F, energy w W) to @a check.
+void addToCheck(FiniteStrainElementCheck& check, const Eigen::Matrix3d& c, double detF, double energy);
+
 /**
  * @brief Total Lagrangian internal forces and consistent tangent of one
  *        element (Bathe, Finite Element Procedures, 1996, §6.2.3; the

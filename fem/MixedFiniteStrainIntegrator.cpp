@@ -81,10 +81,7 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
   const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
   fint.setZero();
   if (kt) kt->setZero();
-  check.minDetF = std::numeric_limits<double>::infinity();
-  check.maxStretch = 0.0;
-  check.minStretch = std::numeric_limits<double>::infinity();
-  check.energy = 0.0;
+  resetCheck(check);
 
   // 1. Kinematics at every point; J~ = the L2 projection of J (M j = g).
   std::vector<MixedPoint> points(rule.size());
@@ -138,27 +135,10 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
     const Vector6d stress = dev.stress + pt * jci;
     const double w = p.weight;
 
-    // B_L as in assembleElementFiniteStrain().
-    b.setZero();
-    for (int a = 0; a < slots; ++a) {
-      const double gx = dh(a, 0), gy = dh(a, 1), gz = dh(a, 2);
-      for (int k = 0; k < 3; ++k) {
-        const int col = 3 * a + k;
-        b(0, col) = f(k, 0) * gx;
-        b(1, col) = f(k, 1) * gy;
-        b(2, col) = f(k, 2) * gz;
-        b(3, col) = f(k, 0) * gy + f(k, 1) * gx;
-        b(4, col) = f(k, 1) * gz + f(k, 2) * gy;
-        b(5, col) = f(k, 2) * gx + f(k, 0) * gz;
-      }
-    }
+    greenLagrangeStrainDisplacement(f, dh, slots, b);
     fint.noalias() += w * (b.transpose() * stress);
 
-    check.energy += w * dev.energy;
-    check.minDetF = std::min(check.minDetF, p.detF);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c, Eigen::EigenvaluesOnly);
-    check.maxStretch = std::max(check.maxStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[2])));
-    check.minStretch = std::min(check.minStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
+    addToCheck(check, c, p.detF, w * dev.energy);
 
     if (!kt) continue;
     const Matrix6d d = dev.tangent + pt * volumetricTangent(ci, p.detF);

@@ -177,7 +177,9 @@ TEST(CalculixDeck, ExportedFieldsFitTwentyCharactersAndReadBackToTheirPrecision)
     ASSERT_EQ(m.load.nodalForces.size(), 3u);
     for (const auto& [node, f] : m.load.nodalForces)
       for (int d = 0; d < 3; ++d)
-        if (f[d] != 0.0) EXPECT_NEAR(f[d], load.nodalForces[0].second[d], 5e-13 * std::abs(f[d])) << k.name;
+        if (f[d] != 0.0) {
+          EXPECT_NEAR(f[d], load.nodalForces[0].second[d], 5e-13 * std::abs(f[d])) << k.name;
+        }
     ASSERT_EQ(m.load.facePressures.size(), 1u);
     EXPECT_NEAR(m.load.facePressures[0].pressure, -1.0 / 3.0 * 1e-20, 5e-13 * 1e-20);
     bool prescribed = false;
