@@ -116,7 +116,8 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
     const Matrix6d wd = w * response.tangent;
     const Eigen::LLT<Matrix6d> llt(wd);
     if (llt.info() == Eigen::Success) {
-      factors.middleCols<6>(used) = b.transpose() * llt.matrixL();
+      const Matrix6d l = llt.matrixL();  // dense: a fixed-size product, not a triangular one
+      factors.middleCols<6>(used).noalias() = b.transpose() * l;
       used += 6;
     } else {
       kt->noalias() += b.transpose() * (wd * b);
