@@ -7,6 +7,7 @@
 #include "fem/NonlinearStaticAnalysis.h"
 
 #include "FemTestMeshes.h"
+#include "FiniteStrainCases.h"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -71,17 +72,7 @@ TEST(FiniteStrainStress, UniaxialStretchToTwiceTheLengthInTwoMaterialsMeetsTheCl
   }
   const HyperelasticTable materials{{0, HyperelasticMaterial::neoHookean(c10, d1)},
                                     {1, HyperelasticMaterial::neoHookean(ratio * c10, d1 / ratio)}};
-  Constraints c;
-  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-    const Eigen::Vector3d x = mesh.nodes.col(i);
-    if (x[0] < 1e-9) c.fix(int(i), 0);
-    if (x[0] > length - 1e-9) c.prescribe(int(i), 0, (stretch - 1) * length);
-    if (x[0] < 1e-9 && x[1] < 1e-9 && x[2] < 1e-9) {
-      c.fix(int(i), 1);
-      c.fix(int(i), 2);
-    }
-    if (x[0] < 1e-9 && x[1] > side - 1e-9 && x[2] < 1e-9) c.fix(int(i), 2);
-  }
+  const Constraints c = test::uniaxialStretch(mesh, length, side, stretch);
   NonlinearStaticAnalysis analysis(mesh, materials, c);
   IncrementControl control;
   control.initial = 0.25;
@@ -157,22 +148,7 @@ TEST(FiniteStrainStress, ABlockTurnedRigidlyBy60DegreesIsStressFreeAtTheNodes) {
   const Eigen::Matrix3d rotation =
       Eigen::AngleAxisd(M_PI / 3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Vector3d centre(3, 2.5, 2);
-  // Outer nodes: those on element faces that belong to one element only.
-  std::map<std::vector<int>, int> faceCount;
-  static const int kFaces[6][8] = {{0, 1, 2, 3, 8, 9, 10, 11},   {4, 5, 6, 7, 12, 13, 14, 15},
-                                   {0, 1, 5, 4, 8, 17, 12, 16},  {1, 2, 6, 5, 9, 18, 13, 17},
-                                   {2, 3, 7, 6, 10, 19, 14, 18}, {3, 0, 4, 7, 11, 16, 15, 19}};
-  for (const Element& el : mesh.elements)
-    for (const auto& face : kFaces) {
-      std::vector<int> key;
-      for (int s : face) key.push_back(el.nodes[std::size_t(s)]);
-      std::sort(key.begin(), key.end());
-      ++faceCount[key];
-    }
-  std::vector<char> outer(std::size_t(mesh.nodeCount()), 0);
-  for (const auto& [key, count] : faceCount)
-    if (count == 1)
-      for (int n : key) outer[std::size_t(n)] = 1;
+  const std::vector<char> outer = test::outerNodes(mesh);
   Constraints c;
   for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
     if (outer[std::size_t(i)]) {

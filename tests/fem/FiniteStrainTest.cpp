@@ -9,6 +9,7 @@
 #include "fem/StaticAnalysis.h"
 
 #include "FemTestMeshes.h"
+#include "FiniteStrainCases.h"
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>
@@ -26,6 +27,8 @@ namespace caps::fem {
 namespace {
 
 using test::boxMesh;
+using test::ElementCase;
+using test::elementCases;
 using test::wobble;
 
 // Soft tissue scale: E = 0.1 MPa, nu = 0.45.
@@ -119,31 +122,6 @@ TEST(HyperelasticMaterial, BadConstantsAreRefusedWithTheirNames) {
   }
   EXPECT_THROW(HyperelasticMaterial::neoHookean(0.01, 1.0).response(Eigen::Matrix3d::Identity(), -0.5),
                std::domain_error);
-}
-
-/// One element of each kind, distorted, with its own node numbering 0..n-1.
-struct ElementCase {
-  std::string name;
-  Mesh mesh;
-};
-
-std::vector<ElementCase> elementCases() {
-  std::vector<ElementCase> cases;
-  Mesh brick = boxMesh(1, 1, 1, 4, 3, 2);
-  for (Eigen::Index i = 0; i < brick.nodeCount(); ++i) brick.nodes.col(i) = wobble(brick.nodes.col(i), 0.2);
-  cases.push_back({"Hex20", brick});
-  Mesh partial = brick;
-  for (int k : {9, 14, 17}) partial.elements[0].nodes[std::size_t(k)] = -1;  // a mid-side subset
-  cases.push_back({"Hex20 with 17 nodes", partial});
-  Mesh wedges = boxMesh(1, 1, 1, 4, 3, 2, Eigen::Vector3d::Zero(), true);
-  for (Eigen::Index i = 0; i < wedges.nodeCount(); ++i) wedges.nodes.col(i) = wobble(wedges.nodes.col(i), 0.2);
-  Mesh degenerate = wedges;
-  degenerate.elements.resize(1);
-  cases.push_back({"degenerate wedge", degenerate});
-  Mesh native = withNativeWedges(wedges);
-  native.elements.resize(1);
-  cases.push_back({"Wedge15", native});
-  return cases;
 }
 
 TEST(FiniteStrainElement, TangentIsTheDerivativeOfTheInternalForces) {
@@ -259,17 +237,7 @@ TEST(NonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosedForm)
                                          HyperelasticMaterial::mooneyRivlin(0.012, 0.006, 1.5),
                                          HyperelasticMaterial::verondaWestmann(0.01, 3.0, 1.0)}) {
     Mesh mesh = boxMesh(2, 1, 1, length, side, side);
-    Constraints c;
-    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-      const Eigen::Vector3d x = mesh.nodes.col(i);
-      if (x[0] < 1e-9) c.fix(int(i), 0);
-      if (x[0] > length - 1e-9) c.prescribe(int(i), 0, (stretch - 1) * length);
-      if (x[0] < 1e-9 && x[1] < 1e-9 && x[2] < 1e-9) {
-        c.fix(int(i), 1);
-        c.fix(int(i), 2);
-      }
-      if (x[0] < 1e-9 && x[1] > side - 1e-9 && x[2] < 1e-9) c.fix(int(i), 2);
-    }
+    const Constraints c = test::uniaxialStretch(mesh, length, side, stretch);
     NonlinearStaticAnalysis analysis(mesh, {{0, m}}, c);
     IncrementControl control;
     control.initial = 0.25;
@@ -317,22 +285,7 @@ TEST(NonlinearStaticAnalysis, ABlockTurnedRigidlyBy60DegreesIsStressFree) {
   const Eigen::Vector3d centre(3, 2.5, 2);
   Constraints c;
   std::vector<int> interior;
-  // Outer nodes: those on element faces that belong to one element only.
-  std::map<std::vector<int>, int> faceCount;
-  static const int kFaces[6][8] = {{0, 1, 2, 3, 8, 9, 10, 11},     {4, 5, 6, 7, 12, 13, 14, 15},
-                                   {0, 1, 5, 4, 8, 17, 12, 16},    {1, 2, 6, 5, 9, 18, 13, 17},
-                                   {2, 3, 7, 6, 10, 19, 14, 18},   {3, 0, 4, 7, 11, 16, 15, 19}};
-  for (const Element& el : mesh.elements)
-    for (const auto& face : kFaces) {
-      std::vector<int> key;
-      for (int s : face) key.push_back(el.nodes[std::size_t(s)]);
-      std::sort(key.begin(), key.end());
-      ++faceCount[key];
-    }
-  std::vector<char> outer(std::size_t(mesh.nodeCount()), 0);
-  for (const auto& [key, count] : faceCount)
-    if (count == 1)
-      for (int n : key) outer[std::size_t(n)] = 1;
+  const std::vector<char> outer = test::outerNodes(mesh);
   for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
     const Eigen::Vector3d x = mesh.nodes.col(i);
     const Eigen::Vector3d u = rotation * (x - centre) + centre - x;

@@ -10,6 +10,7 @@
 #include "fem/NonlinearStaticAnalysis.h"
 
 #include "FemTestMeshes.h"
+#include "FiniteStrainCases.h"
 
 #include <Eigen/LU>
 #include <gtest/gtest.h>
@@ -26,6 +27,7 @@ namespace {
 
 using test::boxMesh;
 using test::MeshBuilder;
+using test::elementCases;
 using test::wobble;
 
 /// Nearly incompressible tissue: E = 0.1 MPa, nu = 0.49.
@@ -71,31 +73,6 @@ TEST(HyperelasticMaterial, DeviatoricAndVolumetricPartsSumToTheResponse) {
   const HyperelasticMaterial svk = HyperelasticMaterial::fromLinear(HyperelasticLaw::StVenantKirchhoff, kTissue);
   EXPECT_FALSE(svk.hasVolumetricSplit());
   EXPECT_THROW(svk.deviatoricResponse(Eigen::Matrix3d::Identity(), 1.0), std::invalid_argument);
-}
-
-/// One element of each kind, distorted, with its own node numbering.
-struct ElementCase {
-  std::string name;
-  Mesh mesh;
-};
-
-std::vector<ElementCase> elementCases() {
-  std::vector<ElementCase> cases;
-  Mesh brick = boxMesh(1, 1, 1, 4, 3, 2);
-  for (Eigen::Index i = 0; i < brick.nodeCount(); ++i) brick.nodes.col(i) = wobble(brick.nodes.col(i), 0.2);
-  cases.push_back({"Hex20", brick});
-  Mesh partial = brick;
-  for (int k : {9, 14, 17}) partial.elements[0].nodes[std::size_t(k)] = -1;  // a mid-side subset
-  cases.push_back({"Hex20 with 17 nodes", partial});
-  Mesh wedges = boxMesh(1, 1, 1, 4, 3, 2, Eigen::Vector3d::Zero(), true);
-  for (Eigen::Index i = 0; i < wedges.nodeCount(); ++i) wedges.nodes.col(i) = wobble(wedges.nodes.col(i), 0.2);
-  Mesh degenerate = wedges;
-  degenerate.elements.resize(1);
-  cases.push_back({"degenerate wedge", degenerate});
-  Mesh native = withNativeWedges(wedges);
-  native.elements.resize(1);
-  cases.push_back({"Wedge15", native});
-  return cases;
 }
 
 ElementDisplacements slotsOf(const Element& el, const Eigen::Matrix3Xd& nodal) {
@@ -212,17 +189,7 @@ TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosed
           HyperelasticMaterial::fromLinear(HyperelasticLaw::MooneyRivlin, {0.1, 0.499, 0.0})}) {
       Mesh mesh = boxMesh(2, 1, 1, length, side, side, Eigen::Vector3d::Zero(), wedges);
       if (wedges) mesh = withNativeWedges(mesh);
-      Constraints c;
-      for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-        const Eigen::Vector3d x = mesh.nodes.col(i);
-        if (x[0] < 1e-9) c.fix(int(i), 0);
-        if (x[0] > length - 1e-9) c.prescribe(int(i), 0, (stretch - 1) * length);
-        if (x[0] < 1e-9 && x[1] < 1e-9 && x[2] < 1e-9) {
-          c.fix(int(i), 1);
-          c.fix(int(i), 2);
-        }
-        if (x[0] < 1e-9 && x[1] > side - 1e-9 && x[2] < 1e-9) c.fix(int(i), 2);
-      }
+      const Constraints c = test::uniaxialStretch(mesh, length, side, stretch);
       AssemblyOptions options;
       options.volumetric = VolumetricFormulation::MixedPressure;
       NonlinearStaticAnalysis analysis(mesh, {{0, m}}, c, options);
