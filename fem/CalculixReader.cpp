@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
 #include <set>
-#include <sstream>
+#include <span>
+#include <string_view>
+#include <system_error>
+#include <unordered_map>
 
 namespace caps::fem {
 
@@ -18,19 +22,30 @@ std::string upper(std::string s) {
   return s;
 }
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r\n");
-  if (b == std::string::npos) return {};
-  const auto e = s.find_last_not_of(" \t\r\n");
-  return s.substr(b, e - b + 1);
+constexpr bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n'; }
+
+std::string_view trimmed(std::string_view s) {
+  std::size_t b = 0, e = s.size();
+  while (b < e && isSpace(s[b])) ++b;
+  while (e > b && isSpace(s[e - 1])) --e;
+  return s.substr(b, e - b);
 }
 
+std::string trim(const std::string& s) { return std::string(trimmed(s)); }
+
+/// The comma-separated fields of @a s, trimmed; a trailing comma gives a
+/// last empty field; an empty line has none.
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
-  std::string field;
-  std::istringstream in(s);
-  while (std::getline(in, field, ',')) out.push_back(trim(field));
-  if (!s.empty() && s.back() == ',') out.emplace_back();
+  if (s.empty()) return out;
+  const std::string_view v(s);
+  std::size_t begin = 0;
+  while (true) {
+    const std::size_t comma = v.find(',', begin);
+    out.emplace_back(trimmed(v.substr(begin, comma == std::string_view::npos ? std::string_view::npos : comma - begin)));
+    if (comma == std::string_view::npos) break;
+    begin = comma + 1;
+  }
   return out;
 }
 
@@ -44,12 +59,14 @@ class Parser {
 public:
   Parser(const std::string& text, std::string source, const CalculixReadOptions& options)
       : source_(std::move(source)), options_(options) {
-    std::istringstream in(text);
-    std::string raw;
+    const std::string_view all(text);
     int number = 0;
-    while (std::getline(in, raw)) {
+    for (std::size_t at = 0; at < all.size();) {
+      const std::size_t end = std::min(all.find('\n', at), all.size());
+      const std::string_view raw = all.substr(at, end - at);
+      at = end + 1;
       ++number;
-      const std::string t = trim(raw);
+      const std::string_view t = trimmed(raw);
       if (t.empty() || t.rfind("**", 0) == 0) continue;
       // A keyword line ending in a comma continues on the next line.
       if (!lines_.empty() && lines_.back().text[0] == '*' && lines_.back().text.back() == ',' &&
@@ -57,7 +74,7 @@ public:
         lines_.back().text += t;
         continue;
       }
-      lines_.push_back({number, t});
+      lines_.push_back({number, std::string(t)});
     }
   }
 
@@ -76,7 +93,7 @@ public:
       }
       std::size_t end = i + 1;
       while (end < lines_.size() && lines_[end].text[0] != '*') ++end;
-      std::vector<Line> data(lines_.begin() + long(i + 1), lines_.begin() + long(end));
+      const std::span<const Line> data(lines_.data() + i + 1, end - i - 1);
       line_ = kw.number;
       handle(keyword, params, data);
       i = end;
@@ -88,26 +105,37 @@ private:
   [[noreturn]] void fail(int line, const std::string& what) const { throw InputDeckError(source_, line, what); }
 
   double number(const std::string& s, int line) const {
+    // The common case, a plain decimal: from_chars (correctly rounded, as strtod).
+    double v = 0.0;
+    const char* end = s.data() + s.size();
+    if (auto r = std::from_chars(s.data(), end, v); r.ec == std::errc() && r.ptr == end && !s.empty()) return v;
+    // Fortran exponents (1.5D3), a leading '+', and the like: strtod's reading.
     std::string t = s;
     for (char& c : t)
       if (c == 'd' || c == 'D') c = 'e';
-    char* end = nullptr;
-    const double v = std::strtod(t.c_str(), &end);
-    if (t.empty() || *end != '\0') fail(line, "'" + s + "' is not a number");
+    char* stop = nullptr;
+    v = std::strtod(t.c_str(), &stop);
+    if (t.empty() || *stop != '\0') fail(line, "'" + s + "' is not a number");
     return v;
   }
+  /// strtol's reading of @a s when all of it is read, false otherwise.
+  static bool readInteger(const std::string& s, long& v) {
+    const char* end = s.data() + s.size();
+    if (auto r = std::from_chars(s.data(), end, v); r.ec == std::errc() && r.ptr == end && !s.empty()) return true;
+    char* stop = nullptr;
+    v = std::strtol(s.c_str(), &stop, 10);
+    return !s.empty() && *stop == '\0';
+  }
   long integer(const std::string& s, int line) const {
-    char* end = nullptr;
-    const long v = std::strtol(s.c_str(), &end, 10);
-    if (s.empty() || *end != '\0') fail(line, "'" + s + "' is not an integer");
+    long v = 0;
+    if (!readInteger(s, v)) fail(line, "'" + s + "' is not an integer");
     return v;
   }
   /// True if @a s is wholly an integer: a node or element number, not a set
   /// name (set names may start with a digit, e.g. ELSET=1E).
   static bool isInteger(const std::string& s) {
-    char* end = nullptr;
-    std::strtol(s.c_str(), &end, 10);
-    return !s.empty() && *end == '\0';
+    long v = 0;
+    return readInteger(s, v);
   }
 
   std::string required(const std::map<std::string, std::string>& params, const std::string& name,
@@ -142,7 +170,7 @@ private:
   }
 
   void handle(const std::string& keyword, const std::map<std::string, std::string>& params,
-              const std::vector<Line>& data) {
+              std::span<const Line> data) {
     if (keyword == "*HEADING" || keyword == "*NODE FILE" || keyword == "*EL FILE" || keyword == "*NODE PRINT" ||
         keyword == "*EL PRINT" || keyword == "*END STEP")
       return;
@@ -248,7 +276,7 @@ private:
 
   /// *STATIC[, DIRECT] with the optional line: initial increment, step
   /// period, minimum and maximum increment (ccx's defaults for empty fields).
-  void readStatic(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+  void readStatic(const std::map<std::string, std::string>& params, std::span<const Line> data) {
     if (steps_ == 0) fail(line_, "*STATIC outside a *STEP");
     step_.direct = params.count("DIRECT") && params.at("DIRECT") != "NO";
     if (data.empty()) return;
@@ -270,7 +298,7 @@ private:
   /// *HYPERELASTIC, NEO HOOKE (C10, D1) or MOONEY-RIVLIN (C10, C01, D1): the
   /// Abaqus/CalculiX data line order (checked against ccx 2.20: C10 = 1,
   /// D1 = 0.1 gives E = 5.806, nu = 0.4516).
-  void readHyperelastic(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+  void readHyperelastic(const std::map<std::string, std::string>& params, std::span<const Line> data) {
     if (material_.empty()) fail(line_, "*HYPERELASTIC outside a *MATERIAL");
     const int region = materialIndex_[material_];
     if (elastic_.count(region)) fail(line_, "material " + material_ + " has both *ELASTIC and *HYPERELASTIC");
@@ -301,7 +329,7 @@ private:
     hyperelasticLine_[region] = at;
   }
 
-  void readNodes(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+  void readNodes(const std::map<std::string, std::string>& params, std::span<const Line> data) {
     std::vector<long>* set = params.count("NSET") ? &nsets_[params.at("NSET")] : nullptr;
     for (const Line& l : data) {
       const auto f = split(l.text);
@@ -318,7 +346,7 @@ private:
     }
   }
 
-  void readElements(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+  void readElements(const std::map<std::string, std::string>& params, std::span<const Line> data) {
     const std::string type = required(params, "TYPE", "*ELEMENT");
     int count = 0;
     if (type == "C3D20" || type == "C3D20R") count = 20;
@@ -401,7 +429,7 @@ private:
   }
 
   void readSet(const std::string& keyword, const std::map<std::string, std::string>& params,
-               const std::vector<Line>& data) {
+               std::span<const Line> data) {
     const bool nodes = keyword == "*NSET";
     const std::string name = required(params, nodes ? "NSET" : "ELSET", keyword);
     std::vector<long>& set = (nodes ? nsets_ : elsets_)[name];
@@ -424,7 +452,7 @@ private:
     }
   }
 
-  void readBoundary(const std::map<std::string, std::string>& params, const std::vector<Line>& data) {
+  void readBoundary(const std::map<std::string, std::string>& params, std::span<const Line> data) {
     for (const auto& [name, value] : params)
       if (name != "OP") fail(line_, "*BOUNDARY, " + name + " is not supported");
     for (const Line& l : data) {
@@ -450,7 +478,7 @@ private:
   /// *EQUATION: a line with the number of terms, then node, DOF,
   /// coefficient triples (up to four per line). The first term's DOF is the
   /// dependent one (ccx), so its coefficient must not be zero.
-  void readEquations(const std::vector<Line>& data) {
+  void readEquations(std::span<const Line> data) {
     std::size_t i = 0;
     while (i < data.size()) {
       const int at = data[i].number;
@@ -602,12 +630,12 @@ private:
   int steps_ = 0;
   std::vector<Eigen::Vector3d> coords_;
   std::vector<long> nodeIds_;
-  std::map<long, int> nodeIndex_;
+  std::unordered_map<long, int> nodeIndex_;
   std::vector<Element> elements_;
   std::vector<long> elementNumbers_;
   std::vector<int> elementLines_;
   std::vector<int> elementNodeCounts_;  ///< 20, 15 or 8: the deck's element type
-  std::map<long, int> elementIds_;
+  std::unordered_map<long, int> elementIds_;
   std::map<std::string, std::vector<long>> nsets_, elsets_;
   std::string material_;
   std::map<std::string, int> materialIndex_;
@@ -636,11 +664,15 @@ CalculixModel parseCalculixInput(const std::string& text, const std::string& sou
 }
 
 CalculixModel readCalculixInput(const std::string& path, const CalculixReadOptions& options) {
-  std::ifstream f(path);
+  std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw std::runtime_error("cannot read the input deck " + path);
-  std::ostringstream s;
-  s << f.rdbuf();
-  return parseCalculixInput(s.str(), path, options);
+  std::string text;
+  char buffer[1 << 16];
+  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) text.append(buffer, n);
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) throw std::runtime_error("cannot read the input deck " + path);
+  return parseCalculixInput(text, path, options);
 }
 
 }  // namespace caps::fem

@@ -291,3 +291,28 @@ TEST(CalculixReader, OrientationAndExpansionOfIsotropicMaterialsChangeNothing) {
   unknown.replace(unknown.find("ORIENTATION=S0"), 14, "ORIENTATION=S1");
   EXPECT_NE(errorOf(unknown).find("orientation S1, which is not defined"), std::string::npos) << errorOf(unknown);
 }
+
+TEST(CalculixReader, NumbersAreReadAsStrtodReadsThemInAnyLineEnding) {
+  // CRLF line endings, a '+' sign, Fortran exponents, a leading dot, tabs.
+  const std::string deck =
+      "*NODE\r\n1, 0, 0, 0\r\n2, +1.0, 0, 0\r\n3, 1.D0, 1d0, 0\r\n4, 0, .1, 0\r\n"
+      "5, 0, 0, 1\r\n6, 1, 0, 0.1E+1\r\n7, 1, 1, 1\r\n8,\t-0.25E+1 ,\t1, 1\r\n"
+      "*ELEMENT, TYPE=C3D8, ELSET=E\r\n+1, 1, 2, 3, 4, 5, 6, 7, 8\r\n"
+      "*MATERIAL, NAME=M\r\n*ELASTIC\r\n7.5D2, 3.D-1\r\n*SOLID SECTION, ELSET=E, MATERIAL=M\r\n";
+  const CalculixModel m = parseCalculixInput(deck);
+  ASSERT_EQ(m.mesh.nodeCount(), 8);
+  EXPECT_EQ(m.mesh.nodes(0, 1), 1.0);
+  EXPECT_EQ(m.mesh.nodes(1, 2), 1.0);
+  EXPECT_EQ(m.mesh.nodes(1, 3), std::strtod("0.1", nullptr));
+  EXPECT_EQ(m.mesh.nodes(2, 5), 1.0);
+  EXPECT_EQ(m.mesh.nodes(0, 7), -2.5);
+  EXPECT_EQ(m.elementIds, std::vector<long>{1});
+  EXPECT_EQ(m.materials.at(0).youngsModulus, 750.0);
+  EXPECT_EQ(m.materials.at(0).poissonRatio, std::strtod("3e-1", nullptr));
+  const std::string base = std::string(kNodes8) + "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n";
+  EXPECT_NE(errorOf(base + "*MATERIAL,NAME=M\n*ELASTIC\n5x, 0.3\n").find("deck.inp:14: '5x' is not a number"),
+            std::string::npos)
+      << errorOf(base + "*MATERIAL,NAME=M\n*ELASTIC\n5x, 0.3\n");
+  EXPECT_NE(errorOf(std::string(kNodes8) + "*ELEMENT, TYPE=C3D8\n1,1,2,3,4,5,6,7,8.5\n").find("'8.5' is not an integer"),
+            std::string::npos);
+}
