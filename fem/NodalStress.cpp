@@ -106,6 +106,7 @@ Eigen::MatrixXd averageAtRegionNodes(const Mesh& mesh, const RegionNodeLayout& l
   }
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(rows, layout.size());
   Eigen::MatrixXd gauss, atNodes;
+  Eigen::VectorXd slots(rows);
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
     const Eigen::MatrixXd& extrapolation = extrapolations.at({el.kind, integrationPointsOf(el, pointsPerDirection)});
@@ -123,7 +124,7 @@ Eigen::MatrixXd averageAtRegionNodes(const Mesh& mesh, const RegionNodeLayout& l
       bool first = true;
       for (int j = 0; j < k; ++j) first = first && nodes[std::size_t(j)] != n;
       if (!first) continue;
-      Eigen::VectorXd slots = atNodes.col(k);
+      slots = atNodes.col(k);
       int count = 1;
       for (int j = k + 1; j < kHex20NodeCount; ++j)
         if (nodes[std::size_t(j)] == n) {
@@ -231,16 +232,27 @@ Eigen::MatrixXd gaussToNodeExtrapolation(ElementKind kind, int pointsPerDirectio
 }
 
 NodalStressField recoverNodalStresses(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
-                                      int pointsPerDirection) {
+                                      int pointsPerDirection, int threads) {
   if (u.size() != mesh.dofCount())
     throw std::invalid_argument("recoverNodalStresses: the displacement vector must have 3N entries");
+  return nodalStressesFromGaussPoints(
+      mesh, materials, recoverStressAtAllGaussPoints(mesh, materials, u, pointsPerDirection, threads),
+      pointsPerDirection);
+}
+
+NodalStressField nodalStressesFromGaussPoints(const Mesh& mesh, const MaterialTable& materials,
+                                              const std::vector<std::vector<StressPoint>>& gaussStress,
+                                              int pointsPerDirection) {
+  if (gaussStress.size() != mesh.elements.size())
+    throw std::invalid_argument("nodalStressesFromGaussPoints: " + std::to_string(gaussStress.size()) +
+                                " elements' stresses given for a mesh of " + std::to_string(mesh.elements.size()));
   std::map<int, double> shearModulus;
   for (const auto& [region, m] : materials) shearModulus[region] = m.youngsModulus / (2.0 * (1.0 + m.poissonRatio));
   NodalStressField field;
   field.layout = RegionNodeLayout::of(mesh, shearModulus);
   field.regionStress =
       averageAtRegionNodes(mesh, field.layout, 6, pointsPerDirection, [&](int e, Eigen::MatrixXd& values) {
-        const auto points = recoverStressAtGaussPoints(mesh, materials, u, e, pointsPerDirection);
+        const auto& points = gaussStress[std::size_t(e)];
         values.resize(6, Eigen::Index(points.size()));
         for (std::size_t p = 0; p < points.size(); ++p) values.col(Eigen::Index(p)) = points[p].stress;
       });

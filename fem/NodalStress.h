@@ -2,11 +2,13 @@
 
 #include "fem/LinearElasticMaterial.h"
 #include "fem/Mesh.h"
+#include "fem/StressRecovery.h"
 
 #include <Eigen/Core>
 
 #include <functional>
 #include <map>
+#include <vector>
 
 namespace caps::fem {
 
@@ -160,6 +162,21 @@ Eigen::MatrixXd gaussToNodeExtrapolation(ElementKind kind, int pointsPerDirectio
  * Jacobian at a Gauss point, std::invalid_argument for a wrong @a u size.
  */
 NodalStressField recoverNodalStresses(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
-                                      int pointsPerDirection = 2);
+                                      int pointsPerDirection = 2, int threads = 1);
+
+/**
+ * @brief recoverNodalStresses() from the stresses already recovered at the
+ *        points of each element's own rule: @a gaussStress[e] as
+ *        recoverStressAtGaussPoints(mesh, materials, u, e,
+ *        @a pointsPerDirection) gives them (recoverStressAtAllGaussPoints()),
+ *        so a caller that needs both computes them once.
+ *
+ * Throws std::invalid_argument when @a gaussStress does not have one entry
+ * per element, std::logic_error when an entry does not have the points of
+ * its element's rule (averageAtRegionNodes()).
+ */
+NodalStressField nodalStressesFromGaussPoints(const Mesh& mesh, const MaterialTable& materials,
+                                              const std::vector<std::vector<StressPoint>>& gaussStress,
+                                              int pointsPerDirection = 2);
 
 }  // namespace caps::fem

@@ -42,4 +42,12 @@ std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const Mate
                                                    const Eigen::VectorXd& u, int element,
                                                    int pointsPerDirection = 3);
 
+/// recoverStressAtGaussPoints() of every element (element e's points at
+/// [e]), the elements shared among @a threads threads in contiguous blocks;
+/// the same values for any thread count. Throws what the first failing
+/// element (lowest index) throws.
+std::vector<std::vector<StressPoint>> recoverStressAtAllGaussPoints(const Mesh& mesh, const MaterialTable& materials,
+                                                                   const Eigen::VectorXd& u, int pointsPerDirection = 3,
+                                                                   int threads = 1);
+
 }  // namespace caps::fem

@@ -3,6 +3,8 @@
 
 #include "FemTestMeshes.h"
 #include "fem/Constraints.h"
+#include "fem/ElementGeometry.h"
+#include "fem/ElementNumbering.h"
 #include "fem/NodalStress.h"
 #include "fem/StaticAnalysis.h"
 
@@ -212,4 +214,61 @@ TEST(NodalStress, TheLayoutCountsEachRegionsElementsAtANodeOnce) {
   EXPECT_EQ(layout.regionOf[layout.representative[centre]], 2);
   EXPECT_EQ(layout.column(3, centre), -1);
   EXPECT_EQ(layout.firstColumn[mesh.nodeCount()], layout.size());
+}
+
+// The stresses of every element on several threads are those of one
+// element at a time, bit for bit, and so are nodal stresses averaged from
+// them; the first bad element (lowest index) is the one reported.
+TEST(NodalStress, EveryElementOnThreadsIsOneElementAtATimeBitForBit) {
+  Mesh mesh = boxMesh(8, 6, 4, 80, 60, 40, Eigen::Vector3d::Zero(), true);
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) mesh.nodes.col(i) = caps::fem::test::wobble(mesh.nodes.col(i), 0.3);
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e) mesh.elements[e].region = int(e % 2);
+  const MaterialTable materials{{0, {1000.0, 0.3, 0.0}}, {1, {300.0, 0.45, 0.0}}};
+  const Eigen::VectorXd u = Eigen::VectorXd::Random(mesh.dofCount()) * 1e-2;
+  ASSERT_GT(mesh.elements.size(), 128u);  // enough for more than one thread
+  for (int points : {2, 3}) {
+    std::vector<std::vector<StressPoint>> one;
+    for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+      one.push_back(recoverStressAtGaussPoints(mesh, materials, u, int(e), points));
+    for (int threads : {1, 2, 3}) {
+      const auto all = recoverStressAtAllGaussPoints(mesh, materials, u, points, threads);
+      ASSERT_EQ(all.size(), one.size());
+      for (std::size_t e = 0; e < all.size(); ++e) {
+        ASSERT_EQ(all[e].size(), one[e].size());
+        for (std::size_t p = 0; p < all[e].size(); ++p) {
+          EXPECT_EQ(all[e][p].stress, one[e][p].stress) << e << ", " << p;
+          EXPECT_EQ(all[e][p].strain, one[e][p].strain);
+          EXPECT_EQ(all[e][p].world, one[e][p].world);
+          EXPECT_EQ(all[e][p].natural, one[e][p].natural);
+        }
+      }
+      // One point at a time (recoverStress) gives the same too.
+      EXPECT_EQ(recoverStress(mesh, materials, u, 7, one[7][1].natural).stress, one[7][1].stress);
+      const NodalStressField f = recoverNodalStresses(mesh, materials, u, points, threads);
+      const NodalStressField g = nodalStressesFromGaussPoints(mesh, materials, one, points);
+      EXPECT_EQ(f.regionStress, g.regionStress);
+      EXPECT_EQ(f.stress, g.stress);
+      EXPECT_EQ(f.elementCount, g.elementCount);
+    }
+  }
+  // Two inverted elements: the lower one is named, on any number of threads.
+  // (Inverted: each node slot takes the node of its mirror image in t.)
+  Mesh bad = boxMesh(8, 6, 4, 80, 60, 40);
+  for (int e : {150, 40}) {
+    Element& el = bad.elements[std::size_t(e)];
+    const auto nodes = el.nodes;
+    for (int k = 0; k < kHex20NodeCount; ++k)
+      for (int j = 0; j < kHex20NodeCount; ++j)
+        if (batheNaturalCoordinates(j) == batheNaturalCoordinates(k).cwiseProduct(Eigen::Vector3d(1, 1, -1)))
+          el.nodes[std::size_t(k)] = nodes[std::size_t(j)];
+  }
+  for (int threads : {1, 2, 3}) {
+    try {
+      recoverStressAtAllGaussPoints(bad, materials, Eigen::VectorXd::Zero(bad.dofCount()), 2, threads);
+      ADD_FAILURE() << "no error on " << threads << " threads";
+    } catch (const ElementError& e) {
+      EXPECT_EQ(e.element(), 40) << threads << " threads";
+    }
+  }
+  EXPECT_THROW(nodalStressesFromGaussPoints(mesh, materials, {}, 2), std::invalid_argument);
 }
