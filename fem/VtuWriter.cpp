@@ -2,10 +2,12 @@
 
 #include <Eigen/Geometry>
 
+#include <charconv>
 #include <cmath>
-#include <fstream>
-#include <sstream>
+#include <cstdio>
 #include <stdexcept>
+#include <system_error>
+#include <type_traits>
 
 namespace caps::fem {
 
@@ -20,7 +22,44 @@ bool allMidsides(const Element& el, const std::vector<int>& batheNodes) {
   return true;
 }
 
-void writeArray(std::ostream& o, const VtuArray& a) {
+/// The document as it grows: numbers formatted by std::to_chars, which gives
+/// the bytes of an ostream with precision(17) (printf's %.17g) at a tenth
+/// of the cost.
+class Text {
+public:
+  Text& operator<<(const char* s) {
+    text_ += s;
+    return *this;
+  }
+  Text& operator<<(const std::string& s) {
+    text_ += s;
+    return *this;
+  }
+  Text& operator<<(char c) {
+    text_ += c;
+    return *this;
+  }
+  Text& operator<<(double v) {
+    char buffer[32];
+    const auto r = std::to_chars(buffer, buffer + sizeof buffer, v, std::chars_format::general, 17);
+    text_.append(buffer, r.ptr);
+    return *this;
+  }
+  template <class Integer, class = std::enable_if_t<std::is_integral_v<Integer>>>
+  Text& operator<<(Integer v) {
+    char buffer[24];
+    const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+    text_.append(buffer, r.ptr);
+    return *this;
+  }
+  void reserve(std::size_t n) { text_.reserve(n); }
+  std::string take() { return std::move(text_); }
+
+private:
+  std::string text_;
+};
+
+void writeArray(Text& o, const VtuArray& a) {
   o << "        <DataArray type=\"Float64\" Name=\"" << a.name << "\" NumberOfComponents=\"" << a.values.rows()
     << "\" format=\"ascii\">\n";
   for (Eigen::Index j = 0; j < a.values.cols(); ++j) {
@@ -71,8 +110,11 @@ std::string vtuDocument(const Mesh& mesh, const std::vector<VtuArray>& pointData
     if (a.values.cols() != m)
       throw std::invalid_argument("cell array '" + a.name + "' has " + std::to_string(a.values.cols()) +
                                   " columns, but the mesh has " + std::to_string(m) + " elements");
-  std::ostringstream o;
-  o.precision(17);
+  Text o;
+  std::size_t values = std::size_t(mesh.nodes.size());
+  for (const auto& a : pointData) values += std::size_t(a.values.size());
+  for (const auto& a : cellData) values += std::size_t(a.values.size());
+  o.reserve(24 * values + 140 * std::size_t(m) + 4096);
   o << "<?xml version=\"1.0\"?>\n"
     << "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
     << "  <UnstructuredGrid>\n"
@@ -88,34 +130,37 @@ std::string vtuDocument(const Mesh& mesh, const std::vector<VtuArray>& pointData
   o << "      <Points>\n";
   writeArray(o, {"Points", mesh.nodes});
   o << "      </Points>\n      <Cells>\n";
-  std::ostringstream connectivity, offsets, types;
-  long offset = 0;
-  for (const Element& el : mesh.elements) {
-    const VtkCell cell = vtkCell(el, mesh.nodes);
-    connectivity << "         ";
-    for (int id : cell.nodes) connectivity << ' ' << id;
-    connectivity << '\n';
-    offset += long(cell.nodes.size());
-    offsets << ' ' << offset;
-    types << ' ' << cell.type;
+  std::vector<VtkCell> cells;
+  cells.reserve(mesh.elements.size());
+  for (const Element& el : mesh.elements) cells.push_back(vtkCell(el, mesh.nodes));
+  o << "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (const VtkCell& cell : cells) {
+    o << "         ";
+    for (int id : cell.nodes) o << ' ' << id;
+    o << '\n';
   }
-  o << "        <DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n"
-    << connectivity.str() << "        </DataArray>\n"
-    << "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n         " << offsets.str()
-    << "\n        </DataArray>\n"
-    << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n         " << types.str()
-    << "\n        </DataArray>\n";
+  o << "        </DataArray>\n"
+    << "        <DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n         ";
+  long offset = 0;
+  for (const VtkCell& cell : cells) {
+    offset += long(cell.nodes.size());
+    o << ' ' << offset;
+  }
+  o << "\n        </DataArray>\n"
+    << "        <DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n         ";
+  for (const VtkCell& cell : cells) o << ' ' << cell.type;
+  o << "\n        </DataArray>\n";
   o << "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n</VTKFile>\n";
-  return o.str();
+  return o.take();
 }
 
 void writeVtu(const std::string& path, const Mesh& mesh, const std::vector<VtuArray>& pointData,
               const std::vector<VtuArray>& cellData) {
   const std::string text = vtuDocument(mesh, pointData, cellData);
-  std::ofstream f(path);
+  std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) throw std::runtime_error("cannot write the VTU file " + path);
-  f << text;
-  if (!f) throw std::runtime_error("error while writing the VTU file " + path);
+  const bool written = std::fwrite(text.data(), 1, text.size(), f) == text.size();
+  if (std::fclose(f) != 0 || !written) throw std::runtime_error("error while writing the VTU file " + path);
 }
 
 }  // namespace caps::fem

@@ -163,3 +163,28 @@ TEST(Vtu, DocumentParsesWithPointAndCellData) {
   EXPECT_EQ(numbers(array(xml, "region").text), (std::vector<double>{0, 0, 0, 3, 0}));
   EXPECT_THROW(vtuDocument(mesh, {{"bad", Eigen::MatrixXd::Zero(1, n - 1)}}), std::invalid_argument);
 }
+
+TEST(Vtu, NumbersAreWrittenAsAnOstreamWithPrecision17WritesThem) {
+  // The writer formats with std::to_chars; the bytes are those of the
+  // ostream it replaced (and every double reads back exactly).
+  const Mesh mesh = boxMesh(1, 1, 1, 10, 10, 10);
+  const Eigen::Index n = mesh.nodeCount();
+  Eigen::MatrixXd v = Eigen::MatrixXd::Random(1, n);
+  const double tricky[] = {0.0, -0.0, 0.1, 1e-5, -2.5e-300, 1e21, 123456789012345678.0, 1.0 / 3.0, 2.2250738585072014e-308, 100.0};
+  for (std::size_t k = 0; k < std::size(tricky); ++k) v(0, Eigen::Index(k)) = tricky[k];
+  const std::string doc = vtuDocument(mesh, {{"values", v}});
+  std::ostringstream expected;
+  expected.precision(17);
+  for (Eigen::Index j = 0; j < n; ++j) expected << "          " << v(0, j) << '\n';
+  const std::string text = array(scanXml(doc), "values").text;
+  EXPECT_EQ(text.substr(text.find('\n') + 1, expected.str().size()), expected.str());
+  const auto back = numbers(text);
+  ASSERT_EQ(back.size(), std::size_t(n));
+  for (Eigen::Index j = 0; j < n; ++j) EXPECT_EQ(back[std::size_t(j)], v(0, j)) << j;
+  std::ostringstream points;
+  points.precision(17);
+  for (Eigen::Index j = 0; j < n; ++j)
+    points << "         " << ' ' << mesh.nodes(0, j) << ' ' << mesh.nodes(1, j) << ' ' << mesh.nodes(2, j) << '\n';
+  const std::string pointText = array(scanXml(doc), "Points").text;
+  EXPECT_EQ(pointText.substr(pointText.find('\n') + 1, points.str().size()), points.str());
+}
