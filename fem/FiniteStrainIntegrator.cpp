@@ -1,5 +1,7 @@
 #include "fem/FiniteStrainIntegrator.h"
 
+#include "fem/VoigtNotation.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -12,29 +14,6 @@
 namespace caps::fem {
 
 namespace {
-
-Eigen::Matrix3d tensorOf(const Vector6d& s) {
-  Eigen::Matrix3d t;
-  t << s[0], s[3], s[5],  //
-      s[3], s[1], s[4],   //
-      s[5], s[4], s[2];
-  return t;
-}
-
-Vector6d voigtOf(const Eigen::Matrix3d& t) {
-  Vector6d s;
-  s << t(0, 0), t(1, 1), t(2, 2), t(0, 1), t(1, 2), t(2, 0);
-  return s;
-}
-
-[[noreturn]] void throwInverted(int element, double detF, const Eigen::Vector3d& rst, const Eigen::Vector3d& world) {
-  std::ostringstream m;
-  m.precision(4);
-  m << "element " << element << " is turned inside out by the displacement (det F = " << detF
-    << ") at natural point (" << rst[0] << ", " << rst[1] << ", " << rst[2] << "), undeformed position ("
-    << world[0] << ", " << world[1] << ", " << world[2] << ") mm";
-  throw InvertedElementError(element, detF, rst, m.str());
-}
 
 /// F = I + u^T G at a point whose reference world gradients are @a g.
 Eigen::Matrix3d deformationGradient(const ElementDisplacements& u, const ShapeDerivatives& g) {
@@ -60,6 +39,16 @@ void greenLagrangeStrainDisplacement(const Eigen::Matrix3d& f, const ShapeDeriva
   }
 }
 
+void throwInverted(int element, const char* measure, double value, const Eigen::Vector3d& rst,
+                   const Eigen::Vector3d& world) {
+  std::ostringstream m;
+  m.precision(4);
+  m << "element " << element << " is turned inside out by the displacement (" << measure << " = " << value
+    << ") at natural point (" << rst[0] << ", " << rst[1] << ", " << rst[2] << "), undeformed position ("
+    << world[0] << ", " << world[1] << ", " << world[2] << ") mm";
+  throw InvertedElementError(element, value, rst, m.str());
+}
+
 void resetCheck(FiniteStrainElementCheck& check) {
   check.minDetF = std::numeric_limits<double>::infinity();
   check.maxStretch = 0.0;
@@ -76,16 +65,44 @@ void addToCheck(FiniteStrainElementCheck& check, const Eigen::Matrix3d& c, doubl
   check.minStretch = std::min(check.minStretch, std::sqrt(std::max(0.0, eig.eigenvalues()[0])));
 }
 
+ReferencePoints referencePoints(const ElementShape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
+                                int elementIndex) {
+  ReferencePoints r;
+  r.gradients.resize(rule.size());
+  r.weights.resize(rule.size());
+  PointGeometry g;
+  for (std::size_t q = 0; q < rule.size(); ++q) {
+    evaluateGeometry(shape, x, rule.points[q], elementIndex, g);
+    r.gradients[q] = g.dhWorld;
+    r.weights[q] = rule.weights[q] * g.detJ;
+  }
+  return r;
+}
+
+std::size_t referencePointsBytes(std::size_t points) {
+  return sizeof(ReferencePoints) + points * (sizeof(ShapeDerivatives) + sizeof(double));
+}
+
 void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
                                  const ElementDisplacements& u, const HyperelasticMaterial& material,
                                  const IntegrationRule& rule, int elementIndex, ElementVector& fint,
                                  ElementMatrix* kt, FiniteStrainElementCheck& check) {
+  assembleElementFiniteStrain(shape, x, referencePoints(shape, x, rule, elementIndex), u, material, rule,
+                              elementIndex, fint, kt, check);
+}
+
+void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
+                                 const ReferencePoints& reference, const ElementDisplacements& u,
+                                 const HyperelasticMaterial& material, const IntegrationRule& rule, int elementIndex,
+                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check) {
   // A native wedge uses slots 0..14 only; absent slots have zero gradients.
   const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
   fint.setZero();
   if (kt) kt->setZero();
   resetCheck(check);
-  PointGeometry g;
+  // f_int of node a, direction k: sum_g w_g P_kJ dH_a/dX_J with P = F S
+  // (the first Piola-Kirchhoff stress), gathered as a 20 x 3 block.
+  Eigen::Matrix<double, kHex20NodeCount, 3> forces = Eigen::Matrix<double, kHex20NodeCount, 3>::Zero();
   StrainDisplacement b;
   // The material part sum_g B^T (w D) B as one symmetric rank update W W^T,
   // W = [B^T L_g ...] with w D = L L^T (Cholesky; the tangent of a stable
@@ -97,22 +114,26 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
   Eigen::Index used = 0;
   Eigen::Matrix<double, kHex20NodeCount, kHex20NodeCount> geometric;
   geometric.setZero();
+  const ResponseParts parts = kt ? ResponseParts::StressAndTangent : ResponseParts::Stress;
   for (std::size_t q = 0; q < rule.size(); ++q) {
-    evaluateGeometry(shape, x, rule.points[q], elementIndex, g);
-    const ShapeDerivatives& dh = g.dhWorld;  // dH/dX on the reference geometry
+    const ShapeDerivatives& dh = reference.gradients[q];  // dH/dX on the reference geometry
     const Eigen::Matrix3d f = deformationGradient(u, dh);
     const double detF = f.determinant();
-    if (!(detF > 0.0)) throwInverted(elementIndex, detF, rule.points[q], g.world);
+    if (!(detF > 0.0)) {
+      PointGeometry g;
+      evaluateGeometry(shape, x, rule.points[q], elementIndex, g, false);
+      throwInverted(elementIndex, "det F", detF, rule.points[q], g.world);
+    }
     const Eigen::Matrix3d c = f.transpose() * f;
-    const MaterialResponse response = material.response(c, detF);
-    const double w = rule.weights[q] * g.detJ;
-
-    greenLagrangeStrainDisplacement(f, dh, slots, b);
-    fint.noalias() += w * (b.transpose() * response.stress);
+    const MaterialResponse response = material.response(c, detF, parts);
+    const double w = reference.weights[q];
+    const Eigen::Matrix3d stress = tensorOf(response.stress);
+    forces.noalias() += dh * (w * (f * stress)).transpose();
 
     addToCheck(check, c, detF, w * response.energy);
 
     if (!kt) continue;
+    greenLagrangeStrainDisplacement(f, dh, slots, b);
     const Matrix6d wd = w * response.tangent;
     const Eigen::LLT<Matrix6d> llt(wd);
     if (llt.info() == Eigen::Success) {
@@ -122,8 +143,9 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
     } else {
       kt->noalias() += b.transpose() * (wd * b);
     }
-    geometric.noalias() += dh * (w * tensorOf(response.stress)) * dh.transpose();
+    geometric.noalias() += dh * (w * stress) * dh.transpose();
   }
+  Eigen::Map<Eigen::Matrix<double, kHex20NodeCount, 3, Eigen::RowMajor>>(fint.data()) = forces;
   if (!kt) return;
   if (used > 0) {
     ElementMatrix materialPart = ElementMatrix::Zero();
@@ -149,7 +171,7 @@ FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const Ele
   p.world = g.world;
   p.deformationGradient = deformationGradient(u, g.dhWorld);
   p.detF = p.deformationGradient.determinant();
-  if (!(p.detF > 0.0)) throwInverted(elementIndex, p.detF, rst, g.world);
+  if (!(p.detF > 0.0)) throwInverted(elementIndex, "det F", p.detF, rst, g.world);
   const Eigen::Matrix3d c = p.deformationGradient.transpose() * p.deformationGradient;
   const MaterialResponse response = material.response(c, p.detF);
   p.secondPiolaKirchhoff = response.stress;

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <string>
+#include <vector>
 
 namespace caps::fem {
 
@@ -56,10 +57,31 @@ struct FiniteStrainElementCheck {
 void greenLagrangeStrainDisplacement(const Eigen::Matrix3d& f, const ShapeDerivatives& dh, int slots,
                                      StrainDisplacement& b);
 
+/// Throws InvertedElementError for @a element, whose @a measure ("det F",
+/// "J~") is @a value <= 0 at natural point @a rst, undeformed @a world.
+[[noreturn]] void throwInverted(int element, const char* measure, double value, const Eigen::Vector3d& rst,
+                                const Eigen::Vector3d& world);
+
 /// Starts @a check for an element (no point seen yet).
 void resetCheck(FiniteStrainElementCheck& check);
 /// Adds one integration point (C = F^T F, det F, energy w W) to @a check.
 void addToCheck(FiniteStrainElementCheck& check, const Eigen::Matrix3d& c, double detF, double energy);
+
+/// What a Total Lagrangian element needs of its reference geometry at the
+/// points of its rule. It is the same at every evaluation, so a model that
+/// is evaluated many times (Newton) computes it once.
+struct ReferencePoints {
+  std::vector<ShapeDerivatives> gradients;  ///< dH/dX at each point
+  std::vector<double> weights;              ///< w_g det J at each point
+};
+
+/// The reference geometry of element @a elementIndex at the points of
+/// @a rule; throws ElementError when its Jacobian is bad there.
+ReferencePoints referencePoints(const ElementShape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
+                                int elementIndex);
+
+/// Bytes one element's ReferencePoints take for a rule of @a points points.
+std::size_t referencePointsBytes(std::size_t points);
 
 /**
  * @brief Total Lagrangian internal forces and consistent tangent of one
@@ -83,6 +105,14 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
                                  const ElementDisplacements& u, const HyperelasticMaterial& material,
                                  const IntegrationRule& rule, int elementIndex, ElementVector& fint,
                                  ElementMatrix* kt, FiniteStrainElementCheck& check);
+
+/// The same on reference geometry computed before (referencePoints() of the
+/// same shape, coordinates and rule); @a shape and @a x name the point in
+/// the message of an inversion.
+void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
+                                 const ReferencePoints& reference, const ElementDisplacements& u,
+                                 const HyperelasticMaterial& material, const IntegrationRule& rule, int elementIndex,
+                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check);
 
 /// Kinematics and stresses at natural point @a rst of one element (for
 /// output); throws as assembleElementFiniteStrain().

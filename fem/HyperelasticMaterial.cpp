@@ -1,5 +1,7 @@
 #include "fem/HyperelasticMaterial.h"
 
+#include "fem/VoigtNotation.h"
+
 #include <Eigen/LU>
 
 #include <cmath>
@@ -10,25 +12,8 @@ namespace caps::fem {
 
 namespace {
 
-// Voigt slots of the symmetric tensor indices: xx, yy, zz, xy, yz, zx.
-constexpr int kPair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {2, 0}};
-
-Vector6d voigt(const Eigen::Matrix3d& a) {
-  Vector6d v;
-  for (int i = 0; i < 6; ++i) v[i] = a(kPair[i][0], kPair[i][1]);
-  return v;
-}
-
 /// d(C^-1)/dC as a 6x6 of tensor components: -(Ci_ik Ci_jl + Ci_il Ci_jk) / 2.
-Matrix6d inverseDerivative(const Eigen::Matrix3d& ci) {
-  Matrix6d m;
-  for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) {
-      const int i = kPair[a][0], j = kPair[a][1], k = kPair[b][0], l = kPair[b][1];
-      m(a, b) = -0.5 * (ci(i, k) * ci(j, l) + ci(i, l) * ci(j, k));
-    }
-  return m;
-}
+Matrix6d inverseDerivative(const Eigen::Matrix3d& ci) { return -0.5 * symmetrizedProduct(ci); }
 
 /// The symmetric fourth-order identity (d_ik d_jl + d_il d_jk) / 2.
 Matrix6d symmetricIdentity() {
@@ -80,7 +65,7 @@ EnergyDerivatives invariantDerivatives(const HyperelasticMaterial& m, double i1b
 MaterialResponse stVenantKirchhoffResponse(const HyperelasticMaterial& m, const Eigen::Matrix3d& c) {
   const LinearElasticMaterial linear{m.youngsModulus, m.poissonRatio, m.density};
   const Eigen::Matrix3d e = 0.5 * (c - Eigen::Matrix3d::Identity());
-  Vector6d strain = voigt(e);
+  Vector6d strain = voigtOf(e);
   strain.tail<3>() *= 2.0;  // engineering shears
   MaterialResponse r;
   r.tangent = linear.elasticityMatrix();
@@ -206,7 +191,7 @@ namespace {
 /// S, dS/dE and W of a split law at C; the volumetric part U(J) only if
 /// @a volumetric (response() and deviatoricResponse() share every operation).
 MaterialResponse splitLawResponse(const HyperelasticMaterial& m, const Eigen::Matrix3d& c, double j,
-                                  bool volumetric) {
+                                  bool volumetric, ResponseParts parts = ResponseParts::StressAndTangent) {
   // Invariants and their first derivatives with respect to C:
   //   dI1b/dC = J^(-2/3) (I - I1/3 C^-1),
   //   dI2b/dC = J^(-4/3) (I1 I - C - 2/3 I2 C^-1),   dJ/dC = J C^-1 / 2,
@@ -218,7 +203,7 @@ MaterialResponse splitLawResponse(const HyperelasticMaterial& m, const Eigen::Ma
   const double i2 = 0.5 * (i1 * i1 - (c * c).trace());
   const double jm23 = std::pow(j, -2.0 / 3.0), jm43 = jm23 * jm23;
   const double i1b = jm23 * i1, i2b = jm43 * i2;
-  const Vector6d vi = voigt(id), vci = voigt(ci), vc = voigt(c);
+  const Vector6d vi = voigtOf(id), vci = voigtOf(ci), vc = voigtOf(c);
   const Vector6d a1 = jm23 * (vi - (i1 / 3.0) * vci);
   const Vector6d b2 = i1 * vi - vc;  // dI2/dC
   const Vector6d a2 = jm43 * (b2 - (2.0 / 3.0) * i2 * vci);
@@ -228,6 +213,10 @@ MaterialResponse splitLawResponse(const HyperelasticMaterial& m, const Eigen::Ma
   MaterialResponse r;
   r.energy = w.w;
   r.stress = 2.0 * (w.w1 * a1 + w.w2 * a2 + w.wj * aj);
+  if (parts == ResponseParts::Stress) {
+    r.tangent.setZero();
+    return r;
+  }
 
   // Second derivatives of the invariants.
   const Matrix6d dci = inverseDerivative(ci);
@@ -261,7 +250,7 @@ void requireSplit(const HyperelasticMaterial& m, const char* what) {
 
 }  // namespace
 
-MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double j) const {
+MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double j, ResponseParts parts) const {
   if (!(j > 0.0)) {
     std::ostringstream m;
     m << "the " << lawName(law) << " material was asked for its stress at det F = " << j
@@ -269,7 +258,7 @@ MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double
     throw std::domain_error(m.str());
   }
   if (law == HyperelasticLaw::StVenantKirchhoff) return stVenantKirchhoffResponse(*this, c);
-  return splitLawResponse(*this, c, j, true);
+  return splitLawResponse(*this, c, j, true, parts);
 }
 
 bool HyperelasticMaterial::hasVolumetricSplit() const { return law != HyperelasticLaw::StVenantKirchhoff; }

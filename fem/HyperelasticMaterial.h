@@ -37,6 +37,13 @@ struct MaterialResponse {
   double energy = 0.0;  ///< strain energy per reference volume (mJ/mm^3 = MPa)
 };
 
+/// What a material evaluation computes: a residual needs S only; the
+/// tangent dS/dE costs several times more.
+enum class ResponseParts {
+  Stress,           ///< S and the energy; the tangent is left zero
+  StressAndTangent  ///< S, dS/dE and the energy
+};
+
 /// The volumetric part U(J) of a split law and its first two derivatives
 /// (for the mixed u/p/J element, which evaluates it at an independent J~).
 struct VolumetricResponse {
@@ -85,13 +92,14 @@ struct HyperelasticMaterial {
   void validate(const std::string& context = "material") const;
 
   /**
-   * @brief S and dS/dE at the right Cauchy-Green tensor @a c = F^T F.
+   * @brief S (and dS/dE, per @a parts) at the right Cauchy-Green tensor @a c = F^T F.
    *
    * @a jacobian = det F, given so the caller's check of it is the one used
    * (sqrt(det C) would lose the sign). Throws std::domain_error if
    * @a jacobian <= 0 (the caller checks first, to cut the step back).
    */
-  MaterialResponse response(const Eigen::Matrix3d& c, double jacobian) const;
+  MaterialResponse response(const Eigen::Matrix3d& c, double jacobian,
+                            ResponseParts parts = ResponseParts::StressAndTangent) const;
 
   /// True if the law is split W = W_dev(I1b, I2b) + U(J) (every law but
   /// St. Venant-Kirchhoff), which the mixed formulation needs.

@@ -1,5 +1,7 @@
 #include "fem/MixedFiniteStrainIntegrator.h"
 
+#include "fem/VoigtNotation.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -18,43 +20,11 @@ namespace {
 using FieldMatrix = Eigen::Matrix<double, kMixedPressureCount, kMixedPressureCount>;
 using CouplingMatrix = Eigen::Matrix<double, kHex20DofCount, kMixedPressureCount>;
 
-// Voigt slots of the symmetric tensor indices: xx, yy, zz, xy, yz, zx.
-constexpr int kPair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {2, 0}};
-
-Vector6d voigtOf(const Eigen::Matrix3d& t) {
-  Vector6d v;
-  for (int i = 0; i < 6; ++i) v[i] = t(kPair[i][0], kPair[i][1]);
-  return v;
-}
-
-Eigen::Matrix3d tensorOf(const Vector6d& s) {
-  Eigen::Matrix3d t;
-  t << s[0], s[3], s[5],  //
-      s[3], s[1], s[4],   //
-      s[5], s[4], s[2];
-  return t;
-}
-
 /// D_J = d(J C^-1)/dE = J (C^-1 (x) C^-1) - J (Ci_ik Ci_jl + Ci_il Ci_jk)
 /// (tensor components in Voigt rows and columns).
 Matrix6d volumetricTangent(const Eigen::Matrix3d& ci, double j) {
-  Matrix6d m;
-  for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) {
-      const int i = kPair[a][0], jj = kPair[a][1], k = kPair[b][0], l = kPair[b][1];
-      m(a, b) = j * (ci(i, jj) * ci(k, l) - (ci(i, k) * ci(jj, l) + ci(i, l) * ci(jj, k)));
-    }
-  return m;
-}
-
-[[noreturn]] void throwInverted(int element, double value, const char* what, const Eigen::Vector3d& rst,
-                                const Eigen::Vector3d& world) {
-  std::ostringstream m;
-  m.precision(4);
-  m << "element " << element << " is turned inside out by the displacement (" << what << " = " << value
-    << ") at natural point (" << rst[0] << ", " << rst[1] << ", " << rst[2] << "), undeformed position ("
-    << world[0] << ", " << world[1] << ", " << world[2] << ") mm";
-  throw InvertedElementError(element, value, rst, m.str());
+  const Vector6d vci = voigtOf(ci);
+  return j * (vci * vci.transpose() - symmetrizedProduct(ci));
 }
 
 /// What the three passes over the points share.
@@ -96,7 +66,7 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
     p.detF = p.f.determinant();
     p.rst = rule.points[q];
     p.world = geometry.world;
-    if (!(p.detF > 0.0)) throwInverted(elementIndex, p.detF, "det F", p.rst, p.world);
+    if (!(p.detF > 0.0)) throwInverted(elementIndex, "det F", p.detF, p.rst, p.world);
     p.weight = rule.weights[q] * geometry.detJ;
     p.n << 1.0, p.rst[0], p.rst[1], p.rst[2];
     mass.noalias() += p.weight * (p.n * p.n.transpose());
@@ -113,7 +83,7 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
   FieldMatrix h = FieldMatrix::Zero();
   for (const MixedPoint& p : points) {
     const double jt = p.n.dot(dilatation);
-    if (!(jt > 0.0)) throwInverted(elementIndex, jt, "J~", p.rst, p.world);
+    if (!(jt > 0.0)) throwInverted(elementIndex, "J~", jt, p.rst, p.world);
     const VolumetricResponse v = material.volumetricResponse(jt);
     rp += p.weight * v.pressure * p.n;
     h.noalias() += (p.weight * v.stiffness) * (p.n * p.n.transpose());
