@@ -24,9 +24,70 @@ double secondsSince(std::chrono::steady_clock::time_point t0) {
 struct IncrementOutcome {
   bool converged = false;
   int iterations = 0;
+  int newTangents = 0;  ///< iterations that formed and factored a tangent
   double residual = 0.0;
   std::string rejection;
   int worstElement = -1;  ///< an inverted element, when that was the reason
+};
+
+/// A running mean of measured seconds.
+struct MeanTime {
+  double total = 0.0;
+  int count = 0;
+  void add(double s) {
+    total += s;
+    ++count;
+  }
+  double mean() const { return count ? total / count : 0.0; }
+};
+
+/**
+ * Modified Newton's choice (TangentUpdate::WhenSlow) before each iteration:
+ * keep the factorization, or form and factor the tangent at the current
+ * state, whichever is predicted to reach the residual tolerance sooner in
+ * time. Near the solution Newton contracts the residual r by about L r
+ * (quadratic convergence), L measured at the last new tangent; a kept
+ * factorization contracts it by about as much as the last iteration did
+ * (linear convergence). The costs of a force evaluation, a tangent
+ * evaluation, a factorization and a solve are measured as the solve goes.
+ */
+class TangentReusePolicy {
+public:
+  MeanTime forces, tangent, factorization, backSolve;
+
+  /// An iteration took the residual from @a before to @a after, with a new
+  /// tangent or with a kept one.
+  void record(double before, double after, bool newTangent) {
+    if (!(before > 0.0) || !std::isfinite(after)) {
+      contraction_ = newtonRate_ = kNone;
+      return;
+    }
+    contraction_ = after / before;
+    if (newTangent) newtonRate_ = contraction_ / before;
+  }
+
+  /// Whether the iteration that starts at relative residual @a residual,
+  /// with @a iterationsLeft iterations allowed, should form a new tangent.
+  bool wantsNewTangent(double residual, double tolerance, int iterationsLeft) const {
+    // Without a measured contraction, or kept factorizations that barely contract: a new tangent.
+    if (!(contraction_ < kSlowestKept) || !(newtonRate_ > 0.0)) return true;
+    if (!(residual > tolerance)) return false;
+    const double digits = std::log(residual / tolerance);
+    const int keptIterations = int(std::ceil(digits / -std::log(contraction_)));
+    if (keptIterations > iterationsLeft) return true;
+    int newtonIterations = 0;
+    for (double r = residual; r > tolerance && newtonIterations < iterationsLeft; ++newtonIterations)
+      r *= std::min(1.0, newtonRate_ * r);
+    const double kept = forces.mean() + backSolve.mean();
+    const double renewed = kept + tangent.mean() + factorization.mean();
+    return newtonIterations * renewed < keptIterations * kept;
+  }
+
+private:
+  static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  static constexpr double kSlowestKept = 0.25;  ///< a kept factorization must at least quarter the residual
+  double contraction_ = kNone;
+  double newtonRate_ = kNone;
 };
 
 std::string percent(double fraction) {
@@ -89,6 +150,9 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     if (options_.volumetric == VolumetricFormulation::MixedPressure)
       assembleElementMixedFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
                                        re ? *re : local, ke, checks[e]);
+    else if (!reference_.empty())
+      assembleElementFiniteStrain(shape, mesh_.elementCoordinates(e), reference_[e], ue, materials_.at(el.region), rule,
+                                  int(e), re ? *re : local, ke, checks[e]);
     else
       assembleElementFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
                                   re ? *re : local, ke, checks[e]);
@@ -109,6 +173,25 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     c.strainEnergy += checks[e].energy;
   }
   return c;
+}
+
+void NonlinearStaticAnalysis::cacheReferenceGeometry() {
+  // About 13 kB per 27-point brick: 80 MB for a 100k-DOF model. The mixed
+  // element evaluates its own geometry.
+  constexpr std::size_t kReferenceCacheBytes = std::size_t(2) << 30;
+  reference_.clear();
+  if (options_.volumetric == VolumetricFormulation::MixedPressure) return;
+  std::size_t bytes = 0;
+  for (const Element& el : mesh_.elements)
+    bytes += referencePointsBytes(integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)).size());
+  if (bytes > kReferenceCacheBytes) return;
+  reference_.reserve(mesh_.elements.size());
+  for (std::size_t e = 0; e < mesh_.elements.size(); ++e) {
+    const Element& el = mesh_.elements[e];
+    reference_.push_back(referencePoints(ElementShape::fromConnectivity(el.kind, el.nodes), mesh_.elementCoordinates(e),
+                                         integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)),
+                                         int(e)));
+  }
 }
 
 Eigen::VectorXd NonlinearStaticAnalysis::internalForces(const Eigen::VectorXd& u) const {
@@ -132,6 +215,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
   // 1. Check the input and set up the constrained system once: the pattern
   //    of K-bar does not change between iterations, so it is analysed once.
   validate(load);
+  cacheReferenceGeometry();
   if (!(control.initial > 0.0 && control.initial <= 1.0 && control.minimum > 0.0 &&
         control.minimum <= control.initial && control.maximum >= control.initial))
     throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
@@ -158,6 +242,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     return map.expand(reduced).col(0) + (lambda - 1.0) * map.offset;
   };
 
+  TangentReusePolicy reuse;  // measures the costs it weighs
   // Forces (and tangent) at u, timed.
   auto timedEvaluate = [&](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -168,6 +253,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     } tally{result.assembleSeconds, t0};
     evaluate(u, tangent, forces);
     ++result.assemblies;
+    (tangent ? reuse.tangent : reuse.forces).add(secondsSince(t0));
   };
   // Factor K-bar of the current k; false (with a reason) when it is not positive definite.
   auto factor = [&](std::string& reason) {
@@ -175,12 +261,23 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     map.reduceValues(k, kbar);
     solver.factorize(kbar);
     result.factorSeconds += secondsSince(t0);
+    reuse.factorization.add(secondsSince(t0));
     ++result.factorizations;
     if (solver.status() == SolverStatus::Success) return true;
     reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
              "at this deformation)";
     return false;
   };
+
+  // What the solver holds of the current trial state, between iterations
+  // and from one converged increment into the next.
+  struct Linearization {
+    Eigen::VectorXd fint;        ///< internal forces at the trial state
+    bool forcesCurrent = false;  ///< fint belongs to the trial state
+    bool tangentInK = false;     ///< k is the tangent at the trial state
+    bool factored = false;       ///< the solver holds a factorization of k (of some earlier state)
+  } lin;
+  const bool fullNewton = newton.tangentUpdate == TangentUpdate::EveryIteration;
 
   // 2. One increment from the converged (ubar, lambda0) to lambda1.
   auto runIncrement = [&](int increment, double lambda0, double lambda1, Eigen::VectorXd& state) {
@@ -189,41 +286,58 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
       out.converged = true;
       return out;
     }
-    Eigen::VectorXd fint;
-    // The predictor: the tangent of the converged state, the prescribed
-    // increment (lambda1 - lambda0) g as a load.
-    timedEvaluate(expand(state, lambda0), &k, &fint);
-    const Eigen::VectorXd dg = (lambda1 - lambda0) * map.offset;
-    Eigen::VectorXd rbar = map.reduceVector(fint - lambda1 * fext + k.selfadjointView<Eigen::Upper>() * dg).col(0);
-    Eigen::VectorXd trial = state;
+    Eigen::VectorXd trial = state, rbar;
     double firstEnergy = 0.0;
-    bool tangentCurrent = true;  // k holds the tangent at the state rbar belongs to
     for (int it = 1; it <= newton.maxIterations; ++it) {
       out.iterations = it;
-      if (!tangentCurrent) {
+      const double lambdaAtTrial = it == 1 ? lambda0 : lambda1;
+      // a. The tangent: reused, or formed at the trial state and factored.
+      //    Modified Newton starts an increment on the factorization it has
+      //    and forms a new tangent at its second iteration, when the
+      //    increment's own contraction is not known yet.
+      bool refresh = !lin.factored || fullNewton || it == 2;
+      if (!refresh && it > 2)
+        refresh = reuse.wantsNewTangent(out.residual, newton.residualTolerance, newton.maxIterations - it + 1);
+      if ((refresh && !lin.tangentInK) || !lin.forcesCurrent) {
         try {
-          timedEvaluate(expand(trial, lambda1), &k, &fint);
-        } catch (const InvertedElementError& e) {  // cannot happen after an accepted line search, but be safe
+          timedEvaluate(expand(trial, lambdaAtTrial), refresh ? &k : nullptr, &lin.fint);
+        } catch (const InvertedElementError& e) {  // cannot happen at an accepted state, but be safe
           out.rejection = e.what();
           out.worstElement = e.element();
           return out;
         }
+        lin.forcesCurrent = true;
+        lin.tangentInK = lin.tangentInK || refresh;
       }
-      if (!factor(out.rejection)) return out;
+      if (refresh) {
+        ++out.newTangents;
+        lin.factored = false;
+        if (!factor(out.rejection)) return out;
+        lin.factored = true;
+      }
+      // b. The out-of-balance force; the first iteration is the predictor:
+      //    the prescribed increment (lambda1 - lambda0) g enters as a load
+      //    through the (factored) tangent.
+      if (it == 1) {
+        const Eigen::VectorXd dg = (lambda1 - lambda0) * map.offset;
+        rbar = map.reduceVector(lin.fint - lambda1 * fext + k.selfadjointView<Eigen::Upper>() * dg).col(0);
+      }
+      const auto solveStart = std::chrono::steady_clock::now();
       const Eigen::VectorXd delta = -solver.solve(rbar);
+      reuse.backSolve.add(secondsSince(solveStart));
       const double s0 = delta.dot(rbar);
-      const double energy = std::abs(s0);
-      if (it == 1) firstEnergy = energy > 0.0 ? energy : 1.0;
+      if (it == 1) firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
 
-      // Line search along delta; an inverting trial halves the step.
+      // c. Line search along delta; an inverting trial halves the step.
+      //    Full Newton builds the next tangent with the first trial.
       double alpha = 1.0, sPrevAlpha = 0.0, sPrev = s0;
       Eigen::VectorXd next, nextFint, nextR;
-      bool accepted = false;
+      bool accepted = false, nextTangent = false;
       for (int ls = 0; ls <= newton.maxLineSearchSteps + 6; ++ls) {
         next = trial + alpha * delta;
+        const bool withTangent = fullNewton && ls == 0;
         try {
-          // The first trial also builds the tangent for the next iteration.
-          timedEvaluate(expand(next, lambda1), ls == 0 ? &k : nullptr, &nextFint);
+          timedEvaluate(expand(next, lambda1), withTangent ? &k : nullptr, &nextFint);
         } catch (const InvertedElementError& e) {
           if (it == 1 || ls >= newton.maxLineSearchSteps + 6) {
             // The predictor itself inverts an element: the increment is too large.
@@ -234,8 +348,9 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
           alpha *= 0.5;
           continue;
         }
+        if (withTangent) lin.factored = false;  // k no longer matches the factorization
         nextR = map.reduceVector(nextFint - lambda1 * fext).col(0);
-        tangentCurrent = ls == 0;
+        nextTangent = withTangent;
         if (!newton.lineSearch || it == 1 || ls >= newton.maxLineSearchSteps) {
           accepted = true;
           break;
@@ -264,16 +379,20 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
         out.rejection = "the line search found no admissible step";
         return out;
       }
+      const double energy = std::abs(alpha * delta.dot(nextR));  // the work the correction leaves undone
       trial = next;
-      fint = nextFint;
+      lin.fint = nextFint;
+      lin.forcesCurrent = true;
+      lin.tangentInK = nextTangent;
       rbar = nextR;
 
-      // Convergence on the residual force and on the energy of the correction.
-      const double scale = std::max({(lambda1 * fext).norm(), fint.norm(), roundoffForce});
+      // d. Convergence on the residual force and on the energy of the correction.
+      const double scale = std::max({(lambda1 * fext).norm(), lin.fint.norm(), roundoffForce});
       const double residual = rbar.norm() <= roundoffForce ? 0.0 : rbar.norm() / scale;
       const double relEnergy = energy / firstEnergy;
+      if (it > 1) reuse.record(out.residual, residual, refresh);
       out.residual = residual;
-      const NewtonIteration report{increment, lambda1, it, residual, relEnergy, alpha};
+      const NewtonIteration report{increment, lambda1, it, residual, relEnergy, alpha, refresh};
       result.iterations.push_back(report);
       if (monitor && !monitor(report)) throw Cancelled{};
       if (!std::isfinite(residual) || residual > 1e8) {
@@ -282,12 +401,8 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
       }
       const bool forceSmall = residual <= newton.residualTolerance;
       const bool energySmall = relEnergy <= newton.energyTolerance || residual == 0.0;
-      if (forceSmall && energySmall && it > 1) {
-        out.converged = true;
-        state = trial;
-        return out;
-      }
-      if (it == 1 && residual == 0.0) {  // linear in this increment (e.g. a rigid motion)
+      if ((forceSmall && energySmall && it > 1) || (it == 1 && residual == 0.0)) {
+        // (A zero residual after the first iteration: linear in this increment, e.g. a rigid motion.)
         out.converged = true;
         state = trial;
         return out;
@@ -322,9 +437,12 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
         ++accepted;
         ubar = state;
         lambda = target;
-        if (!control.fixed && o.iterations <= 5) step = std::min(control.maximum, 1.5 * step);
+        // Grow after a fast convergence: at most 5 tangents (full Newton: 5
+        // iterations), and at most 10 iterations of modified Newton.
+        if (!control.fixed && o.newTangents <= 5 && o.iterations <= 10) step = std::min(control.maximum, 1.5 * step);
         continue;
       }
+      lin = {};  // it described the failed trial
       lastReason = o.rejection;
       if (o.worstElement >= 0) lastWorst = o.worstElement;
       if (control.fixed) break;

@@ -2,6 +2,7 @@
 
 #include "fem/Assembly.h"
 #include "fem/Constraints.h"
+#include "fem/FiniteStrainIntegrator.h"
 #include "fem/HyperelasticMaterial.h"
 #include "fem/Mesh.h"
 #include "fem/SparseCholeskySolver.h"
@@ -16,6 +17,19 @@
 
 namespace caps::fem {
 
+/// When the Newton iteration forms and factors a new tangent.
+enum class TangentUpdate {
+  /// Full Newton: a new tangent and one numeric factorization every iteration.
+  EveryIteration,
+  /// Modified Newton: the last factorization is kept, across iterations and
+  /// into the next increment, while keeping it is predicted to reach the
+  /// tolerance sooner than a new one (from the measured contraction of the
+  /// residual and the measured costs of a tangent, a factorization, a force
+  /// evaluation and a solve); otherwise the iteration forms the tangent at
+  /// its state and factors it (the "reformation" of FEBio's quasi-Newton).
+  WhenSlow
+};
+
 /// Tolerances and safeguards of the Newton-Raphson iteration in one increment.
 struct NewtonOptions {
   /// Converged when |R| <= residualTolerance * the force scale (the larger
@@ -25,6 +39,7 @@ struct NewtonOptions {
   /// times that of the increment's first.
   double energyTolerance = 1e-14;
   int maxIterations = 20;
+  TangentUpdate tangentUpdate = TangentUpdate::WhenSlow;
   /// Line search along each correction (FEBio's): when the energy along it
   /// has not fallen below lineSearchRatio of its start, the step is cut to
   /// the secant root, at most maxLineSearchSteps times.
@@ -53,6 +68,7 @@ struct NewtonIteration {
   double residual = 0.0;       ///< |R| / force scale after the iteration
   double energy = 0.0;         ///< |dU . R| of the correction / the increment's first
   double lineSearchStep = 1.0; ///< the fraction of the correction taken
+  bool newTangent = true;      ///< the correction came from a tangent formed and factored for it
 };
 
 /// One attempted increment, accepted or cut back.
@@ -144,12 +160,16 @@ private:
   /// f_int and (if @a k) K_t at @a u into @a fint / @a k; returns the checks.
   DeformationCheck evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) const;
   void validate(const LoadCase& load) const;
+  /// Keeps each element's reference geometry (ReferencePoints) when it fits
+  /// kReferenceCacheBytes; evaluations compute it on the fly otherwise.
+  void cacheReferenceGeometry();
 
   Mesh mesh_;
   HyperelasticTable materials_;
   MaterialTable linear_;
   Constraints constraints_;
   AssemblyOptions options_;
+  std::vector<ReferencePoints> reference_;  ///< per element, or empty
 };
 
 }  // namespace caps::fem
