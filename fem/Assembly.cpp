@@ -4,7 +4,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <exception>
+#include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -134,41 +137,69 @@ void assembleElements(const Mesh& mesh, int threads, const ElementKernel& kernel
   const std::size_t ne = mesh.elements.size();
   const std::size_t workers = std::size_t(std::max(1, threads));
 
-  // Element matrices in batches, threads splitting each batch; the scatter
-  // runs in element order on this thread, so the sums are bit-identical for
-  // any thread count. Straight into the pattern's places: no triplet list to
-  // sort (that was most of the assembly time).
+  // Element matrices in batches, into one of two buffers, while this thread
+  // scatters the batch before from the other; then it joins the workers on
+  // what is left of the batch. The scatter runs in element order, so the
+  // sums are bit-identical for any thread count. Straight into the
+  // pattern's places: no triplet list to sort.
   constexpr std::size_t kBatch = 256;
-  std::vector<ElementMatrix> matrices(k ? kBatch : 0);
-  std::vector<ElementVector> vectors(r ? kBatch : 0);
-  auto compute = [&](std::size_t first, std::size_t last, std::exception_ptr& error) {
-    try {
-      for (std::size_t e = first; e < last; ++e)
-        kernel(e, k ? &matrices[e % kBatch] : nullptr, r ? &vectors[e % kBatch] : nullptr);
-    } catch (...) {
-      error = std::current_exception();
+  std::array<std::vector<ElementMatrix>, 2> matrices;
+  std::array<std::vector<ElementVector>, 2> vectors;
+  for (int b = 0; b < 2; ++b) {
+    if (k) matrices[std::size_t(b)].resize(kBatch);
+    if (r) vectors[std::size_t(b)].resize(kBatch);
+  }
+  // The lowest-numbered failing element of a batch.
+  struct Failure {
+    std::mutex mutex;
+    std::size_t element = std::numeric_limits<std::size_t>::max();
+    std::exception_ptr error;
+    void record(std::size_t e, std::exception_ptr p) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (e < element) {
+        element = e;
+        error = std::move(p);
+      }
     }
   };
-  for (std::size_t begin = 0; begin < ne; begin += kBatch) {
-    const std::size_t end = std::min(ne, begin + kBatch);
-    const std::size_t used = std::min(workers, end - begin);
-    std::vector<std::exception_ptr> errors(used);
-    std::vector<std::thread> pool;
-    for (std::size_t t = 1; t < used; ++t)
-      pool.emplace_back(compute, begin + (end - begin) * t / used, begin + (end - begin) * (t + 1) / used,
-                        std::ref(errors[t]));
-    compute(begin, begin + (end - begin) / used, errors[0]);
-    for (auto& w : pool) w.join();
-    for (auto& err : errors)
-      if (err) std::rethrow_exception(err);  // the lowest-numbered bad element's range first
+  auto compute = [&](std::size_t begin, std::size_t end, std::size_t buffer, std::atomic<std::size_t>& next,
+                     Failure& failure) {
+    for (std::size_t e = next.fetch_add(1); e < end; e = next.fetch_add(1)) {
+      try {
+        kernel(e, k ? &matrices[buffer][e - begin] : nullptr, r ? &vectors[buffer][e - begin] : nullptr);
+      } catch (...) {
+        failure.record(e, std::current_exception());
+      }
+    }
+  };
+  auto scatterBatch = [&](std::size_t begin, std::size_t end, std::size_t buffer) {
     for (std::size_t e = begin; e < end; ++e) {
       const Element& el = mesh.elements[e];
-      if (k) scatter(k->outerIndexPtr(), k->innerIndexPtr(), el, matrices[e % kBatch], k->valuePtr());
+      if (k) scatter(k->outerIndexPtr(), k->innerIndexPtr(), el, matrices[buffer][e - begin], k->valuePtr());
       if (r)
         for (int a = 0; a < kHex20NodeCount; ++a)
-          if (el.nodes[std::size_t(a)] >= 0) r->segment<3>(3 * el.nodes[std::size_t(a)]) += vectors[e % kBatch].segment<3>(3 * a);
+          if (el.nodes[std::size_t(a)] >= 0)
+            r->segment<3>(3 * el.nodes[std::size_t(a)]) += vectors[buffer][e - begin].segment<3>(3 * a);
     }
+  };
+  std::size_t pendingBegin = 0, pendingEnd = 0, pendingBuffer = 1;  // computed, not yet scattered
+  for (std::size_t begin = 0, batch = 0; begin < ne; begin += kBatch, ++batch) {
+    const std::size_t end = std::min(ne, begin + kBatch);
+    const std::size_t buffer = batch % 2;
+    std::atomic<std::size_t> next{begin};
+    Failure failure;
+    std::vector<std::thread> pool;
+    for (std::size_t t = 1; t < std::min(workers, end - begin); ++t)
+      pool.emplace_back(compute, begin, end, buffer, std::ref(next), std::ref(failure));
+    scatterBatch(pendingBegin, pendingEnd, pendingBuffer);
+    compute(begin, end, buffer, next, failure);
+    for (auto& w : pool) w.join();
+    if (failure.error) std::rethrow_exception(failure.error);
+    pendingBegin = begin;
+    pendingEnd = end;
+    pendingBuffer = buffer;
   }
+  scatterBatch(pendingBegin, pendingEnd, pendingBuffer);
 }
 
 void assembleStiffnessValues(const Mesh& mesh, const MaterialTable& materials, const AssemblyOptions& options,

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 
 namespace caps::fem {
@@ -372,7 +373,8 @@ TEST(Sutures, ZeroGapSutureEqualsMergedMesh) {
 }
 
 TEST(Determinism, AssemblyIsBitIdenticalForAnyThreadCount) {
-  Mesh mesh = boxMesh(5, 4, 3, 50, 40, 30);
+  // 594 elements: three batches of the assembly's pipeline (Assembly.cpp).
+  Mesh mesh = boxMesh(12, 8, 6, 120, 80, 60);
   test::appendMesh(mesh, boxMesh(3, 3, 2, 30, 30, 20, Eigen::Vector3d(0, 0, 40), true));
   const MaterialTable materials = oneMaterial();
   AssemblyOptions one, two, three;
@@ -387,6 +389,23 @@ TEST(Determinism, AssemblyIsBitIdenticalForAnyThreadCount) {
     EXPECT_EQ(std::memcmp(k->valuePtr(), k1.valuePtr(), sizeof(double) * std::size_t(k1.nonZeros())), 0);
     EXPECT_EQ(std::memcmp(k->innerIndexPtr(), k1.innerIndexPtr(), sizeof(int) * std::size_t(k1.nonZeros())), 0);
     EXPECT_EQ(std::memcmp(k->outerIndexPtr(), k1.outerIndexPtr(), sizeof(int) * std::size_t(k1.cols() + 1)), 0);
+  }
+}
+
+TEST(Determinism, TheLowestNumberedFailingElementIsReportedForAnyThreadCount) {
+  const Mesh mesh = boxMesh(12, 8, 8, 120, 80, 80);  // 768 elements, three batches
+  Eigen::SparseMatrix<double> k = stiffnessPattern(mesh);
+  for (int threads : {1, 2, 3}) {
+    const ElementKernel kernel = [](std::size_t e, ElementMatrix* ke, ElementVector*) {
+      if (e == 700 || e == 300 || e == 270) throw std::runtime_error("element " + std::to_string(e));
+      ke->setIdentity();
+    };
+    try {
+      assembleElements(mesh, threads, kernel, &k, nullptr);
+      ADD_FAILURE() << "no element failed on " << threads << " threads";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "element 270") << threads << " threads";
+    }
   }
 }
 
