@@ -126,8 +126,11 @@ using NewtonMonitor = std::function<bool(const NewtonIteration&)>;
  * the load fraction lambda: a suture is a linear constraint and closes
  * exactly in large deformation too. Each increment starts from the tangent
  * of the last converged state with the prescribed increment as load (the
- * consistent predictor). The pattern of K-bar is analysed once; every
- * iteration is one numeric factorization. Loads (nodal forces, gravity,
+ * consistent predictor). The pattern of K-bar is analysed once; an
+ * iteration either factors a new tangent numerically or, in modified Newton
+ * (NewtonOptions::tangentUpdate), keeps the last factorization when that is
+ * predicted to converge sooner. Each element's reference geometry is
+ * computed once per solve. Loads (nodal forces, gravity,
  * muscles) are dead loads scaled by lambda; face pressures (follower loads
  * in large deformation) are refused.
  */

@@ -27,7 +27,8 @@ const char* kFemUsage =
   "                     iterations, residual, accepted or why it was cut back)\n"
   "\n"
   "Large deformation: *STEP, NLGEOM (or any *HYPERELASTIC material, which CalculiX solves\n"
-  "nonlinearly too) is solved in Total Lagrangian form by Newton-Raphson with a line search.\n"
+  "nonlinearly too) is solved in Total Lagrangian form by Newton-Raphson with a line search;\n"
+  "an iteration keeps the last factorization when that is measured to converge sooner.\n"
   "*STATIC's data line (initial increment, step time, minimum, maximum) sets the increments:\n"
   "they grow after a fast convergence and are cut back when Newton fails or an element would\n"
   "turn inside out (det F <= 0); *STATIC, DIRECT keeps them fixed. Loads, prescribed\n"
@@ -112,7 +113,8 @@ int runFem(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out
       out << "increment " << it.increment << " to load fraction " << std::setprecision(6) << it.loadFraction
           << ", iteration " << it.iteration << ": residual " << std::setprecision(3) << it.residual
           << ", energy " << it.energy << (it.lineSearchStep < 1.0 ? ", line search " : "")
-          << (it.lineSearchStep < 1.0 ? std::to_string(it.lineSearchStep) : std::string()) << "\n"
+          << (it.lineSearchStep < 1.0 ? std::to_string(it.lineSearchStep) : std::string())
+          << (it.newTangent ? "" : " (factorization kept)") << "\n"
           << std::flush;
     };
   const FemRunReport r = SimulateLogic::solveDeck(deck, outDir, options);
