@@ -39,7 +39,8 @@
 namespace {
 
 using namespace caps::fem;
-using caps::bench::skinPatch;
+using caps::bench::skinPatchMaterials;
+using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -67,10 +68,8 @@ int main(int argc, char** argv) {
               "incs", "its", "facts", "evals", "read s", "solve s", "assem s", "factor s", "s/it", "ccxIt", "ccx s", "ccx s/it", "ccx/ours",
               "max rel du");
   for (long target : targets) {
-    int n = 2;
-    while (3L * skinPatch(n + 1, layers).nodeCount() <= target) ++n;
-    const Mesh mesh = skinPatch(n, layers);
-    const MaterialTable linear{{0, {0.015, 0.45, 1.1e-9}}, {1, {0.005, 0.45, 0.95e-9}}, {2, {0.03, 0.45, 1.05e-9}}};
+    const Mesh mesh = skinPatchOfSize(target, layers);
+    const MaterialTable linear = skinPatchMaterials();
     HyperelasticTable hyperelastic;
     for (const auto& [region, m] : linear) hyperelastic[region] = HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, m);
     Constraints c;

@@ -3,6 +3,7 @@
 // 20-node bricks through the thickness (one region per layer).
 
 #include "fem/ElementNumbering.h"
+#include "fem/LinearElasticMaterial.h"
 #include "fem/Mesh.h"
 
 #include <array>
@@ -12,6 +13,7 @@
 namespace caps::bench {
 
 using caps::fem::Element;
+using caps::fem::MaterialTable;
 using caps::fem::kHex20NodeCount;
 using caps::fem::Mesh;
 using caps::fem::batheNaturalCoordinates;
@@ -39,6 +41,18 @@ inline Mesh skinPatch(int n, int layers) {
   mesh.nodes.resize(3, Eigen::Index(xs.size()));
   for (std::size_t i = 0; i < xs.size(); ++i) mesh.nodes.col(Eigen::Index(i)) = xs[i];
   return mesh;
+}
+
+/// The largest patch of @a layers layers with at most @a dofs DOFs (3 per node; at least 2 x 2 bricks).
+inline Mesh skinPatchOfSize(long dofs, int layers) {
+  int n = 2;
+  while (3L * skinPatch(n + 1, layers).nodeCount() <= dofs) ++n;
+  return skinPatch(n, layers);
+}
+
+/// The layers' small-strain materials (E MPa, nu, density t/mm^3): skin, fat, muscle.
+inline MaterialTable skinPatchMaterials() {
+  return {{0, {0.015, 0.45, 1.1e-9}}, {1, {0.005, 0.45, 0.95e-9}}, {2, {0.03, 0.45, 1.05e-9}}};
 }
 
 }  // namespace caps::bench

@@ -35,7 +35,8 @@
 namespace {
 
 using namespace caps::fem;
-using caps::bench::skinPatch;
+using caps::bench::skinPatchMaterials;
+using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
@@ -62,10 +63,8 @@ int main(int argc, char** argv) {
               "constrain", "analyse", "factor", "solve", "2nd case", "total", "GFlop", "GFlop/s", "L MB",
               "peak MB", "ccx s", "ccx/ours", "ccxN s", "ccxN/ours");
   for (long target : targets) {
-    int n = 2;
-    while (3L * skinPatch(n + 1, layers).nodeCount() <= target) ++n;
-    const Mesh mesh = skinPatch(n, layers);
-    MaterialTable materials{{0, {0.015, 0.45, 1.1e-9}}, {1, {0.005, 0.45, 0.95e-9}}, {2, {0.03, 0.45, 1.05e-9}}};
+    const Mesh mesh = skinPatchOfSize(target, layers);
+    MaterialTable materials = skinPatchMaterials();
     Constraints c;
     for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
       if (mesh.nodes(2, i) < 1e-9) c.fixNode(int(i));

@@ -39,7 +39,8 @@
 namespace {
 
 using namespace caps::fem;
-using caps::bench::skinPatch;
+using caps::bench::skinPatchMaterials;
+using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
@@ -108,10 +109,8 @@ int main(int argc, char** argv) {
   std::printf("%8s %7s %9s %9s %9s %10s  %s\n", "DOF", "elems", "ccx s", "caps s", "ccx/caps", "max |du|",
               "caps fem's phases");
   for (long target : targets) {
-    int n = 2;
-    while (3L * skinPatch(n + 1, layers).nodeCount() <= target) ++n;
-    const Mesh mesh = skinPatch(n, layers);
-    MaterialTable materials{{0, {0.015, 0.45, 1.1e-9}}, {1, {0.005, 0.45, 0.95e-9}}, {2, {0.03, 0.45, 1.05e-9}}};
+    const Mesh mesh = skinPatchOfSize(target, layers);
+    MaterialTable materials = skinPatchMaterials();
     Constraints c;
     const double top = mesh.nodes.row(2).maxCoeff();
     for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
