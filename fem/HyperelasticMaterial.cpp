@@ -263,10 +263,11 @@ MaterialResponse HyperelasticMaterial::response(const Eigen::Matrix3d& c, double
 
 bool HyperelasticMaterial::hasVolumetricSplit() const { return law != HyperelasticLaw::StVenantKirchhoff; }
 
-MaterialResponse HyperelasticMaterial::deviatoricResponse(const Eigen::Matrix3d& c, double j) const {
+MaterialResponse HyperelasticMaterial::deviatoricResponse(const Eigen::Matrix3d& c, double j,
+                                                          ResponseParts parts) const {
   requireSplit(*this, "deviatoric response");
   if (!(j > 0.0)) throwNonPositive(*this, j);
-  return splitLawResponse(*this, c, j, false);
+  return splitLawResponse(*this, c, j, false, parts);
 }
 
 VolumetricResponse HyperelasticMaterial::volumetricResponse(double j) const {

@@ -113,7 +113,8 @@ struct HyperelasticMaterial {
    * Throws std::domain_error as response() and std::invalid_argument for
    * St. Venant-Kirchhoff (no split).
    */
-  MaterialResponse deviatoricResponse(const Eigen::Matrix3d& c, double jacobian) const;
+  MaterialResponse deviatoricResponse(const Eigen::Matrix3d& c, double jacobian,
+                                      ResponseParts parts = ResponseParts::StressAndTangent) const;
 
   /// U(J) = (J - 1)^2 / D1 and its derivatives at @a jacobian (any value;
   /// the caller checks its sign). Throws std::invalid_argument for St.

@@ -29,12 +29,12 @@ Matrix6d volumetricTangent(const Eigen::Matrix3d& ci, double j) {
 
 /// What the three passes over the points share.
 struct MixedPoint {
-  ShapeDerivatives dh;  ///< dH/dX on the reference geometry
+  const ShapeDerivatives* dh = nullptr;  ///< dH/dX on the reference geometry
   Eigen::Matrix3d f;
   double detF = 1.0;
   double weight = 0.0;  ///< w_g det J
   MixedFieldVector n;   ///< (1, r, s, t)
-  Eigen::Vector3d rst, world;
+  Eigen::Vector3d rst;
 };
 
 }  // namespace
@@ -44,6 +44,15 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
                                       const IntegrationRule& rule, int elementIndex, ElementVector& fint,
                                       ElementMatrix* kt, FiniteStrainElementCheck& check,
                                       MixedElementFields* fields) {
+  assembleElementMixedFiniteStrain(shape, x, referencePoints(shape, x, rule, elementIndex), u, material, rule,
+                                   elementIndex, fint, kt, check, fields);
+}
+
+void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
+                                      const ReferencePoints& reference, const ElementDisplacements& u,
+                                      const HyperelasticMaterial& material, const IntegrationRule& rule,
+                                      int elementIndex, ElementVector& fint, ElementMatrix* kt,
+                                      FiniteStrainElementCheck& check, MixedElementFields* fields) {
   if (!material.hasVolumetricSplit())
     throw std::invalid_argument("element " + std::to_string(elementIndex) +
                                 ": the mixed u/p/J formulation needs a law split into deviatoric and volumetric "
@@ -57,17 +66,20 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
   std::vector<MixedPoint> points(rule.size());
   FieldMatrix mass = FieldMatrix::Zero();
   MixedFieldVector g = MixedFieldVector::Zero();
-  PointGeometry geometry;
+  // The undeformed position of a point, for the message of an inversion only.
+  auto inverted = [&](const char* measure, double value, const Eigen::Vector3d& rst) {
+    PointGeometry g;
+    evaluateGeometry(shape, x, rst, elementIndex, g, false);
+    throwInverted(elementIndex, measure, value, rst, g.world);
+  };
   for (std::size_t q = 0; q < rule.size(); ++q) {
     MixedPoint& p = points[q];
-    evaluateGeometry(shape, x, rule.points[q], elementIndex, geometry);
-    p.dh = geometry.dhWorld;
-    p.f = Eigen::Matrix3d::Identity() + u.transpose() * p.dh;
+    p.dh = &reference.gradients[q];
+    p.f = Eigen::Matrix3d::Identity() + u.transpose() * *p.dh;
     p.detF = p.f.determinant();
     p.rst = rule.points[q];
-    p.world = geometry.world;
-    if (!(p.detF > 0.0)) throwInverted(elementIndex, "det F", p.detF, p.rst, p.world);
-    p.weight = rule.weights[q] * geometry.detJ;
+    if (!(p.detF > 0.0)) inverted("det F", p.detF, p.rst);
+    p.weight = reference.weights[q];
     p.n << 1.0, p.rst[0], p.rst[1], p.rst[2];
     mass.noalias() += p.weight * (p.n * p.n.transpose());
     g += p.weight * p.detF * p.n;
@@ -83,7 +95,7 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
   FieldMatrix h = FieldMatrix::Zero();
   for (const MixedPoint& p : points) {
     const double jt = p.n.dot(dilatation);
-    if (!(jt > 0.0)) throwInverted(elementIndex, "J~", jt, p.rst, p.world);
+    if (!(jt > 0.0)) inverted("J~", jt, p.rst);
     const VolumetricResponse v = material.volumetricResponse(jt);
     rp += p.weight * v.pressure * p.n;
     h.noalias() += (p.weight * v.stiffness) * (p.n * p.n.transpose());
@@ -92,25 +104,27 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
   const MixedFieldVector pressure = massFactor.solve(rp);
 
   // 3. Forces and tangent with S = S_dev(F) + p~ J C^-1.
+  //    f_int of node a, direction k: sum_g w_g (F S)_kJ dH_a/dX_J.
   StrainDisplacement b;
   CouplingMatrix kup = CouplingMatrix::Zero();
+  Eigen::Matrix<double, kHex20NodeCount, 3> forces = Eigen::Matrix<double, kHex20NodeCount, 3>::Zero();
+  const ResponseParts parts = kt ? ResponseParts::StressAndTangent : ResponseParts::Stress;
   for (const MixedPoint& p : points) {
-    const ShapeDerivatives& dh = p.dh;
+    const ShapeDerivatives& dh = *p.dh;
     const Eigen::Matrix3d& f = p.f;
     const Eigen::Matrix3d c = f.transpose() * f;
     const Eigen::Matrix3d ci = c.inverse();
-    const MaterialResponse dev = material.deviatoricResponse(c, p.detF);
+    const MaterialResponse dev = material.deviatoricResponse(c, p.detF, parts);
     const double pt = p.n.dot(pressure);
     const Vector6d jci = p.detF * voigtOf(ci);  // dJ/dE
     const Vector6d stress = dev.stress + pt * jci;
     const double w = p.weight;
-
-    greenLagrangeStrainDisplacement(f, dh, slots, b);
-    fint.noalias() += w * (b.transpose() * stress);
+    forces.noalias() += dh * (w * (f * tensorOf(stress))).transpose();
 
     addToCheck(check, c, p.detF, w * dev.energy);
 
     if (!kt) continue;
+    greenLagrangeStrainDisplacement(f, dh, slots, b);
     const Matrix6d d = dev.tangent + pt * volumetricTangent(ci, p.detF);
     const Eigen::Matrix<double, 6, kHex20DofCount> db = (w * d) * b;
     kt->noalias() += b.transpose() * db;
@@ -123,6 +137,7 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
       }
     kup.noalias() += (b.transpose() * (w * jci)) * p.n.transpose();
   }
+  Eigen::Map<Eigen::Matrix<double, kHex20NodeCount, 3, Eigen::RowMajor>>(fint.data()) = forces;
   if (fields) {
     fields->pressure = pressure;
     fields->dilatation = dilatation;

@@ -63,4 +63,12 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
                                       ElementMatrix* kt, FiniteStrainElementCheck& check,
                                       MixedElementFields* fields = nullptr);
 
+/// The same on reference geometry computed before (referencePoints() of the
+/// same shape, coordinates and rule).
+void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
+                                      const ReferencePoints& reference, const ElementDisplacements& u,
+                                      const HyperelasticMaterial& material, const IntegrationRule& rule,
+                                      int elementIndex, ElementVector& fint, ElementMatrix* kt,
+                                      FiniteStrainElementCheck& check, MixedElementFields* fields = nullptr);
+
 }  // namespace caps::fem

@@ -147,15 +147,15 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     // Formulation switch (AssemblyOptions::volumetric): the mixed u/p/J element or the displacement one.
     const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
     const IntegrationRule& rule = integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection));
+    const ElementCoordinates x = mesh_.elementCoordinates(e);
+    const ReferencePoints reference = reference_.empty() ? referencePoints(shape, x, rule, int(e)) : ReferencePoints{};
+    const ReferencePoints& ref = reference_.empty() ? reference : reference_[e];
     if (options_.volumetric == VolumetricFormulation::MixedPressure)
-      assembleElementMixedFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
-                                       re ? *re : local, ke, checks[e]);
-    else if (!reference_.empty())
-      assembleElementFiniteStrain(shape, mesh_.elementCoordinates(e), reference_[e], ue, materials_.at(el.region), rule,
-                                  int(e), re ? *re : local, ke, checks[e]);
+      assembleElementMixedFiniteStrain(shape, x, ref, ue, materials_.at(el.region), rule, int(e), re ? *re : local, ke,
+                                       checks[e]);
     else
-      assembleElementFiniteStrain(shape, mesh_.elementCoordinates(e), ue, materials_.at(el.region), rule, int(e),
-                                  re ? *re : local, ke, checks[e]);
+      assembleElementFiniteStrain(shape, x, ref, ue, materials_.at(el.region), rule, int(e), re ? *re : local, ke,
+                                  checks[e]);
   };
   Eigen::VectorXd scratch;
   assembleElements(mesh_, options_.threads, kernel, k, fint ? fint : &scratch);
@@ -176,11 +176,9 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
 }
 
 void NonlinearStaticAnalysis::cacheReferenceGeometry() {
-  // About 13 kB per 27-point brick: 80 MB for a 100k-DOF model. The mixed
-  // element evaluates its own geometry.
+  // About 13 kB per 27-point brick: 80 MB for a 100k-DOF model.
   constexpr std::size_t kReferenceCacheBytes = std::size_t(2) << 30;
   reference_.clear();
-  if (options_.volumetric == VolumetricFormulation::MixedPressure) return;
   std::size_t bytes = 0;
   for (const Element& el : mesh_.elements)
     bytes += referencePointsBytes(integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)).size());
