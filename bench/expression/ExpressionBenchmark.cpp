@@ -36,7 +36,7 @@
 #include "modules/expression/MuscleSet.h"
 #include "modules/expression/PlanUnderExpression.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/Scene.h"

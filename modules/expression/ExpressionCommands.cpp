@@ -18,7 +18,7 @@
 #include "modules/expression/ExpressionLogic.h"
 #include "modules/expression/PlanUnderExpression.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 #include "modules/report/PlanAnimation.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/ExpressionNode.h"

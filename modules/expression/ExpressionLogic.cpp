@@ -13,7 +13,7 @@
 #include <vtkUnsignedCharArray.h>
 
 #include "fem/StaticAnalysis.h"
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/ExpressionNode.h"
 #include "scene/LandmarksNode.h"

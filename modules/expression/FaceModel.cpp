@@ -6,8 +6,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/PlanSimulation.h"
+#include "planning/SkinChart.h"
 
 namespace caps::expression {
 namespace {

@@ -11,7 +11,7 @@
 #include "fem/ContinuumMesher.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/SurfaceMesh.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "segmentation/Landmarks.h"
 #include "segmentation/RangeMap.h"
 

@@ -10,7 +10,7 @@
 #include <set>
 #include <sstream>
 
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/SkinTensionLines.h"
 
 namespace fs = std::filesystem;
 

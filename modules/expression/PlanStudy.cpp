@@ -14,7 +14,7 @@
 #include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
 
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 #include "segmentation/SkinShade.h"
 
 namespace caps::expression {

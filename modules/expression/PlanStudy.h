@@ -22,8 +22,8 @@
 #include "modules/core/Module.h"
 #include "modules/expression/ExpressionLogic.h"
 #include "modules/expression/PlanUnderExpression.h"
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/IncisionPlan.h"
+#include "planning/PlanSimulation.h"
 #include "segmentation/RangeMap.h"
 #include "segmentation/SurfaceScanColourMap.h"
 

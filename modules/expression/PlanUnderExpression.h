@@ -13,7 +13,7 @@
 #include "fem/MuscleLoad.h"
 #include "fem/StaticAnalysis.h"
 #include "modules/expression/MuscleResponses.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 
 namespace caps::expression {
 

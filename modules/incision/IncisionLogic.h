@@ -11,12 +11,12 @@
 #include <nlohmann/json.hpp>
 
 #include "modules/core/Module.h"
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/PlanDisplay.h"
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/PlanRecipe.h"
-#include "modules/incision/ProcedureTemplate.h"
-#include "modules/incision/SkinMeasurements.h"
+#include "planning/IncisionPlan.h"
+#include "planning/PlanDisplay.h"
+#include "planning/PlanSimulation.h"
+#include "planning/PlanRecipe.h"
+#include "planning/ProcedureTemplate.h"
+#include "planning/SkinMeasurements.h"
 #include "scene/Node.h"
 
 namespace caps {

@@ -27,8 +27,8 @@
 #include <QVBoxLayout>
 
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanLines.h"
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/PlanLines.h"
+#include "planning/SkinTensionLines.h"
 #include "segmentation/LandmarkPlacement.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/PlanNode.h"

@@ -16,7 +16,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
-#include "modules/incision/PlanRecipe.h"
+#include "planning/PlanRecipe.h"
 #include "scene/Node.h"
 
 class QCheckBox;

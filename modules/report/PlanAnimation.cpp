@@ -27,7 +27,7 @@
 #include <vtkUnsignedCharArray.h>
 
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"

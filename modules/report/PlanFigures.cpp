@@ -11,7 +11,7 @@
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapPreview.h"
 #include "modules/report/ReportFigures.h"

@@ -11,8 +11,8 @@
 
 #include <QImage>
 
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/IncisionPlan.h"
+#include "planning/SkinChart.h"
 #include "modules/report/ReportFigures.h"
 
 #include "segmentation/RangeMap.h"

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "modules/core/Module.h"
-#include "modules/incision/PlanRecipe.h"
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/SkinMeasurements.h"
-#include "modules/incision/WoundStress.h"
+#include "planning/PlanRecipe.h"
+#include "planning/PlanSimulation.h"
+#include "planning/SkinMeasurements.h"
+#include "planning/WoundStress.h"
 #include "modules/report/ReportDocument.h"
 
 namespace caps {

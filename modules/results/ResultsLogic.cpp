@@ -14,8 +14,8 @@
 #include <vtkStaticPointLocator.h>
 
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/SkinChart.h"
-#include "modules/incision/WoundStress.h"
+#include "planning/SkinChart.h"
+#include "planning/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"

@@ -15,8 +15,8 @@
 #include <vtkSmartPointer.h>
 
 #include "modules/core/Module.h"
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/IncisionPlan.h"
+#include "planning/PlanSimulation.h"
 #include "scene/SnapshotNode.h"
 #include "segmentation/RangeMap.h"
 

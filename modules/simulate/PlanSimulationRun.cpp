@@ -77,7 +77,7 @@ std::string facialTissueSource()
          "Skin (dermis) E = 0.15 MPa, fat 0.01 MPa, muscle / SMAS 0.05 MPa, \u03bd = 0.45 everywhere.\n"
          "Sources: Chabanas, Luboz & Payan, Med. Image Anal. 7(2), 2003; Keeve et al., Comput. Aided Surg. 3, "
          "1998; Barbarino et al., J. Biomech. Eng. 131(4), 2009; Mazza & Barbarino, Facial Plast. Surg. Clin. "
-         "N. Am. 19(4), 2011 (see modules/incision/PlanSimulation.cpp).\n"
+         "N. Am. 19(4), 2011 (see planning/PlanSimulation.cpp).\n"
          "Sutures alone load the model, so the displacements depend only on the ratios of the moduli and on \u03bd; "
          "the forces and stresses scale with E.";
 }

@@ -16,10 +16,10 @@
 
 #include "modules/core/Module.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanDisplay.h"
-#include "modules/incision/PlanRecipe.h"
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/WoundStress.h"
+#include "planning/PlanDisplay.h"
+#include "planning/PlanRecipe.h"
+#include "planning/PlanSimulation.h"
+#include "planning/WoundStress.h"
 #include "scene/Node.h"
 
 namespace caps {

@@ -8,7 +8,7 @@
 
 #include <QWidget>
 
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "scene/Node.h"
 
 class QCheckBox;

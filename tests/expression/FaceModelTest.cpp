@@ -18,7 +18,7 @@
 #include "fem/StaticAnalysis.h"
 #include "modules/expression/FaceModel.h"
 #include "modules/expression/MuscleResponses.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 
 namespace caps::expression {
 namespace {

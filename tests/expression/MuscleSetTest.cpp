@@ -18,7 +18,7 @@
 #include "modules/expression/FaceModel.h"
 #include "modules/expression/MuscleResponses.h"
 #include "modules/expression/MuscleSet.h"
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/SkinTensionLines.h"
 
 using namespace caps;
 using namespace caps::expression;

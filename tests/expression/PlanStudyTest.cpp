@@ -19,7 +19,7 @@
 #include "SampleFace.h"
 #include "modules/expression/PlanStudy.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 
 namespace caps::expression {
 namespace {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/ProcedureTemplate.h"
+#include "planning/PlanSimulation.h"
+#include "planning/ProcedureTemplate.h"
 #include "segmentation/RangeMap.h"
 
 namespace caps::test {

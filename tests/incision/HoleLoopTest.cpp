@@ -7,7 +7,7 @@
 #include <set>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 
 using namespace caps;
 using namespace caps::incision;

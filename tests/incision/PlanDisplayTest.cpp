@@ -24,7 +24,7 @@
 #include <vtkXMLPolyDataReader.h>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 #include "segmentation/SkinShade.h"
 
 namespace caps::incision {

@@ -6,7 +6,7 @@
 
 #include "AnalyticSkins.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "scene/PlanNode.h"
 
 namespace caps::incision {

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 
 namespace caps::incision {
 namespace {

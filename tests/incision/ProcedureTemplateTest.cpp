@@ -8,7 +8,7 @@
 
 #include "AnalyticSkins.h"
 #include "TestPaths.h"
-#include "modules/incision/SkinMeasurements.h"
+#include "planning/SkinMeasurements.h"
 
 using namespace caps;
 using namespace caps::incision;

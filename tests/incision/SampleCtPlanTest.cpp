@@ -17,7 +17,7 @@
 #include "fem/CalculixIO.h"
 #include "fem/StaticAnalysis.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
 #include "scene/Scene.h"

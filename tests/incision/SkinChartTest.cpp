@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 
 using namespace caps;
 using namespace caps::incision;

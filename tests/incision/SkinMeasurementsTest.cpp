@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/SkinMeasurements.h"
+#include "planning/SkinMeasurements.h"
 
 using namespace caps;
 using namespace caps::incision;

@@ -6,9 +6,9 @@
 // dorsum, down and out along the nasolabial fold on the cheek; mirror
 // symmetric; and the traced lines following the field.
 
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/SkinTensionLines.h"
 
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 
 #include "AnalyticSkins.h"
 

@@ -22,10 +22,10 @@
 #include <vtkPolyData.h>
 
 #include "AnalyticSkins.h"
-#include "modules/incision/PlanDisplay.h"
-#include "modules/incision/PlanRecipe.h"
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/Undermining.h"
+#include "planning/PlanDisplay.h"
+#include "planning/PlanRecipe.h"
+#include "planning/PlanSimulation.h"
+#include "planning/Undermining.h"
 
 namespace caps::incision {
 namespace {

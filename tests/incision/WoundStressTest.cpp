@@ -16,8 +16,8 @@
 #include "fem/ElementShape.h"
 #include "fem/NodalStress.h"
 #include "fem/StressRecovery.h"
-#include "modules/incision/PlanSimulation.h"
-#include "modules/incision/WoundStress.h"
+#include "planning/PlanSimulation.h"
+#include "planning/WoundStress.h"
 
 namespace caps::incision {
 namespace {

@@ -24,8 +24,8 @@
 
 #include "Workstation.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanLines.h"
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/PlanLines.h"
+#include "planning/SkinTensionLines.h"
 #include "segmentation/LandmarkPlacement.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "report/DemoScene.h"

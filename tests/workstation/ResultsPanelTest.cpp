@@ -26,7 +26,7 @@
 #include "Workstation.h"
 #include "ui/ThreeDView.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/WoundStress.h"
+#include "planning/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/results/ResultsLogic.h"
 #include "report/DemoScene.h"

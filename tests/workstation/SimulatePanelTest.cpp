@@ -23,7 +23,7 @@
 
 #include "Workstation.h"
 #include "modules/incision/IncisionLogic.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "report/DemoScene.h"
 #include "scene/PlanNode.h"

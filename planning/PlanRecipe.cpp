@@ -1,4 +1,4 @@
-#include "modules/incision/PlanRecipe.h"
+#include "planning/PlanRecipe.h"
 
 #include <algorithm>
 #include <bit>
@@ -16,10 +16,10 @@
 #include <vtkMatrix3x3.h>
 #include <vtkPointData.h>
 
-#include "modules/incision/Undermining.h"
+#include "planning/Undermining.h"
 
 #ifndef CAPS_VERSION
-#error "CAPS_VERSION must be defined (modules/incision/CMakeLists.txt)"
+#error "CAPS_VERSION must be defined (planning/CMakeLists.txt)"
 #endif
 
 namespace fs = std::filesystem;

@@ -10,7 +10,7 @@
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 #include "segmentation/RangeMap.h"
 
 namespace caps::incision {

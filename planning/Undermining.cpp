@@ -1,4 +1,4 @@
-#include "modules/incision/Undermining.h"
+#include "planning/Undermining.h"
 
 #include <algorithm>
 #include <cmath>

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "fem/SurfaceMesh.h"
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/IncisionPlan.h"
+#include "planning/SkinChart.h"
 
 namespace caps::incision {
 

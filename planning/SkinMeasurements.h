@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 
 namespace caps::incision {
 

@@ -1,4 +1,4 @@
-#include "modules/incision/SkinTensionLines.h"
+#include "planning/SkinTensionLines.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,8 +12,8 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/PlanLines.h"
+#include "planning/IncisionPlan.h"
+#include "planning/PlanLines.h"
 
 namespace caps::incision {
 

@@ -26,7 +26,7 @@
 #include <Eigen/Core>
 #include <vtkSmartPointer.h>
 
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 #include "segmentation/Landmarks.h"
 #include "segmentation/RangeMap.h"
 

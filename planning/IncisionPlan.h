@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 
 #include "fem/SurfaceMesh.h"
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 
 namespace caps::incision {
 

@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 
 #include "fem/SurfaceMesh.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 
 namespace caps::incision {
 

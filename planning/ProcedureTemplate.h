@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 
 namespace caps::incision {
 

@@ -1,4 +1,4 @@
-#include "modules/incision/SkinMeasurements.h"
+#include "planning/SkinMeasurements.h"
 
 #include <algorithm>
 #include <cmath>

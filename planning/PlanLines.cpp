@@ -1,4 +1,4 @@
-#include "modules/incision/PlanLines.h"
+#include "planning/PlanLines.h"
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,7 @@
 #include <vtkPoints.h>
 #include <vtkUnsignedCharArray.h>
 
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 
 namespace caps::incision {
 namespace {

@@ -17,9 +17,9 @@
 #include "fem/LinearElasticMaterial.h"
 #include "fem/Mesh.h"
 #include "fem/SurfaceMesher.h"
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/SkinChart.h"
-#include "modules/incision/SkinMeasurements.h"
+#include "planning/IncisionPlan.h"
+#include "planning/SkinChart.h"
+#include "planning/SkinMeasurements.h"
 #include "segmentation/RangeMap.h"
 
 namespace caps::incision {

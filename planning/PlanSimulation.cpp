@@ -1,4 +1,4 @@
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "fem/StaticAnalysis.h"
-#include "modules/incision/Undermining.h"
+#include "planning/Undermining.h"
 
 namespace caps::incision {
 namespace {

@@ -1,4 +1,4 @@
-#include "modules/incision/PlanDisplay.h"
+#include "planning/PlanDisplay.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,8 +13,8 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
+#include <vtkXMLPolyDataWriter.h>
 
-#include "modules/segment/SegmentCommands.h"
 #include "segmentation/SkinShade.h"
 
 namespace caps::incision {
@@ -233,11 +233,29 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
   return surface;
 }
 
+namespace {
+
+/// Writes @a surface as VTK XML PolyData: appended raw data, zlib-compressed
+/// (the settings of `caps segment`'s surfaces, so both read alike).
+void writeVtp(vtkPolyData* surface, const std::filesystem::path& file)
+{
+  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
+  writer->SetInputData(surface);
+  writer->SetFileName(file.string().c_str());
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() != 1)
+    throw std::runtime_error("Could not write " + file.string() + ": is the folder writable?");
+}
+
+} // namespace
+
 void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& before,
                       const std::filesystem::path& after)
 {
-  cli::writeVtp(planDisplayPolyData(display, 0.0), before);
-  cli::writeVtp(planDisplayPolyData(display, 1.0), after);
+  writeVtp(planDisplayPolyData(display, 0.0), before);
+  writeVtp(planDisplayPolyData(display, 1.0), after);
 }
 
 } // namespace caps::incision

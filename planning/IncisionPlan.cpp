@@ -1,4 +1,4 @@
-#include "modules/incision/IncisionPlan.h"
+#include "planning/IncisionPlan.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "modules/incision/ProcedureTemplate.h"
+#include "planning/ProcedureTemplate.h"
 
 #include <algorithm>
 #include <cmath>

@@ -18,8 +18,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "modules/incision/IncisionPlan.h"
-#include "modules/incision/ProcedureTemplate.h"
+#include "planning/IncisionPlan.h"
+#include "planning/ProcedureTemplate.h"
 
 class vtkImageData;
 

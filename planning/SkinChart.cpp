@@ -1,4 +1,4 @@
-#include "modules/incision/SkinChart.h"
+#include "planning/SkinChart.h"
 
 #include <cmath>
 #include <sstream>

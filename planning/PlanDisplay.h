@@ -13,7 +13,7 @@
 #include <vtkSmartPointer.h>
 
 #include "fem/DisplaySurface.h"
-#include "modules/incision/PlanSimulation.h"
+#include "planning/PlanSimulation.h"
 #include "segmentation/RangeMap.h"
 #include "segmentation/SurfaceScanColourMap.h"
 

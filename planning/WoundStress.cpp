@@ -1,4 +1,4 @@
-#include "modules/incision/WoundStress.h"
+#include "planning/WoundStress.h"
 
 #include <algorithm>
 #include <cmath>
