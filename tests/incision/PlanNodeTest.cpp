@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "AnalyticSkins.h"
+#include "planning/AnalyticSkins.h"
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanSimulation.h"
 #include "scene/PlanNode.h"

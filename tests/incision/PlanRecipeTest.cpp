@@ -17,7 +17,7 @@
 #include <vtkImageData.h>
 #include <vtkPointData.h>
 
-#include "AnalyticSkins.h"
+#include "planning/AnalyticSkins.h"
 #include "TestPaths.h"
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanRecipe.h"
