@@ -1,5 +1,7 @@
 #include "planning/PlanDisplay.h"
 
+#include "segmentation/SurfaceExtraction.h"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -13,7 +15,6 @@
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
 #include <vtkUnsignedCharArray.h>
-#include <vtkXMLPolyDataWriter.h>
 
 #include "segmentation/SkinShade.h"
 
@@ -233,29 +234,11 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
   return surface;
 }
 
-namespace {
-
-/// Writes @a surface as VTK XML PolyData: appended raw data, zlib-compressed
-/// (the settings of `caps segment`'s surfaces, so both read alike).
-void writeVtp(vtkPolyData* surface, const std::filesystem::path& file)
-{
-  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
-  writer->SetInputData(surface);
-  writer->SetFileName(file.string().c_str());
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1)
-    throw std::runtime_error("Could not write " + file.string() + ": is the folder writable?");
-}
-
-} // namespace
-
 void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& before,
                       const std::filesystem::path& after)
 {
-  writeVtp(planDisplayPolyData(display, 0.0), before);
-  writeVtp(planDisplayPolyData(display, 1.0), after);
+  seg::writeSurfaceVtp(planDisplayPolyData(display, 0.0), before);
+  seg::writeSurfaceVtp(planDisplayPolyData(display, 1.0), after);
 }
 
 } // namespace caps::incision

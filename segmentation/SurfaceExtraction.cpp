@@ -18,6 +18,7 @@
 #include <vtkDecimatePro.h>
 #include <vtkReverseSense.h>
 #include <vtkWindowedSincPolyDataFilter.h>
+#include <vtkXMLPolyDataWriter.h>
 
 namespace caps::seg {
 namespace {
@@ -220,6 +221,18 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
     surface = normals->GetOutput();
   }
   return surface;
+}
+
+void writeSurfaceVtp(vtkPolyData* surface, const std::filesystem::path& file)
+{
+  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
+  writer->SetInputData(surface);
+  writer->SetFileName(file.string().c_str());
+  writer->SetDataModeToAppended();
+  writer->EncodeAppendedDataOff();
+  writer->SetCompressorTypeToZLib();
+  if (writer->Write() != 1)
+    throw std::runtime_error("Could not write " + file.string() + ": is the folder writable?");
 }
 
 } // namespace caps::seg

@@ -2,6 +2,8 @@
 /// @file SurfaceExtraction.h
 /// @brief Closed triangle surfaces of label maps, in the patient frame.
 
+#include <filesystem>
+
 #include <vtkImageData.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
@@ -41,5 +43,10 @@ struct SurfaceOptions
 /// @throws std::invalid_argument for a null image or one that is not one
 ///         scalar component.
 vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOptions& options = {});
+
+/// Writes @a surface as VTK XML PolyData (.vtp): appended raw data,
+/// zlib-compressed, so every surface CAPS writes reads alike.
+/// @throws std::runtime_error naming the file when it cannot be written.
+void writeSurfaceVtp(vtkPolyData* surface, const std::filesystem::path& file);
 
 } // namespace caps::seg

@@ -14,9 +14,9 @@
 #include <vtkPolyData.h>
 #include <vtkSTLWriter.h>
 #include <vtkSmartPointer.h>
-#include <vtkXMLPolyDataWriter.h>
 
 #include "modules/segment/SegmentLogic.h"
+#include "segmentation/SurfaceExtraction.h"
 #include "modules/volumes/VolumesLogic.h"
 #include "scene/LabelMapNode.h"
 #include "scene/NrrdIO.h"
@@ -158,18 +158,6 @@ void writeStl(vtkPolyData* surface, const fs::path& file)
                              ": is the folder writable and the disk not full?");
 }
 
-void writeVtp(vtkPolyData* surface, const fs::path& file)
-{
-  auto writer = vtkSmartPointer<vtkXMLPolyDataWriter>::New();
-  writer->SetInputData(surface);
-  writer->SetFileName(file.string().c_str());
-  writer->SetDataModeToAppended();
-  writer->EncodeAppendedDataOff();
-  writer->SetCompressorTypeToZLib();
-  if (writer->Write() != 1)
-    throw std::runtime_error("Could not write " + file.string() + ": is the folder writable?");
-}
-
 } // namespace cli
 
 namespace {
@@ -281,8 +269,8 @@ int runSegment(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, s
     NrrdIO::writeImage(image, args.out / "labels.nrrd");
     if (args.vtp)
     {
-      cli::writeVtp(skin, args.out / "skin.vtp");
-      cli::writeVtp(bone, args.out / "bone.vtp");
+      seg::writeSurfaceVtp(skin, args.out / "skin.vtp");
+      seg::writeSurfaceVtp(bone, args.out / "bone.vtp");
       written.insert(written.end(), {"skin.vtp", "bone.vtp"});
     }
     if (args.stl)

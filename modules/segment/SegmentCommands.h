@@ -75,8 +75,6 @@ VolumeNode* loadCt(ModuleLogic& logic, const std::filesystem::path& path,
 /// Writes a triangle surface as binary STL (mm, patient LPS).
 /// @throws std::runtime_error naming the file when it cannot be written.
 void writeStl(vtkPolyData* surface, const std::filesystem::path& file);
-/// Writes a surface as VTK XML PolyData (.vtp, compressed).
-void writeVtp(vtkPolyData* surface, const std::filesystem::path& file);
 
 } // namespace cli
 } // namespace caps
