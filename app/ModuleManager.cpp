@@ -10,6 +10,31 @@ namespace fs = std::filesystem;
 
 namespace caps {
 
+namespace {
+
+/// Why the plugin behind @a handle was built from other sources than this
+/// caps, or "" when it was built with it. Its shared libraries are this
+/// build's; a plugin from another build may disagree with them about the
+/// layout of every class they exchange (a heap corruption, not an error).
+std::string buildStampMismatch(void* handle)
+{
+  using StampFn = const char* (*)();
+  auto stamp = reinterpret_cast<StampFn>(dlsym(handle, "caps_module_build_stamp"));
+  const std::string ours = buildStamp();
+  const std::string rebuild =
+    ": rebuild it with this caps (cmake --build on the build folder) or remove it from the "
+    "module folder";
+  if (!stamp)
+    return "carries no build stamp (built before caps " + ours + ")" + rebuild;
+  const std::string theirs = stamp() ? stamp() : "";
+  if (theirs != ours)
+    return "was built from other sources (build " + theirs + ", this caps is " + ours + ")" +
+           rebuild;
+  return {};
+}
+
+} // namespace
+
 ModuleManager::~ModuleManager()
 {
   // Objects made by a plugin's code must go before its code is unloaded.
@@ -78,6 +103,12 @@ void ModuleManager::loadFolder(const fs::path& folder)
       failed_.push_back({file, "was built for module API " + std::to_string(version()) +
                                  ", this caps uses " + std::to_string(kModuleApiVersion) +
                                  ": rebuild the module"});
+      dlclose(handle);
+      continue;
+    }
+    if (const std::string why = buildStampMismatch(handle); !why.empty())
+    {
+      failed_.push_back({file, why});
       dlclose(handle);
       continue;
     }

@@ -3,8 +3,9 @@
 /// @brief The plugin interface every workstation module implements.
 ///
 /// A module is a shared library in the app's plugin folder that exports
-/// `caps_module_api_version()` and `caps_create_module()` (use
-/// CAPS_DECLARE_MODULE). Like a 3D Slicer loadable module it has metadata,
+/// `caps_module_api_version()`, `caps_module_build_stamp()` and
+/// `caps_create_module()` (use CAPS_DECLARE_MODULE, and link the
+/// caps_build_stamp object library). Like a 3D Slicer loadable module it has metadata,
 /// a logic object bound to the scene (no widgets: the command line and the
 /// tests drive exactly what the GUI drives), an optional Qt panel, and
 /// optional command-line subcommands.
@@ -20,6 +21,7 @@
 
 #include <vtkSmartPointer.h>
 
+#include "modules/core/BuildStamp.h"
 #include "scene/Node.h"
 #include "scene/SnapshotNode.h"
 
@@ -33,7 +35,7 @@ class ModuleHost;
 
 /// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
 /// in a way that breaks plugins built against the old headers.
-inline constexpr int kModuleApiVersion = 4;
+inline constexpr int kModuleApiVersion = 5;
 
 /// The module's algorithmic side, bound to the scene. Subclasses add the
 /// module's operations; it never includes a widget header.
@@ -187,6 +189,10 @@ public:
   extern "C" __attribute__((visibility("default"))) int caps_module_api_version()                  \
   {                                                                                                \
     return ::caps::kModuleApiVersion;                                                              \
+  }                                                                                                \
+  extern "C" __attribute__((visibility("default"))) const char* caps_module_build_stamp()          \
+  {                                                                                                \
+    return ::caps::buildStamp();                                                                   \
   }                                                                                                \
   extern "C" __attribute__((visibility("default"))) ::caps::Module* caps_create_module()           \
   {                                                                                                \

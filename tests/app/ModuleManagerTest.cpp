@@ -63,13 +63,14 @@ TEST(ModuleManager, ReportsEveryBadPluginWithItsReason)
   fs::copy_file(testPlugin("not_a_module"), folder / "c_not_a_module.so");
   fs::copy_file(testPlugin("wrong_api_module"), folder / "d_wrong_api.so");
   std::ofstream(folder / "e_text.so") << "this is text, not a library\n";
+  fs::copy_file(testPlugin("other_build_module"), folder / "f_other_build.so");
   std::ofstream(folder / "readme.txt") << "ignored: not a .so\n";
 
   caps::ModuleManager manager;
   manager.loadFolder(folder);
   ASSERT_EQ(manager.modules().size(), 1u) << manager.report();
   EXPECT_EQ(manager.modules()[0].module->name(), "probe");
-  ASSERT_EQ(manager.failures().size(), 4u) << manager.report();
+  ASSERT_EQ(manager.failures().size(), 5u) << manager.report();
   const auto reason = [&](const char* file) {
     for (const auto& f : manager.failures())
       if (f.file.filename() == file)
@@ -80,6 +81,29 @@ TEST(ModuleManager, ReportsEveryBadPluginWithItsReason)
   EXPECT_NE(reason("c_not_a_module.so").find("is not a CAPS module"), std::string::npos);
   EXPECT_NE(reason("d_wrong_api.so").find("rebuild the module"), std::string::npos);
   EXPECT_NE(reason("e_text.so").find("cannot be loaded"), std::string::npos);
+  // The right API from other sources: refused before any of its code runs,
+  // naming both builds and what to do.
+  const std::string other = reason("f_other_build.so");
+  EXPECT_NE(other.find("was built from other sources (build 0.0.0+0123456789abcdef, this caps is " +
+                       std::string(caps::buildStamp()) + ")"),
+            std::string::npos)
+    << other;
+  EXPECT_NE(other.find("rebuild it with this caps"), std::string::npos) << other;
+}
+
+// Every plugin of the build carries the app's own stamp, and the stamp says
+// which version and which sources: "VERSION+16 hex digits".
+TEST(ModuleManager, ThePluginsOfThisBuildCarryItsStamp)
+{
+  const std::string stamp = caps::buildStamp();
+  EXPECT_EQ(stamp.rfind(std::string(CAPS_VERSION) + "+", 0), 0u) << stamp;
+  const std::string hash = stamp.substr(stamp.find('+') + 1);
+  EXPECT_EQ(hash.size(), 16u) << stamp;
+  EXPECT_EQ(hash.find_first_not_of("0123456789abcdef"), std::string::npos) << stamp;
+  caps::ModuleManager manager;
+  manager.loadFolder(CAPS_MODULE_DIR);
+  EXPECT_GE(manager.modules().size(), 8u) << manager.report();
+  EXPECT_TRUE(manager.failures().empty()) << manager.report();
 }
 
 TEST(ModuleManager, CommandsRunOnTheSessionsLogic)
