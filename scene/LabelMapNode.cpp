@@ -2,6 +2,8 @@
 
 #include <vtkPointData.h>
 
+#include <cmath>
+
 #include "scene/JsonFields.h"
 #include "scene/NrrdIO.h"
 #include "scene/SceneError.h"
@@ -24,6 +26,11 @@ void LabelMapNode::setImage(vtkSmartPointer<vtkImageData> image) {
 
 void LabelMapNode::setReferenceVolumeId(NodeId id) {
   referenceVolumeId_ = std::move(id);
+  modified();
+}
+
+void LabelMapNode::setThresholds(std::optional<Thresholds> thresholds) {
+  thresholds_ = thresholds;
   modified();
 }
 
@@ -53,6 +60,7 @@ void LabelMapNode::writeFields(nlohmann::json& j) const {
   j["referenceVolumeId"] = referenceVolumeId_;
   auto& table = j["labels"] = nlohmann::json::array();
   for (const auto& [value, label] : labels_) table.push_back({{"value", value}, {"name", label.name}, {"color", label.color}});
+  if (thresholds_) j["thresholdsHu"] = {{"skin", thresholds_->skinHu}, {"bone", thresholds_->boneHu}};
 }
 
 void LabelMapNode::readFields(const nlohmann::json& j) {
@@ -62,6 +70,14 @@ void LabelMapNode::readFields(const nlohmann::json& j) {
     for (const auto& e : jsonfields::list(*table, "labels"))
       labels[jsonfields::toInt(e.at("value"), "a label value")] = Label{e.value("name", ""), e.at("color").get<std::array<double, 3>>()};
     labels_ = std::move(labels);
+  }
+  if (const auto* t = jsonfields::find(j, "thresholdsHu")) {
+    const Thresholds read{t->at("skin").get<double>(), t->at("bone").get<double>()};
+    if (!std::isfinite(read.skinHu) || !std::isfinite(read.boneHu) || read.boneHu <= read.skinHu)
+      throw SceneError("label map '" + name() + "' records thresholds skin " + t->at("skin").dump() +
+                       " HU and bone " + t->at("bone").dump() +
+                       " HU; the bone's must be above the skin's: correct scene.json or segment again");
+    thresholds_ = read;
   }
 }
 

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "scene/Node.h"
@@ -24,6 +25,14 @@ class LabelMapNode : public Node {
     bool operator==(const Label&) const = default;
   };
 
+  /// The HU thresholds a segmentation was made with: the range maps search
+  /// their sub-voxel skin and bone crossings at the same values.
+  struct Thresholds {
+    double skinHu = 0.0;  ///< air / soft tissue
+    double boneHu = 0.0;  ///< soft tissue / bone
+    bool operator==(const Thresholds&) const = default;
+  };
+
   NodeType type() const override { return NodeType::LabelMap; }
 
   vtkImageData* image() const { return image_; }
@@ -32,6 +41,11 @@ class LabelMapNode : public Node {
 
   const NodeId& referenceVolumeId() const { return referenceVolumeId_; }
   void setReferenceVolumeId(NodeId id);
+
+  /// None for a label map from elsewhere (a file, a scene saved before they
+  /// were recorded): its thresholds are unknown.
+  const std::optional<Thresholds>& thresholds() const { return thresholds_; }
+  void setThresholds(std::optional<Thresholds> thresholds);
 
   const std::map<int, Label>& labels() const { return labels_; }
   void setLabels(std::map<int, Label> labels);
@@ -49,6 +63,7 @@ class LabelMapNode : public Node {
   vtkSmartPointer<vtkImageData> image_;
   NodeId referenceVolumeId_;
   std::map<int, Label> labels_;
+  std::optional<Thresholds> thresholds_;
 };
 
 }  // namespace caps

@@ -47,12 +47,30 @@ void RangeMapNode::writeBulk(const std::filesystem::path& file) const { NrrdIO::
 
 void RangeMapNode::readBulk(const std::filesystem::path& file) { values_ = NrrdIO::readMatrix(file); }
 
+void RangeMapNode::setSourceVolumeId(NodeId id) {
+  sourceVolumeId_ = std::move(id);
+  modified();
+}
+
+void RangeMapNode::setSourceLabelMapId(NodeId id) {
+  sourceLabelMapId_ = std::move(id);
+  modified();
+}
+
+void RangeMapNode::setSkinMapId(NodeId id) {
+  skinMapId_ = std::move(id);
+  modified();
+}
+
 void RangeMapNode::writeFields(nlohmann::json& j) const {
   j["role"] = role_;
   j["axisOrigin"] = jsonfields::toJson(axisOrigin_);
   j["axisDirection"] = jsonfields::toJson(axisDirection_);
   j["zMin"] = zMin_;
   j["zMax"] = zMax_;
+  if (!sourceVolumeId_.empty()) j["sourceVolumeId"] = sourceVolumeId_;
+  if (!sourceLabelMapId_.empty()) j["sourceLabelMapId"] = sourceLabelMapId_;
+  if (!skinMapId_.empty()) j["skinMapId"] = skinMapId_;
 }
 
 void RangeMapNode::readFields(const nlohmann::json& j) {
@@ -61,6 +79,9 @@ void RangeMapNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "axisDirection", axisDirection_);
   jsonfields::read(j, "zMin", zMin_);
   jsonfields::read(j, "zMax", zMax_);
+  jsonfields::read(j, "sourceVolumeId", sourceVolumeId_);
+  jsonfields::read(j, "sourceLabelMapId", sourceLabelMapId_);
+  jsonfields::read(j, "skinMapId", skinMapId_);
 }
 
 }  // namespace caps

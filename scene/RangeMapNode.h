@@ -35,6 +35,20 @@ class RangeMapNode : public Node {
   double zMax() const { return zMax_; }
   void setZRange(double zMin, double zMax);
 
+  /// @name Provenance (empty when unknown: maps of scenes saved before they were recorded)
+  ///@{
+  /// The CT volume the map was built from.
+  const NodeId& sourceVolumeId() const { return sourceVolumeId_; }
+  void setSourceVolumeId(NodeId id);
+  /// The label map the map was built from.
+  const NodeId& sourceLabelMapId() const { return sourceLabelMapId_; }
+  void setSourceLabelMapId(NodeId id);
+  /// The skin map built in the same run as this map (a skin map's own id):
+  /// the bone map that goes with a skin map is the one that names it.
+  const NodeId& skinMapId() const { return skinMapId_; }
+  void setSkinMapId(NodeId id);
+  ///@}
+
   /// θ of row i, z of column j (see class doc).
   double thetaAt(Eigen::Index i) const;
   double zAt(Eigen::Index j) const;
@@ -54,6 +68,9 @@ class RangeMapNode : public Node {
   Eigen::Vector3d axisDirection_ = Eigen::Vector3d::UnitZ();  // patient superior
   double zMin_ = 0.0;
   double zMax_ = 0.0;
+  NodeId sourceVolumeId_;
+  NodeId sourceLabelMapId_;
+  NodeId skinMapId_;
 };
 
 }  // namespace caps

@@ -242,21 +242,11 @@ double applyActivations(const ExpressionModel& model, const Eigen::VectorXd& act
 
 namespace {
 
-const RangeMapNode* newestMap(const Scene& scene, const std::string& role)
-{
-  const RangeMapNode* found = nullptr;
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == role)
-      found = static_cast<const RangeMapNode*>(n);
-  return found;
-}
-
 } // namespace
 
 expression::ExpressionModelInput ExpressionLogic::modelInput() const
 {
-  const RangeMapNode* skinNode = newestMap(scene(), "skin");
-  const RangeMapNode* boneNode = newestMap(scene(), "bone");
+  const auto [skinNode, boneNode] = RangeMapLogic::newestMaps(scene());
   if (!skinNode || !boneNode)
     throw std::invalid_argument(std::string("the scene has no ") + (!skinNode ? "skin" : "bone") +
                                 " range map: build the range maps in the Range maps module first (open a CT, "

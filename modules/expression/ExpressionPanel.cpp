@@ -75,15 +75,6 @@ QDoubleSpinBox* millimetres(QWidget* parent, const QString& objectName, double l
   return box;
 }
 
-const RangeMapNode* newestMapOfRole(const Scene& scene, const std::string& role)
-{
-  const RangeMapNode* found = nullptr;
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == role)
-      found = static_cast<const RangeMapNode*>(n);
-  return found;
-}
-
 /// Whether plan @a name was predicted: its closure or its skin after is in the scene.
 bool predicted(const Scene& scene, const std::string& name)
 {
@@ -979,10 +970,7 @@ void ExpressionPanel::studyPlan()
   auto input = std::make_shared<expression::PlanStudyInput>();
   try
   {
-    const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(planNode->rangeMapId());
-    if (!skinNode || skinNode->role() != "skin")
-      skinNode = newestMapOfRole(scene, "skin");
-    const RangeMapNode* boneNode = newestMapOfRole(scene, "bone");
+    const auto [skinNode, boneNode] = RangeMapLogic::mapsOf(scene, *planNode);
     if (!skinNode || !boneNode)
       throw std::invalid_argument("the scene has no skin and bone range maps to predict it on: build them in the "
                                   "Range maps module");

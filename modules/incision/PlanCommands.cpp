@@ -399,16 +399,7 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     RangeMapOutput maps;
     NodeId skinMapId;
     {
-      const RangeMapNode* skinNode = nullptr;
-      const RangeMapNode* boneNode = nullptr;
-      for (Node* n : logic.scene().nodesOfType(NodeType::RangeMap))
-      {
-        const auto* map = static_cast<const RangeMapNode*>(n);
-        if (map->role() == "skin")
-          skinNode = map;
-        else if (map->role() == "bone")
-          boneNode = map;
-      }
+      const auto [skinNode, boneNode] = RangeMapLogic::newestMaps(logic.scene());
       if (skinNode && boneNode && logic.scene().nodesOfType(NodeType::Volume).size() == 1)
       {
         maps.skin = RangeMapLogic::toRangeMap(*skinNode);

@@ -10,6 +10,7 @@
 
 #include "modules/segment/SegmentLogic.h"
 #include "scene/LabelMapNode.h"
+#include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
@@ -88,14 +89,28 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
   return out;
 }
 
-RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMapOutput& output)
+RangeMapLogic::Parameters RangeMapLogic::forLabelMap(Parameters parameters,
+                                                     const LabelMapNode& labels)
+{
+  if (const auto& made = labels.thresholds())
+  {
+    parameters.skinThresholdHu = made->skinHu;
+    parameters.boneThresholdHu = made->boneHu;
+  }
+  return parameters;
+}
+
+RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMapOutput& output,
+                                         const NodeId& labelMapId)
 {
   Scene& s = scene();
-  for (const auto& id : made_[volume.id()])
-    s.removeNode(id); // false when the user removed it already
+  const std::vector<NodeId> replaced = mapsOfVolume(volume);
+  for (const auto& id : replaced)
+    s.removeNode(id);
   made_[volume.id()].clear();
 
   const seg::CylindricalFrame& frame = output.skin.frame();
+  NodeId skinId;
   auto add = [&](const seg::RangeMap& map, const char* role, const std::string& name) {
     auto node = std::make_unique<RangeMapNode>();
     node->setName(volume.name() + " " + name);
@@ -103,9 +118,15 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
     node->setRole(role);
     node->setAxis(frame.origin(), frame.direction());
     node->setZRange(frame.zMin(), frame.zMax());
-    const std::string id = s.addNode(std::move(node))->id();
-    made_[volume.id()].push_back(id);
-    return id;
+    node->setSourceVolumeId(volume.id());
+    node->setSourceLabelMapId(labelMapId);
+    auto* added = s.addNode(std::move(node));
+    // The skin map is added first; every map of the run names it.
+    if (skinId.empty())
+      skinId = added->id();
+    static_cast<RangeMapNode*>(added)->setSkinMapId(skinId);
+    made_[volume.id()].push_back(added->id());
+    return added->id();
   };
   RangeMapResult result;
   result.skinId = add(output.skin, "skin", "skin range");
@@ -113,7 +134,73 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
   result.thicknessId = add(output.thickness, "thickness", "thickness (radial)");
   result.thicknessNormalId =
     add(output.thicknessNormal, "thickness-normal", "thickness (along the skin normal)");
+  result.labelMapId = labelMapId;
+
+  for (Node* node : s.nodesOfType(NodeType::Plan))
+  {
+    auto* plan = static_cast<PlanNode*>(node);
+    if (std::find(replaced.begin(), replaced.end(), plan->rangeMapId()) != replaced.end())
+      plan->setRangeMapId(result.skinId);
+  }
   return result;
+}
+
+std::vector<NodeId> RangeMapLogic::mapsOfVolume(const VolumeNode& volume) const
+{
+  std::vector<NodeId> ids;
+  for (const auto& id : made_.count(volume.id()) ? made_.at(volume.id()) : std::vector<NodeId>{})
+    if (scene().nodeAs<RangeMapNode>(id)) // the user may have removed it already
+      ids.push_back(id);
+  for (Node* node : scene().nodesOfType(NodeType::RangeMap))
+    if (static_cast<RangeMapNode*>(node)->sourceVolumeId() == volume.id() &&
+        std::find(ids.begin(), ids.end(), node->id()) == ids.end())
+      ids.push_back(node->id());
+  return ids;
+}
+
+namespace {
+
+const RangeMapNode* newestOfRole(const Scene& scene, const std::string& role)
+{
+  const RangeMapNode* found = nullptr;
+  for (Node* node : scene.nodesOfType(NodeType::RangeMap))
+    if (static_cast<const RangeMapNode*>(node)->role() == role)
+      found = static_cast<const RangeMapNode*>(node);
+  return found;
+}
+
+} // namespace
+
+const RangeMapNode* RangeMapLogic::builtWith(const Scene& scene, const RangeMapNode& skin,
+                                             const std::string& role)
+{
+  // A skin map without provenance (an older scene): the newest of the role.
+  if (skin.skinMapId().empty())
+    return newestOfRole(scene, role);
+  for (Node* node : scene.nodesOfType(NodeType::RangeMap))
+  {
+    const auto* map = static_cast<const RangeMapNode*>(node);
+    if (map->role() == role && map->skinMapId() == skin.id())
+      return map;
+  }
+  return nullptr;
+}
+
+SkinAndBoneMaps RangeMapLogic::newestMaps(const Scene& scene)
+{
+  SkinAndBoneMaps maps;
+  maps.skin = newestOfRole(scene, "skin");
+  if (maps.skin)
+    maps.bone = builtWith(scene, *maps.skin, "bone");
+  return maps;
+}
+
+SkinAndBoneMaps RangeMapLogic::mapsOf(const Scene& scene, const PlanNode& plan)
+{
+  const auto* own = scene.nodeAs<RangeMapNode>(plan.rangeMapId());
+  if (!own || own->role() != "skin")
+    return newestMaps(scene);
+  return {own, builtWith(scene, *own, "bone")};
 }
 
 RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& parameters,
@@ -131,10 +218,9 @@ RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& pa
     labels = scene().nodeAs<LabelMapNode>(made.labelMapId);
     segmented = true;
   }
-  RangeMapOutput computed = compute(volume.image(), labels->image(), parameters,
+  RangeMapOutput computed = compute(volume.image(), labels->image(), forLabelMap(parameters, *labels),
                                     segmented ? part(progress, 0.5, 1.0) : progress);
-  RangeMapResult result = addToScene(volume, computed);
-  result.labelMapId = labels->id();
+  RangeMapResult result = addToScene(volume, computed, labels->id());
   result.segmented = segmented;
   if (output)
     *output = std::move(computed);

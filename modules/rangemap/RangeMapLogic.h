@@ -18,6 +18,9 @@
 
 namespace caps {
 
+class LabelMapNode;
+class PlanNode;
+class Scene;
 class RangeMapNode;
 class VolumeNode;
 
@@ -44,6 +47,13 @@ struct RangeMapResult
   bool segmented = false; ///< the volume had no label map: run() segmented it first
 };
 
+/// A skin range map and the bone map built with it (either may be null).
+struct SkinAndBoneMaps
+{
+  const RangeMapNode* skin = nullptr;
+  const RangeMapNode* bone = nullptr;
+};
+
 /// @class RangeMapLogic
 /// @brief Cylindrical range maps of the skin and bone and the soft-tissue
 /// thickness (issue 3, items 3–5), as scene nodes with roles "skin", "bone",
@@ -63,7 +73,9 @@ public:
     int nZ = 256;     ///< samples along the axis
     /// 3 × 3 box smoothing of the skin and bone maps (§4.2.1, eq. 4.2) before the thickness.
     bool smooth = false;
-    /// HU of the skin and bone crossings; also the thresholds when run() has to segment.
+    /// HU of the skin and bone crossings; also the thresholds when run() has
+    /// to segment. A label map that records its own (LabelMapNode::thresholds)
+    /// overrides them: see forLabelMap().
     double skinThresholdHu = -400.0;
     double boneThresholdHu = 250.0;
     /// The axis the user sets (LPS mm point, direction); none: fitted to the head.
@@ -81,12 +93,37 @@ public:
   static RangeMapOutput compute(vtkImageData* ct, vtkImageData* labels,
                                 const Parameters& parameters, const TaskProgress& progress = {});
 
-  /// Adds the four RangeMap nodes for @a volume, removing the ones an earlier
-  /// run made for it.
-  RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output);
+  /// @a parameters with the thresholds @a labels was segmented with, when it
+  /// records them: the sub-voxel crossings are searched at the HU where the
+  /// masks were cut (segmenting at -300 HU gives crossings at -300 HU too).
+  static Parameters forLabelMap(Parameters parameters, const LabelMapNode& labels);
+
+  /// Adds the four RangeMap nodes for @a volume, made from the label map
+  /// @a labelMapId (each records both, and the new skin map's id), and
+  /// removes the maps an earlier run made for the same volume: those of this
+  /// logic and those recording the volume as their source. Plans drawn on a
+  /// removed skin map move to the new one (their cut paths are on the chart).
+  RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output,
+                            const NodeId& labelMapId = {});
+
+  /// @name Which maps go together
+  /// The one rule every module uses to pair maps: a bone map goes with the
+  /// skin map it was built with (RangeMapNode::skinMapId), never with a map
+  /// of another run. Maps of scenes saved before that was recorded pair with
+  /// the newest map of the other role.
+  ///@{
+  /// The newest skin map of @a scene and the bone map built with it.
+  static SkinAndBoneMaps newestMaps(const Scene& scene);
+  /// The maps @a plan is drawn on: its own skin map (the newest one when
+  /// that is gone) and the bone map built with it.
+  static SkinAndBoneMaps mapsOf(const Scene& scene, const PlanNode& plan);
+  /// The map of @a role ("bone", "thickness", ...) built with @a skin, or null.
+  static const RangeMapNode* builtWith(const Scene& scene, const RangeMapNode& skin,
+                                       const std::string& role);
+  ///@}
 
   /// The whole pipeline on the scene (segmenting first when the volume has no
-  /// label map). @a output, when given, receives what compute() found.
+  /// label map), at the label map's thresholds (forLabelMap). @a output, when given, receives what compute() found.
   RangeMapResult run(const VolumeNode& volume, const Parameters& parameters,
                      const TaskProgress& progress = {}, RangeMapOutput* output = nullptr);
 
@@ -102,6 +139,10 @@ public:
   static std::string describeAxis(const seg::HeadAxisFit& axis);
 
 private:
+  /// The maps a new run for @a volume replaces: those this logic made for
+  /// it and those recording it as their source.
+  std::vector<NodeId> mapsOfVolume(const VolumeNode& volume) const;
+
   /// Per volume id, the nodes made for it (to replace them on the next run).
   std::map<std::string, std::vector<std::string>> made_;
 };

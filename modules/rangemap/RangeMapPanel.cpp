@@ -465,9 +465,12 @@ void RangeMapPanel::run()
   RangeMapLogic::Parameters parameters;
   parameters.smooth = smooth_->isChecked();
   // The worker gets the voxels, never the nodes; with no label map yet it
-  // segments first (with the default thresholds) and adds the label map at the end.
+  // segments first (with the default thresholds) and adds the label map at
+  // the end. An existing one's crossings are searched at its own thresholds.
   vtkSmartPointer<vtkImageData> ct = volume->image();
   LabelMapNode* existing = SegmentLogic(logic_.scene()).findLabelMap(*volume);
+  if (existing)
+    parameters = RangeMapLogic::forLabelMap(parameters, *existing);
   vtkSmartPointer<vtkImageData> labels = existing ? existing->image() : nullptr;
   const std::string volumeId = volume->id();
   host_.runTask("Range maps of " + volume->name(), [this, ct, labels, volumeId,
@@ -496,9 +499,11 @@ void RangeMapPanel::run()
         host_.showWarning("Range maps", "The volume was closed while its maps were being built.");
         return;
       }
+      SegmentLogic segment(logic_.scene());
       if (segmented)
-        SegmentLogic(logic_.scene()).addToScene(*target, std::move(*segmentation));
-      logic_.addToScene(*target, *output);
+        segment.addToScene(*target, std::move(*segmentation));
+      const LabelMapNode* madeFrom = segment.findLabelMap(*target);
+      logic_.addToScene(*target, *output, madeFrom ? madeFrom->id() : NodeId{});
       status_->setText(statistics(*output));
       host_.showStatus("Range maps of '" + target->name() + "' built");
     });

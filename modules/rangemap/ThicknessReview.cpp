@@ -19,15 +19,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-const RangeMapNode* newestMap(const Scene& scene, const std::string& role)
-{
-  const RangeMapNode* found = nullptr;
-  for (const Node* node : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(node)->role() == role)
-      found = static_cast<const RangeMapNode*>(node);
-  return found;
-}
-
 /// A CSV field: quoted when it holds a comma, a quote or a line break.
 std::string csvField(const std::string& text)
 {
@@ -48,10 +39,10 @@ std::string csvField(const std::string& text)
 
 std::optional<ThicknessReview> ThicknessReview::fromScene(const Scene& scene)
 {
-  const RangeMapNode* skin = newestMap(scene, "skin");
-  const RangeMapNode* bone = newestMap(scene, "bone");
-  const RangeMapNode* thickness = newestMap(scene, "thickness");
-  const RangeMapNode* normal = newestMap(scene, "thickness-normal");
+  // The newest maps, all of one run (RangeMapLogic::newestMaps).
+  const auto [skin, bone] = RangeMapLogic::newestMaps(scene);
+  const RangeMapNode* thickness = skin ? RangeMapLogic::builtWith(scene, *skin, "thickness") : nullptr;
+  const RangeMapNode* normal = skin ? RangeMapLogic::builtWith(scene, *skin, "thickness-normal") : nullptr;
   if (!skin || !bone || !thickness)
     return std::nullopt;
   return ThicknessReview(RangeMapLogic::toRangeMap(*skin), RangeMapLogic::toRangeMap(*bone),

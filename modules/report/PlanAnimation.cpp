@@ -61,14 +61,11 @@ const PlanNode& findPlan(const Scene& scene, const std::string& name)
   throw std::invalid_argument("the scene has no plan named \"" + name + "\"; its plans are " + names);
 }
 
-/// The skin range map the plan is drawn on (its own, else the scene's "skin" map).
+/// The skin range map the plan is drawn on (RangeMapLogic::mapsOf).
 seg::RangeMap skinMapOf(const Scene& scene, const PlanNode& plan)
 {
-  if (const auto* own = scene.nodeAs<RangeMapNode>(plan.rangeMapId()))
-    return RangeMapLogic::toRangeMap(*own);
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == "skin")
-      return RangeMapLogic::toRangeMap(*static_cast<const RangeMapNode*>(n));
+  if (const RangeMapNode* skin = RangeMapLogic::mapsOf(scene, plan).skin)
+    return RangeMapLogic::toRangeMap(*skin);
   throw std::invalid_argument("the scene has no skin range map to draw plan \"" + plan.name() +
                               "\" on: make the range maps (RangeMap module, caps rangemap) first");
 }

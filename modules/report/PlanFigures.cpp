@@ -26,14 +26,6 @@
 namespace caps::report {
 namespace {
 
-const RangeMapNode* mapOfRole(const Scene& scene, const std::string& role)
-{
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == role)
-      return static_cast<const RangeMapNode*>(n);
-  return nullptr;
-}
-
 
 /// Pixels for a figure printed widthMm wide at dpi.
 int pixels(double widthMm, double dpi) { return int(std::lround(widthMm / 25.4 * dpi)); }
@@ -115,7 +107,7 @@ PlanFigures::PlanFigures(Scene& scene, const VolumeNode& volume, double dpi)
 
 void PlanFigures::addThicknessViews(ReportDocument& doc, const PlanFacts& plan) const
 {
-  const RangeMapNode* thickness = mapOfRole(scene_, "thickness");
+  const RangeMapNode* thickness = mapOfPlan(plan, "thickness");
   if (!thickness)
   {
     doc.paragraph("The scene has no thickness map: make the range maps (RangeMap module) to see the tissue "
@@ -183,9 +175,19 @@ void PlanFigures::addStoryboard(ReportDocument& doc) const
 
 namespace caps::report {
 
-seg::RangeMap PlanFigures::skinMap(const PlanFacts&) const
+const RangeMapNode* PlanFigures::mapOfPlan(const PlanFacts& plan, const std::string& role) const
 {
-  const RangeMapNode* skin = mapOfRole(scene_, "skin");
+  const auto* skin = scene_.nodeAs<RangeMapNode>(plan.skinMapId);
+  if (!skin)
+    skin = RangeMapLogic::newestMaps(scene_).skin;
+  if (!skin)
+    return nullptr;
+  return role == "skin" ? skin : RangeMapLogic::builtWith(scene_, *skin, role);
+}
+
+seg::RangeMap PlanFigures::skinMap(const PlanFacts& plan) const
+{
+  const RangeMapNode* skin = mapOfPlan(plan, "skin");
   if (!skin)
     throw std::invalid_argument("the scene has no skin range map for the report's figures");
   return RangeMapLogic::toRangeMap(*skin);
@@ -317,7 +319,7 @@ void PlanFigures::addPredictionViews(ReportDocument& doc, const PlanFacts& plan)
 void PlanFigures::addThicknessOnFace(ReportDocument& doc, const PlanFacts& plan) const
 {
   vtkPolyData* head = headSkin(scene_);
-  const RangeMapNode* thicknessNode = mapOfRole(scene_, "thickness");
+  const RangeMapNode* thicknessNode = mapOfPlan(plan, "thickness");
   if (!head || !thicknessNode)
     return;
   const seg::RangeMap thickness = RangeMapLogic::toRangeMap(*thicknessNode);

@@ -18,6 +18,7 @@
 #include "segmentation/RangeMap.h"
 
 namespace caps {
+class RangeMapNode;
 class Scene;
 class VolumeNode;
 } // namespace caps
@@ -76,6 +77,8 @@ private:
   void addThicknessOnFace(ReportDocument& doc, const PlanFacts& plan) const;
   /// The skin range map the plan is drawn on.
   seg::RangeMap skinMap(const PlanFacts& plan) const;
+  /// The map of @a role built with the plan's skin map, or null.
+  const RangeMapNode* mapOfPlan(const PlanFacts& plan, const std::string& role) const;
 
   Scene& scene_;
   const VolumeNode& volume_;

@@ -78,6 +78,7 @@ struct PlanFacts
   /// along it on the thickness map; NaN when the scene has none.
   double thicknessMin = 0.0, thicknessMean = 0.0, thicknessMax = 0.0;
   std::string ctSha256; ///< of the CT the plan was made on (its recipe)
+  std::string skinMapId; ///< the RangeMap node the plan was drawn on (RangeMapLogic::mapsOf)
 };
 
 /// The facts of @a plan in @a scene (its skin, bone and thickness maps).

@@ -37,19 +37,6 @@ SurfaceNode* surfaceNamed(const Scene& scene, const std::string& name)
   return nullptr;
 }
 
-const RangeMapNode* mapOfRole(const Scene& scene, const std::string& role)
-{
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == role)
-      return static_cast<const RangeMapNode*>(n);
-  return nullptr;
-}
-
-const RangeMapNode* skinMapOf(const Scene& scene, const PlanNode& plan)
-{
-  const auto* skin = scene.nodeAs<RangeMapNode>(plan.rangeMapId());
-  return skin ? skin : mapOfRole(scene, "skin");
-}
 
 } // namespace
 
@@ -188,8 +175,7 @@ std::string ResultsLogic::closureKey(const PlanNode& plan)
 
 ClosureJob ResultsLogic::closureJob(const PlanNode& node)
 {
-  const RangeMapNode* skinNode = skinMapOf(scene(), node);
-  const RangeMapNode* boneNode = mapOfRole(scene(), "bone");
+  const auto [skinNode, boneNode] = RangeMapLogic::mapsOf(scene(), node);
   if (!skinNode || !boneNode)
     throw std::invalid_argument("the scene has no skin and bone range maps for plan \"" + node.name() +
                                 "\": make them in the RangeMap module first");
@@ -225,7 +211,7 @@ std::optional<ClosureNumbers> ResultsLogic::computeClosure(const ClosureJob& job
 
 IncisionProfile ResultsLogic::incisionProfile(const PlanNode& node, vtkPolyData* before) const
 {
-  const RangeMapNode* skinNode = skinMapOf(scene(), node);
+  const RangeMapNode* skinNode = RangeMapLogic::mapsOf(scene(), node).skin;
   if (!skinNode)
     throw std::invalid_argument("the scene has no skin range map for plan \"" + node.name() + "\"");
   IncisionProfile profile;
@@ -409,7 +395,7 @@ vtkSmartPointer<vtkPolyData> ResultsLogic::headWithoutPatch(vtkPolyData* head, v
 
 std::optional<SnapshotNode::Camera> ResultsLogic::planCamera(const PlanNode& node, vtkPolyData* before) const
 {
-  const RangeMapNode* skinNode = skinMapOf(scene(), node);
+  const RangeMapNode* skinNode = RangeMapLogic::mapsOf(scene(), node).skin;
   if (!skinNode || !before || before->GetNumberOfPoints() == 0)
     return std::nullopt;
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);

@@ -74,6 +74,7 @@ SegmentationOutput SegmentLogic::compute(vtkImageData* ct, const Parameters& par
   SegmentationOutput out;
   out.labels = makeLabels(masks.body, masks.bone);
   out.notes = std::move(masks.notes);
+  out.thresholds = {parameters.skinThresholdHu, parameters.boneThresholdHu};
   report(progress, 0.85, "Skin surface");
   out.skinDisplay = displaySurface(masks.body);
   report(progress, 0.93, "Bone surface");
@@ -101,6 +102,7 @@ SegmentationResult SegmentLogic::addToScene(const VolumeNode& volume, Segmentati
   labels->setName(volume.name() + " skin and bone");
   labels->setImage(output.labels);
   labels->setReferenceVolumeId(volume.id());
+  labels->setThresholds(output.thresholds);
   labels->setLabels({{kBackgroundLabel, {"Background", {0.0, 0.0, 0.0}}},
                      {kSoftTissueLabel, {"Soft tissue", {0.90, 0.70, 0.55}}},
                      {kBoneLabel, {"Bone", {0.95, 0.93, 0.84}}}});

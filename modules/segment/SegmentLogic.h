@@ -12,11 +12,11 @@
 #include <vtkSmartPointer.h>
 
 #include "modules/core/Module.h"
+#include "scene/LabelMapNode.h"
 #include "segmentation/HeadSegmentation.h"
 
 namespace caps {
 
-class LabelMapNode;
 class SurfaceNode;
 class VolumeNode;
 
@@ -36,6 +36,8 @@ struct SegmentationOutput
   vtkSmartPointer<vtkPolyData> boneDisplay;
   /// What the segmentation did and found (seg::HeadMasks::notes).
   std::vector<std::string> notes;
+  /// The thresholds it was made with; addToScene() records them on the label map.
+  LabelMapNode::Thresholds thresholds;
 };
 
 /// The ids of the nodes segment() made, and the segmentation's notes.

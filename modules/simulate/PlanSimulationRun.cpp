@@ -33,14 +33,6 @@ double secondsSince(std::chrono::steady_clock::time_point start)
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-const RangeMapNode* mapOfRole(const Scene& scene, const std::string& role)
-{
-  for (Node* n : scene.nodesOfType(NodeType::RangeMap))
-    if (static_cast<const RangeMapNode*>(n)->role() == role)
-      return static_cast<const RangeMapNode*>(n);
-  return nullptr;
-}
-
 /// Reports a phase; stops the run when the user cancelled.
 void phase(const TaskProgress& progress, double fraction, const std::string& step)
 {
@@ -87,10 +79,7 @@ PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const inci
   const auto* node = scene.nodeAs<PlanNode>(planId);
   if (!node)
     throw std::invalid_argument("there is no plan to simulate: place one in the Incision module first");
-  const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(node->rangeMapId());
-  if (!skinNode)
-    skinNode = mapOfRole(scene, "skin");
-  const RangeMapNode* boneNode = mapOfRole(scene, "bone");
+  const auto [skinNode, boneNode] = RangeMapLogic::mapsOf(scene, *node);
   if (!skinNode || !boneNode)
     throw std::invalid_argument("the scene has no " + std::string(!skinNode ? "skin" : "bone") +
                                 " range map for plan \"" + node->name() +
@@ -109,8 +98,11 @@ PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const inci
   in.skin = RangeMapLogic::toRangeMap(*skinNode);
   in.bone = RangeMapLogic::toRangeMap(*boneNode);
   in.skinMapId = skinNode->id();
+  // The CT the maps were built from; maps of older scenes: the first CT.
   const auto volumes = scene.nodesOfType(NodeType::Volume);
-  if (!volumes.empty())
+  if (const auto* source = scene.nodeAs<VolumeNode>(skinNode->sourceVolumeId()))
+    in.ct = source->image();
+  else if (!volumes.empty())
     in.ct = static_cast<const VolumeNode*>(volumes.front())->image();
   in.options = options;
   for (const auto& [layer, m] : options.materials)

@@ -3,6 +3,7 @@
 // with their roles, size and axis, and the thickness matches the analytic
 // thickness between the two ellipsoids.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -14,6 +15,7 @@
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentLogic.h"
 #include "scene/LabelMapNode.h"
+#include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
@@ -194,4 +196,146 @@ TEST(RangeMapLogic, SmoothingAndBadInput)
                std::invalid_argument);
   EXPECT_THROW(caps::RangeMapLogic::compute(volume->image(), nullptr, parameters),
                std::invalid_argument);
+}
+
+namespace {
+
+// The CT's HU at a world point, trilinear (the interpolant the range-map
+// crossings are searched on), NaN outside the grid.
+double huAt(vtkImageData* ct, const Eigen::Vector3d& world)
+{
+  double index[3];
+  const double point[3] = {world.x(), world.y(), world.z()};
+  ct->TransformPhysicalPointToContinuousIndex(point, index);
+  const int* dims = ct->GetDimensions();
+  int base[3];
+  double t[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    base[a] = static_cast<int>(std::floor(index[a]));
+    t[a] = index[a] - base[a];
+    if (base[a] < 0 || base[a] + 1 >= dims[a])
+      return std::nan("");
+  }
+  double value = 0.0;
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    double weight = 1.0;
+    int ijk[3];
+    for (int a = 0; a < 3; ++a)
+    {
+      const int up = (corner >> a) & 1;
+      weight *= up ? t[a] : 1.0 - t[a];
+      ijk[a] = base[a] + up;
+    }
+    value += weight * ct->GetScalarComponentAsDouble(ijk[0], ijk[1], ijk[2], 0);
+  }
+  return value;
+}
+
+} // namespace
+
+// The skin threshold of the range maps is the one the label map was made
+// with: segmented at -700 HU, the maps built with the parameters' default
+// (-400 HU) put the skin where the CT reads -700 HU, not -400 HU.
+TEST(RangeMapLogic, CrossingsAreSearchedAtTheThresholdsTheLabelMapWasMadeWith)
+{
+  const HeadPhantom& phantom = HeadPhantom::instance();
+  caps::Scene scene;
+  auto* volume = scene.add<caps::VolumeNode>();
+  volume->setImage(phantom.images.ct);
+  caps::SegmentLogic::Parameters segmentAt;
+  segmentAt.skinThresholdHu = -700.0;
+  segmentAt.boneThresholdHu = HeadPhantom::boneThreshold;
+  const auto made = caps::SegmentLogic(scene).segment(*volume, segmentAt);
+  const auto* labels = scene.nodeAs<caps::LabelMapNode>(made.labelMapId);
+  ASSERT_TRUE(labels->thresholds().has_value());
+  EXPECT_EQ(labels->thresholds()->skinHu, -700.0);
+  EXPECT_EQ(labels->thresholds()->boneHu, HeadPhantom::boneThreshold);
+
+  caps::RangeMapLogic logic(scene);
+  caps::RangeMapLogic::Parameters parameters;
+  parameters.nTheta = 96;
+  parameters.nZ = 48;
+  ASSERT_EQ(parameters.skinThresholdHu, -400.0); // what the maps would use on their own
+  caps::RangeMapOutput output;
+  const auto result = logic.run(*volume, parameters, {}, &output);
+  EXPECT_FALSE(result.segmented);
+  EXPECT_EQ(result.labelMapId, labels->id());
+  const auto* skinNode = scene.nodeAs<caps::RangeMapNode>(result.skinId);
+  EXPECT_EQ(skinNode->sourceLabelMapId(), labels->id());
+  EXPECT_EQ(skinNode->sourceVolumeId(), volume->id());
+
+  // The HU at the skin points, away from the poles the rays graze.
+  std::vector<double> hu;
+  for (int j = 0; j < output.skin.nZ(); ++j)
+    for (int i = 0; i < output.skin.nTheta(); ++i)
+    {
+      const Eigen::Vector3d p = output.skin.surfacePoint(i, j);
+      if (std::isfinite(output.skin.at(i, j)) && std::abs(p.z() - phantom.centre.z()) < 60.0)
+        if (const double v = huAt(volume->image(), p); std::isfinite(v))
+          hu.push_back(v);
+    }
+  ASSERT_GT(hu.size(), 1000u);
+  std::nth_element(hu.begin(), hu.begin() + hu.size() / 2, hu.end());
+  const double median = hu[hu.size() / 2];
+  EXPECT_NEAR(median, -700.0, 10.0);
+  // And not at the parameters' own threshold: the two lie 300 HU apart.
+  EXPECT_GT(std::abs(median + 400.0), 250.0);
+}
+
+// After the maps are rebuilt, a plan drawn on the old ones is predicted on
+// the new skin and bone maps together, whichever logic rebuilt them, and
+// never on a skin map of one run with the bone map of another.
+TEST(RangeMapLogic, APlanAfterTheMapsAreRebuiltUsesTheNewSkinAndBoneTogether)
+{
+  const HeadPhantom& phantom = HeadPhantom::instance();
+  caps::Scene scene;
+  auto* volume = scene.add<caps::VolumeNode>();
+  volume->setImage(phantom.images.ct);
+  caps::SegmentLogic::Parameters p;
+  p.skinThresholdHu = HeadPhantom::skinThreshold;
+  p.boneThresholdHu = HeadPhantom::boneThreshold;
+  caps::SegmentLogic(scene).segment(*volume, p);
+  caps::RangeMapLogic::Parameters coarse;
+  coarse.nTheta = 48;
+  coarse.nZ = 24;
+  const auto first = caps::RangeMapLogic(scene).run(*volume, coarse);
+  auto* plan = scene.add<caps::PlanNode>();
+  plan->setRangeMapId(first.skinId);
+  ASSERT_EQ(caps::RangeMapLogic::mapsOf(scene, *plan).bone->id(), first.boneId);
+
+  // Rebuilt finer by another logic (as `caps rangemap` on a saved scene).
+  caps::RangeMapLogic::Parameters fine = coarse;
+  fine.nTheta = 64;
+  fine.nZ = 32;
+  const auto second = caps::RangeMapLogic(scene).run(*volume, fine);
+  EXPECT_EQ(scene.nodeAs<caps::RangeMapNode>(first.skinId), nullptr);
+  EXPECT_EQ(scene.nodeAs<caps::RangeMapNode>(first.boneId), nullptr);
+  EXPECT_EQ(scene.nodesOfType(caps::NodeType::RangeMap).size(), 4u);
+  EXPECT_EQ(plan->rangeMapId(), second.skinId);
+  auto maps = caps::RangeMapLogic::mapsOf(scene, *plan);
+  ASSERT_NE(maps.skin, nullptr);
+  ASSERT_NE(maps.bone, nullptr);
+  EXPECT_EQ(maps.skin->id(), second.skinId);
+  EXPECT_EQ(maps.bone->id(), second.boneId);
+  EXPECT_EQ(maps.bone->values().rows(), 64);
+  EXPECT_EQ(caps::RangeMapLogic::builtWith(scene, *maps.skin, "thickness")->id(), second.thicknessId);
+
+  // A newer bone map of another run (a map added by hand, another CT's)
+  // does not pair with the plan's skin map; the newest pair of the scene is
+  // the newest skin with the bone built with it.
+  auto* stray = scene.add<caps::RangeMapNode>();
+  stray->setRole("bone");
+  stray->setValues(Eigen::MatrixXf::Constant(8, 4, 50.0f));
+  stray->setSkinMapId("RangeMap999");
+  maps = caps::RangeMapLogic::mapsOf(scene, *plan);
+  EXPECT_EQ(maps.bone->id(), second.boneId);
+  EXPECT_EQ(caps::RangeMapLogic::newestMaps(scene).bone->id(), second.boneId);
+
+  // A plan whose map is gone is drawn on the newest skin map and its bone.
+  plan->setRangeMapId("RangeMap12345");
+  maps = caps::RangeMapLogic::mapsOf(scene, *plan);
+  EXPECT_EQ(maps.skin->id(), second.skinId);
+  EXPECT_EQ(maps.bone->id(), second.boneId);
 }

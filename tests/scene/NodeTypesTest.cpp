@@ -83,10 +83,28 @@ TEST(NodeTypes, LabelMapRoundTripKeepsTableAndGeometry) {
   l.setLabels({{1, {"skin", {1.0, 0.8, 0.7}}}, {2, {"bone", {0.95, 0.95, 0.9}}}});
   l.setLabel(3, {"cartilage", {0.2, 0.4, 0.9}});
   EXPECT_EQ(l.labels().size(), 3u);
+  EXPECT_FALSE(l.thresholds().has_value());
+  EXPECT_FALSE(roundTrip(l, tmp.path())->thresholds().has_value());
+  l.setThresholds(LabelMapNode::Thresholds{-312.5, 275.0});
   auto copy = roundTrip(l, tmp.path());
   EXPECT_EQ(copy->referenceVolumeId(), "Volume1");
   EXPECT_EQ(copy->labels(), l.labels());
+  ASSERT_TRUE(copy->thresholds().has_value());
+  EXPECT_EQ(*copy->thresholds(), (LabelMapNode::Thresholds{-312.5, 275.0}));
   test::expectSameImage(l.image(), copy->image());
+}
+
+TEST(NodeTypes, LabelMapRefusesThresholdsWithTheBoneBelowTheSkin) {
+  LabelMapNode l;
+  nlohmann::json j = l.toJson();
+  j["thresholdsHu"] = {{"skin", 300.0}, {"bone", -400.0}};
+  LabelMapNode read;
+  try {
+    read.fromJson(j);
+    FAIL() << "swapped thresholds were accepted";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("segment again"), std::string::npos) << e.what();
+  }
 }
 
 TEST(NodeTypes, LabelMapRejectsNonByteImages) {
@@ -146,6 +164,9 @@ TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame) {
   r.setRole("bone");
   r.setAxis({1.0, -2.0, 3.0}, {0.0, 0.0, 2.0});
   r.setZRange(-60.0, 90.0);
+  r.setSourceVolumeId("Volume2");
+  r.setSourceLabelMapId("LabelMap3");
+  r.setSkinMapId("RangeMap7");
   EXPECT_EQ(r.axisDirection(), Eigen::Vector3d::UnitZ());  // normalised
   EXPECT_DOUBLE_EQ(r.thetaAt(0), -M_PI);
   EXPECT_DOUBLE_EQ(r.thetaAt(9), -M_PI / 2);  // front of the face
@@ -156,6 +177,9 @@ TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame) {
   EXPECT_EQ(copy->axisDirection(), Eigen::Vector3d::UnitZ());
   EXPECT_EQ(copy->zMin(), -60.0);
   EXPECT_EQ(copy->zMax(), 90.0);
+  EXPECT_EQ(copy->sourceVolumeId(), "Volume2");
+  EXPECT_EQ(copy->sourceLabelMapId(), "LabelMap3");
+  EXPECT_EQ(copy->skinMapId(), "RangeMap7");
   ASSERT_EQ(copy->values().rows(), 36);
   ASSERT_EQ(copy->values().cols(), 7);
   EXPECT_TRUE(std::isnan(copy->values()(3, 4)));
