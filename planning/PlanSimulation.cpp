@@ -282,245 +282,319 @@ SimulationCancelled::SimulationCancelled() : std::runtime_error("the simulation 
 
 namespace {
 
-/// simulatePlan(), or with @a meshOnly its meshes only (meshPlan()).
-PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
-                               const SimulationOptions& options, bool meshOnly)
+/// The plan's model from the cut to the closure (thesis §4.5), one step per
+/// method: run() is the table of contents. simulatePlan() runs every step;
+/// meshPlan() stops after the meshes.
+class PlanModel
 {
-  // Between phases only: a phase, once started, runs to its end.
-  auto phase = [&options](double fraction, const std::string& step) {
-    if (options.progress && !options.progress(fraction, step))
-      throw SimulationCancelled();
-  };
-  checkOptions(options);
-  if (skin.empty())
-    throw std::invalid_argument("the skin range map is empty: build it from the CT first");
-  if (plan.pointCount() < 2)
-    throw std::invalid_argument("the plan has no cut (fewer than two cut points)");
-  if (!options.layerFractions.empty() && int(options.layerFractions.size()) != options.layerCount)
-    throw std::invalid_argument("simulation options: one layer fraction per layer is needed");
-  const seg::CylindricalFrame& frame = skin.frame();
-  const bool haveBone = !bone.empty();
-  if (options.boneSmoothingPasses < 0)
-    throw std::invalid_argument("the bone smoothing passes must be 0 or more");
-  if (haveBone && ((bone.frame().origin() - frame.origin()).norm() > 1e-6 ||
-                   (bone.frame().direction() - frame.direction()).norm() > 1e-9))
-    throw std::invalid_argument("the bone range map is on another cylinder axis than the skin map: "
-                                "build both on the same frame");
-
-  const SkinChart chart = plan.chart(skin); // throws when the centre is off the skin
-  checkPlan(plan, skin);
-
-  PlanPrediction out;
-  phase(0.0, "Surface mesh around the plan");
-  const auto meshStart = std::chrono::steady_clock::now();
-
-  // 1. The hole, refined to the element size consistently with the sutures.
-  RefinedHole refined = refineHole(plan.chartPath(chart), plan.borderOffsets(), plan.sutures(), options.elementSize);
-  out.hole = refined.hole;
-  out.sutures = refined.sutures;
-  out.refinedVertexOf = refined.refinedVertexOf;
-
-  // 2. The surface mesh in the chart (§4.5.1), inside the scanned z range.
-  fem::SurfaceMesherOptions surfaceOptions;
-  surfaceOptions.firstLayerThickness = options.elementSize;
-  surfaceOptions.layerGrowth = options.layerGrowth;
-  surfaceOptions.regionRadius = options.regionRadius;
-  // The chart bounds: where the scan ends across the plan's width. A CT
-  // often cuts the head (the top slice, the neck), leaving rows at the ends
-  // of the frame with no or only part of the skin; the region stops at the
-  // first fully measured row from each end. Holes further in are not an end
-  // of the scan: the checks below name them.
+public:
+  PlanModel(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+            const SimulationOptions& options)
+    : skin_(skin), bone_(bone), plan_(plan), options_(options), chart_(checkedChart(skin, bone, plan, options))
   {
+  }
+
+  PlanPrediction run(bool meshOnly)
+  {
+    phase(0.0, "Surface mesh around the plan");
+    const auto meshStart = std::chrono::steady_clock::now();
+    refineTheCut();
+    meshTheSkin();
+    phase(0.1, "Continuum mesh from the skin to the bone");
+    meshTheTissue();
+    out_.times.mesh = secondsSince(meshStart);
+    checkTheThesisCounts();
+    if (meshOnly)
+      return std::move(out_);
+    phase(0.2, "Assembly and factorisation (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
+    fem::AssemblyOptions assembly;
+    assembly.threads = options_.threads;
+    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, layerMaterials(), out_.continuum.constraints(), assembly);
+    factor(analysis);
+    phase(0.8, "Solve");
+    solve(analysis);
+    phase(0.9, "Closure forces");
+    closureForces();
+    skinForTheDisplay();
+    zPlastyGain();
+    return std::move(out_);
+  }
+
+private:
+  /// The plan's chart on the skin, after checking the inputs (throws naming
+  /// what is wrong: options, an empty map, no cut, maps on other axes).
+  static SkinChart checkedChart(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
+                                const SimulationOptions& options)
+  {
+    checkOptions(options);
+    if (skin.empty())
+      throw std::invalid_argument("the skin range map is empty: build it from the CT first");
+    if (plan.pointCount() < 2)
+      throw std::invalid_argument("the plan has no cut (fewer than two cut points)");
+    if (!options.layerFractions.empty() && int(options.layerFractions.size()) != options.layerCount)
+      throw std::invalid_argument("simulation options: one layer fraction per layer is needed");
+    const seg::CylindricalFrame& frame = skin.frame();
+    if (options.boneSmoothingPasses < 0)
+      throw std::invalid_argument("the bone smoothing passes must be 0 or more");
+    if (!bone.empty() && ((bone.frame().origin() - frame.origin()).norm() > 1e-6 ||
+                          (bone.frame().direction() - frame.direction()).norm() > 1e-9))
+      throw std::invalid_argument("the bone range map is on another cylinder axis than the skin map: "
+                                  "build both on the same frame");
+    SkinChart chart = plan.chart(skin); // throws when the centre is off the skin
+    checkPlan(plan, skin);
+    return chart;
+  }
+
+  /// Between steps only: a step, once started, runs to its end.
+  void phase(double fraction, const std::string& step) const
+  {
+    if (options_.progress && !options_.progress(fraction, step))
+      throw SimulationCancelled();
+  }
+
+  /// 1. The hole, refined to the element size consistently with the sutures.
+  void refineTheCut()
+  {
+    refined_ = refineHole(plan_.chartPath(chart_), plan_.borderOffsets(), plan_.sutures(), options_.elementSize);
+    out_.hole = refined_.hole;
+    out_.sutures = refined_.sutures;
+    out_.refinedVertexOf = refined_.refinedVertexOf;
+  }
+
+  /// 2. The surface mesh in the chart (§4.5.1), inside the scanned z range,
+  /// with measured skin under every vertex and edge midpoint.
+  void meshTheSkin()
+  {
+    fem::SurfaceMesherOptions surfaceOptions;
+    surfaceOptions.firstLayerThickness = options_.elementSize;
+    surfaceOptions.layerGrowth = options_.layerGrowth;
+    surfaceOptions.regionRadius = options_.regionRadius;
+    const auto [vMin, vMax] = scannedRows();
+    surfaceOptions.vMin = vMin;
+    surfaceOptions.vMax = vMax;
+    surfaceOptions.minPointSpacing = std::min(1.0, 0.4 * options_.elementSize);
+    out_.surface = fem::meshAroundHole(out_.hole, surfaceOptions);
+    if (!out_.surface.quality.valid())
+    {
+      std::string message = "the surface mesh around the plan is not valid:";
+      for (const auto& p : out_.surface.quality.problems)
+        message += "\n  " + p;
+      throw std::runtime_error(message);
+    }
+    const fem::SurfaceMesh& surface = out_.surface.mesh;
+    auto checkSkin = [&](const ChartPoint& c) {
+      if (!chart_.lift(c).allFinite())
+        throw std::invalid_argument("the skin map has no surface under the meshed region at " + where(chart_, c) +
+                                    " (a hole in the map or beyond the scan): reduce the region radius or move the plan");
+    };
+    for (const auto& v : surface.vertices)
+      checkSkin(v);
+    for (const auto& polygon : surface.polygons)
+      for (std::size_t i = 0; i < polygon.size(); ++i)
+        checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
+  }
+
+  /// The chart's v bounds: where the scan ends across the plan's width. A CT
+  /// often cuts the head (the top slice, the neck), leaving rows at the ends
+  /// of the frame with no or only part of the skin; the region stops at the
+  /// first fully measured row from each end. Holes further in are not an end
+  /// of the scan: meshTheSkin() names them.
+  std::pair<double, double> scannedRows() const
+  {
+    const seg::CylindricalFrame& frame = skin_.frame();
     double extent = 0.0;
-    for (const auto& p : out.hole.points)
+    for (const auto& p : out_.hole.points)
       extent = std::max(extent, std::abs(p.x()));
-    const double halfWidth = std::min(pi, (extent + options.regionRadius + options.elementSize) / chart.radius());
-    const double ic = frame.thetaToIndex(chart.centreTheta()), di = halfWidth / (2 * pi) * frame.nTheta();
+    const double halfWidth = std::min(pi, (extent + options_.regionRadius + options_.elementSize) / chart_.radius());
+    const double ic = frame.thetaToIndex(chart_.centreTheta()), di = halfWidth / (2 * pi) * frame.nTheta();
     const int i0 = int(std::floor(ic - di)), i1 = int(std::ceil(ic + di));
     auto rowMeasured = [&](int j) {
       for (int i = i0; i <= i1; ++i)
-        if (!std::isfinite(skin.at(((i % frame.nTheta()) + frame.nTheta()) % frame.nTheta(), j)))
+        if (!std::isfinite(skin_.at(((i % frame.nTheta()) + frame.nTheta()) % frame.nTheta(), j)))
           return false;
       return true;
     };
-    const double jc = frame.zToIndex(chart.centreZ());
+    const double jc = frame.zToIndex(chart_.centreZ());
     int top = frame.nZ() - 1, bottom = 0;
     while (top > jc && !rowMeasured(top))
       --top;
     while (bottom < jc && !rowMeasured(bottom))
       ++bottom;
-    surfaceOptions.vMin = frame.indexToZ(bottom) - chart.centreZ();
-    surfaceOptions.vMax = frame.indexToZ(top) - chart.centreZ();
+    return {frame.indexToZ(bottom) - chart_.centreZ(), frame.indexToZ(top) - chart_.centreZ()};
   }
-  surfaceOptions.minPointSpacing = std::min(1.0, 0.4 * options.elementSize);
-  out.surface = fem::meshAroundHole(out.hole, surfaceOptions);
-  if (!out.surface.quality.valid())
+
+  /// 3. Skin to bone (§4.5.2), along the ray towards the axis, with the
+  /// undermined band and regions, and the excised tissue.
+  void meshTheTissue()
   {
-    std::string message = "the surface mesh around the plan is not valid:";
-    for (const auto& p : out.surface.quality.problems)
-      message += "\n  " + p;
-    throw std::runtime_error(message);
+    const fem::SurfaceMesh& surface = out_.surface.mesh;
+    const seg::RangeMap boneForDepth =
+      bone_.empty() ? seg::RangeMap()
+                    : boneForTissueDepth(skin_, bone_, options_.noBoneDepth, options_.boneSmoothingPasses);
+    const fem::TissueGeometry geometry = skinToBoneGeometry(chart_, skin_, boneForDepth);
+    fem::ContinuumMeshOptions continuumOptions = options_.continuumMeshOptions();
+    continuumOptions.rim = options_.rim;
+    continuumOptions.cutLayers = options_.cutLayers;
+    out_.underminedVertices = fem::underminingBand(surface, out_.sutures, options_.underminingWidth);
+    addUnderminedRegions(surface, plan_, chart_, out_.underminedVertices); // and the plan's regions (Undermining.h)
+    continuumOptions.underminedVertices = out_.underminedVertices;
+    out_.continuum = fem::meshContinuum(surface, out_.sutures, geometry, continuumOptions);
+    out_.excisedTissue = fem::meshExcisedTissue(surface, geometry, continuumOptions);
+    out_.excisedVolume = fem::meshVolume(out_.excisedTissue.mesh);
+    out_.layerCount = options_.layerCount;
+    out_.cutLayers = options_.cutLayers == 0 ? options_.layerCount : options_.cutLayers;
   }
-  const fem::SurfaceMesh& surface = out.surface.mesh;
 
-  // Measured skin under every vertex and edge midpoint of the region.
-  auto checkSkin = [&](const ChartPoint& c) {
-    if (!chart.lift(c).allFinite())
-      throw std::invalid_argument("the skin map has no surface under the meshed region at " + where(chart, c) +
-                                  " (a hole in the map or beyond the scan): reduce the region radius or move the plan");
-  };
-  for (const auto& v : surface.vertices)
-    checkSkin(v);
-  for (const auto& polygon : surface.polygons)
-    for (std::size_t i = 0; i < polygon.size(); ++i)
-      checkSkin(0.5 * (surface.vertices[polygon[i]] + surface.vertices[polygon[(i + 1) % polygon.size()]]));
-
-  phase(0.1, "Continuum mesh from the skin to the bone");
-  const seg::RangeMap boneForDepth =
-    haveBone ? boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses) : seg::RangeMap();
-  // 3. Skin to bone (§4.5.2): along the ray towards the axis.
-  const fem::TissueGeometry geometry = skinToBoneGeometry(chart, skin, boneForDepth);
-  fem::ContinuumMeshOptions continuumOptions = options.continuumMeshOptions();
-  continuumOptions.rim = options.rim;
-  continuumOptions.cutLayers = options.cutLayers;
-  out.underminedVertices = fem::underminingBand(surface, out.sutures, options.underminingWidth);
-  addUnderminedRegions(surface, plan, chart, out.underminedVertices); // and the plan's regions (Undermining.h)
-  continuumOptions.underminedVertices = out.underminedVertices;
-  out.continuum = fem::meshContinuum(surface, out.sutures, geometry, continuumOptions);
-  out.excisedTissue = fem::meshExcisedTissue(surface, geometry, continuumOptions);
-  out.excisedVolume = fem::meshVolume(out.excisedTissue.mesh);
-  out.layerCount = options.layerCount;
-  out.cutLayers = options.cutLayers == 0 ? options.layerCount : options.cutLayers;
-  out.times.mesh = secondsSince(meshStart);
-
-  // The thesis's counts (§4.5.2), for a cut through every layer (a partial
-  // one shares nodes and adds the hole's floor).
-  if (options.cutLayers == 0 || options.cutLayers == options.layerCount)
+  /// The thesis's counts (§4.5.2), for a cut through every layer (a partial
+  /// one shares nodes and adds the hole's floor).
+  void checkTheThesisCounts() const
   {
+    if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
+      return;
+    const fem::SurfaceMesh& surface = out_.surface.mesh;
     const Eigen::Index nv = Eigen::Index(surface.vertices.size());
-    const Eigen::Index ne = Eigen::Index(out.continuum.edges.size());
-    const Eigen::Index nl = options.layerCount;
+    const Eigen::Index ne = Eigen::Index(out_.continuum.edges.size());
+    const Eigen::Index nl = options_.layerCount;
     const Eigen::Index np = Eigen::Index(surface.polygons.size());
-    if (out.continuum.mesh.nodeCount() != nl * (2 * nv + ne) + nv + ne ||
-        Eigen::Index(out.continuum.mesh.elements.size()) != nl * np)
+    if (out_.continuum.mesh.nodeCount() != nl * (2 * nv + ne) + nv + ne ||
+        Eigen::Index(out_.continuum.mesh.elements.size()) != nl * np)
       throw std::runtime_error("the continuum mesh does not have N_l(2N_v + N_e) + N_v + N_e nodes and N_l N_p "
                                "elements (§4.5.2): a mesher bug");
   }
 
-  if (meshOnly)
-    return out;
-
-  // 4. Materials, constraints, solve.
+  /// 4. The material of every layer (checked: one for each).
+  const fem::MaterialTable& layerMaterials()
   {
-    std::string step = "Assembly and factorisation (";
-    step += std::to_string(out.continuum.mesh.dofCount());
-    step += " DOF)";
-    phase(0.2, step);
+    out_.materials = options_.layerMaterials();
+    for (int layer = 0; layer < options_.layerCount; ++layer)
+      if (!out_.materials.count(layer))
+        throw std::invalid_argument("simulation options: no material for layer " + std::to_string(layer));
+    return out_.materials;
   }
-  out.materials = options.layerMaterials();
-  for (int layer = 0; layer < options.layerCount; ++layer)
-    if (!out.materials.count(layer))
-      throw std::invalid_argument("simulation options: no material for layer " + std::to_string(layer));
-  fem::AssemblyOptions assembly;
-  assembly.threads = options.threads;
-  fem::LinearStaticAnalysis analysis(out.continuum.mesh, out.materials, out.continuum.constraints(), assembly);
-  const auto prepareStart = std::chrono::steady_clock::now();
-  const fem::SolverStatus status = analysis.prepare();
-  const double prepareWall = secondsSince(prepareStart);
-  if (status != fem::SolverStatus::Success)
-    throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
-  phase(0.8, "Solve");
-  out.displacements = analysis.solve(fem::LoadCase{});
-  out.times.assemble = analysis.times().assemble + analysis.times().constrain;
-  out.times.factor = std::max(0.0, prepareWall - out.times.assemble);
-  out.times.solve = analysis.times().solve;
-  out.dofCount = out.continuum.mesh.dofCount();
-  out.reducedDofCount = analysis.constraintMap().reducedCount();
-  if (!out.displacements.allFinite())
-    throw std::runtime_error("the solve of the plan gave non-finite displacements");
-  out.nodalForces = analysis.internalForces(out.displacements);
 
-  phase(0.9, "Closure forces");
-  // 5. Closure forces: no load acts on the model, so K U at a sutured node is
-  // what its suture pulls with, and at a fixed node what the bone holds.
-  ClosureForces& closure = out.closure;
-  for (const fem::Suture& s : out.continuum.sutures)
+  /// 5. The model with its constraints, assembled and factored.
+  void factor(fem::LinearStaticAnalysis& analysis)
   {
-    const Eigen::Vector3d f = out.nodalForces.segment<3>(3 * Eigen::Index(s.node));
-    closure.sutures.push_back({s.node, s.target, f});
-    closure.magnitudeSum += f.norm();
-    closure.largest = std::max(closure.largest, f.norm());
+    const auto prepareStart = std::chrono::steady_clock::now();
+    const fem::SolverStatus status = analysis.prepare();
+    prepareWall_ = secondsSince(prepareStart);
+    if (status != fem::SolverStatus::Success)
+      throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
   }
-  for (int node : out.continuum.fixedNodes)
-    closure.supportReaction += out.nodalForces.segment<3>(3 * Eigen::Index(node));
+
+  /// 6. The displacements and the nodal forces K U.
+  void solve(fem::LinearStaticAnalysis& analysis)
   {
-    // The refined sub-pairs of each plan pair follow one another in
-    // out.sutures (refineHole()), as many as its segment's pieces.
-    const int n = plan.pointCount();
-    std::size_t first = 0;
-    for (const fem::SutureEdgePair& pair : plan.sutures())
+    out_.displacements = analysis.solve(fem::LoadCase{});
+    out_.times.assemble = analysis.times().assemble + analysis.times().constrain;
+    out_.times.factor = std::max(0.0, prepareWall_ - out_.times.assemble);
+    out_.times.solve = analysis.times().solve;
+    out_.dofCount = out_.continuum.mesh.dofCount();
+    out_.reducedDofCount = analysis.constraintMap().reducedCount();
+    if (!out_.displacements.allFinite())
+      throw std::runtime_error("the solve of the plan gave non-finite displacements");
+    out_.nodalForces = analysis.internalForces(out_.displacements);
+  }
+
+  /// 7. Closure forces: no load acts on the model, so K U at a sutured node
+  /// is what its suture pulls with, and at a fixed node what the bone holds;
+  /// summed per sutured pair of the plan.
+  void closureForces()
+  {
+    ClosureForces& closure = out_.closure;
+    for (const fem::Suture& s : out_.continuum.sutures)
     {
-      const int pieces = refined.piecesPerSegment[segmentOfEdge(pair.a[0], pair.a[1], n)];
-      std::vector<char> alongPair(std::size_t(out.continuum.mesh.nodeCount()), 0);
-      for (std::size_t k = first; k < first + std::size_t(pieces) && k < out.sutures.size(); ++k)
-        for (const auto& e : {out.sutures[k].a, out.sutures[k].b})
-        {
-          for (int v : e)
-            for (int node : out.continuum.vertexColumns[v])
-              alongPair[node] = 1;
-          const int edge = out.continuum.edgeIndex(e[0], e[1]);
-          if (edge >= 0)
-            for (int node : out.continuum.edgeColumns[edge])
-              alongPair[node] = 1;
-        }
+      const Eigen::Vector3d f = out_.nodalForces.segment<3>(3 * Eigen::Index(s.node));
+      closure.sutures.push_back({s.node, s.target, f});
+      closure.magnitudeSum += f.norm();
+      closure.largest = std::max(closure.largest, f.norm());
+    }
+    for (int node : out_.continuum.fixedNodes)
+      closure.supportReaction += out_.nodalForces.segment<3>(3 * Eigen::Index(node));
+    // The refined sub-pairs of each plan pair follow one another in
+    // out_.sutures (refineHole()), as many as its segment's pieces.
+    const int n = plan_.pointCount();
+    std::size_t first = 0;
+    for (const fem::SutureEdgePair& pair : plan_.sutures())
+    {
+      const int pieces = refined_.piecesPerSegment[segmentOfEdge(pair.a[0], pair.a[1], n)];
+      closure.edges.push_back(forceAlong(pair, first, pieces));
       first += std::size_t(pieces);
-      SuturedEdgeForce edgeForce;
-      edgeForce.edges = pair;
-      for (const SutureForce& f : closure.sutures)
-        if (alongPair[f.node])
-        {
-          ++edgeForce.sutureCount;
-          edgeForce.resultant += f.force;
-          edgeForce.magnitudeSum += f.force.norm();
-        }
-      edgeForce.resultantMagnitude = edgeForce.resultant.norm();
-      closure.edges.push_back(edgeForce);
     }
   }
 
-  // 6. What the display and the report need.
-  for (const auto& s : out.continuum.sutures)
+  /// The suture forces at the nodes along the refined sub-pairs
+  /// [first, first + pieces) of the plan's pair @a pair.
+  SuturedEdgeForce forceAlong(const fem::SutureEdgePair& pair, std::size_t first, int pieces) const
   {
-    const auto& x = out.continuum.mesh.nodes;
-    out.maxSutureGapBefore = std::max(out.maxSutureGapBefore, (x.col(s.node) - x.col(s.target)).norm());
-    out.maxSutureGap = std::max(out.maxSutureGap, (out.displacedNode(s.node) - out.displacedNode(s.target)).norm());
-  }
-  DisplacedSkin& top = out.skin;
-  top.chart = surface.vertices;
-  top.polygons = surface.polygons;
-  top.holeVertexCount = surface.holeVertexCount;
-  for (std::size_t v = 0; v < surface.vertices.size(); ++v)
-  {
-    const int node = out.continuum.vertexColumns[v].front();
-    top.nodes.push_back(node);
-    top.original.push_back(out.continuum.mesh.nodes.col(node));
-    top.displaced.push_back(out.displacedNode(node));
+    std::vector<char> alongPair(std::size_t(out_.continuum.mesh.nodeCount()), 0);
+    for (std::size_t k = first; k < first + std::size_t(pieces) && k < out_.sutures.size(); ++k)
+      for (const auto& e : {out_.sutures[k].a, out_.sutures[k].b})
+      {
+        for (int v : e)
+          for (int node : out_.continuum.vertexColumns[v])
+            alongPair[node] = 1;
+        const int edge = out_.continuum.edgeIndex(e[0], e[1]);
+        if (edge >= 0)
+          for (int node : out_.continuum.edgeColumns[edge])
+            alongPair[node] = 1;
+      }
+    SuturedEdgeForce edgeForce;
+    edgeForce.edges = pair;
+    for (const SutureForce& f : out_.closure.sutures)
+      if (alongPair[f.node])
+      {
+        ++edgeForce.sutureCount;
+        edgeForce.resultant += f.force;
+        edgeForce.magnitudeSum += f.force.norm();
+      }
+    edgeForce.resultantMagnitude = edgeForce.resultant.norm();
+    return edgeForce;
   }
 
-  // 7. Z-plasty (§2.1, Fig. 2.2). Each end of the central limb has two
-  // copies on the border: one is a flap tip, carried by the sutures to a limb
-  // tip, where it ends on the new central limb across the axis; the other is
-  // the corner the other flap pivots about (a shared vertex of a suture pair,
-  // corner rule) and stays in the surrounding skin. The lengthening along the
-  // old central axis is the change of distance between those pivot copies
-  // (ideally from the short diagonal to the long one of the Z's
-  // parallelogram, zPlastyGeometricGain()); that is what is measured here.
-  if (plan.generator() == "z" || plan.generator() == "multiple-z")
+  /// 8. What the display and the report need: the suture gaps and the skin
+  /// before and after.
+  void skinForTheDisplay()
   {
-    const std::array<int, 2> tips = zPlastyFlapTips(plan);
-    const int n = plan.pointCount();
+    for (const auto& s : out_.continuum.sutures)
+    {
+      const auto& x = out_.continuum.mesh.nodes;
+      out_.maxSutureGapBefore = std::max(out_.maxSutureGapBefore, (x.col(s.node) - x.col(s.target)).norm());
+      out_.maxSutureGap =
+        std::max(out_.maxSutureGap, (out_.displacedNode(s.node) - out_.displacedNode(s.target)).norm());
+    }
+    const fem::SurfaceMesh& surface = out_.surface.mesh;
+    DisplacedSkin& top = out_.skin;
+    top.chart = surface.vertices;
+    top.polygons = surface.polygons;
+    top.holeVertexCount = surface.holeVertexCount;
+    for (std::size_t v = 0; v < surface.vertices.size(); ++v)
+    {
+      const int node = out_.continuum.vertexColumns[v].front();
+      top.nodes.push_back(node);
+      top.original.push_back(out_.continuum.mesh.nodes.col(node));
+      top.displaced.push_back(out_.displacedNode(node));
+    }
+  }
+
+  /// 9. Z-plasty (§2.1, Fig. 2.2). Each end of the central limb has two
+  /// copies on the border: one is a flap tip, carried by the sutures to a
+  /// limb tip, where it ends on the new central limb across the axis; the
+  /// other is the corner the other flap pivots about (a shared vertex of a
+  /// suture pair, corner rule) and stays in the surrounding skin. The
+  /// lengthening along the old central axis is the change of distance
+  /// between those pivot copies (ideally from the short diagonal to the long
+  /// one of the Z's parallelogram, zPlastyGeometricGain()); that is what is
+  /// measured here.
+  void zPlastyGain()
+  {
+    if (plan_.generator() != "z" && plan_.generator() != "multiple-z")
+      return;
+    const DisplacedSkin& top = out_.skin;
+    const std::array<int, 2> tips = zPlastyFlapTips(plan_);
+    const int n = plan_.pointCount();
     std::vector<bool> corner(holeLoopSize(n), false);
-    for (const auto& s : plan.sutures())
+    for (const auto& s : plan_.sutures())
     {
       if (s.a[0] == s.b[0])
         corner[s.a[0]] = true;
@@ -531,7 +605,7 @@ PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& b
     for (int t = 0; t < 2; ++t)
     {
       const int left = tips[t], right = rightSideVertex(tips[t], n);
-      const int l = out.refinedVertexOf[left], r = out.refinedVertexOf[right];
+      const int l = out_.refinedVertexOf[left], r = out_.refinedVertexOf[right];
       int v = (top.displaced[l] - top.original[l]).norm() <= (top.displaced[r] - top.original[r]).norm() ? l : r;
       if (corner[left] != corner[right])
         v = corner[left] ? l : r;
@@ -539,19 +613,27 @@ PlanPrediction runPlanPipeline(const seg::RangeMap& skin, const seg::RangeMap& b
       after[t] = top.displaced[v];
     }
     ZPlastyPrediction z;
-    z.predicted = zPlastyPredictedGain(before, after, centralAxis(plan, skin));
-    const auto angle = plan.parameters().find("limb_angle");
-    if (angle != plan.parameters().end())
+    z.predicted = zPlastyPredictedGain(before, after, centralAxis(plan_, skin_));
+    const auto angle = plan_.parameters().find("limb_angle");
+    if (angle != plan_.parameters().end())
     {
       z.limbAngle = angle->second;
       z.geometric = zPlastyGeometricGain(z.limbAngle);
       if (z.limbAngle >= 30.0 * pi / 180.0 - 1e-12 && z.limbAngle <= 90.0 * pi / 180.0 + 1e-12)
         z.theoretical = zPlastyTheoreticalGain(std::clamp(z.limbAngle, 30.0 * pi / 180.0, 90.0 * pi / 180.0));
     }
-    out.zPlasty = z;
+    out_.zPlasty = z;
   }
-  return out;
-}
+
+  const seg::RangeMap& skin_;
+  const seg::RangeMap& bone_;
+  const IncisionPlan& plan_;
+  const SimulationOptions& options_;
+  const SkinChart chart_;
+  RefinedHole refined_;
+  double prepareWall_ = 0.0;
+  PlanPrediction out_;
+};
 
 } // namespace
 
@@ -568,13 +650,13 @@ std::string materialProblem(double youngsModulusMPa, double poissonRatio)
 PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                             const SimulationOptions& options)
 {
-  return runPlanPipeline(skin, bone, plan, options, false);
+  return PlanModel(skin, bone, plan, options).run(false);
 }
 
 PlanPrediction meshPlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                         const SimulationOptions& options)
 {
-  return runPlanPipeline(skin, bone, plan, options, true);
+  return PlanModel(skin, bone, plan, options).run(true);
 }
 
 } // namespace caps::incision
