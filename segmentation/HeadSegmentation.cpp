@@ -325,10 +325,7 @@ std::string formatVolume(double mm3)
   return s.str();
 }
 
-} // namespace
-
-HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters,
-                      const ProgressCallback& progress)
+void checkSegmentationInputs(vtkImageData* ct, const SegmentationParameters& parameters)
 {
   if (!ct || ct->GetNumberOfPoints() == 0 || !ct->GetPointData()->GetScalars())
     throw std::invalid_argument("The CT volume is empty: there is nothing to segment.");
@@ -340,246 +337,305 @@ HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters
       parameters.minBoneIslandMm3 < 0 || parameters.maxBoneHoleMm3 < 0 ||
       parameters.maxReattachedPieceMm3 < 0)
     throw std::invalid_argument("Segmentation radii and volumes must not be negative.");
+}
 
-  const Reporter reporter(progress);
+/// The CT's voxel grid, as the steps below need it.
+struct CtGrid
+{
+  explicit CtGrid(vtkImageData* ct)
+    : count(static_cast<std::size_t>(ct->GetNumberOfPoints())), data(ct->GetScalarPointer()),
+      scalarType(ct->GetScalarType())
+  {
+    ct->GetDimensions(dims);
+    ct->GetSpacing(spacing);
+    voxelMm3 = std::abs(spacing[0] * spacing[1] * spacing[2]);
+  }
   int dims[3];
   double spacing[3];
-  ct->GetDimensions(dims);
-  ct->GetSpacing(spacing);
-  const double voxelMm3 = std::abs(spacing[0] * spacing[1] * spacing[2]);
-  const auto count = static_cast<std::size_t>(ct->GetNumberOfPoints());
-  const void* ctData = ct->GetScalarPointer();
-  HeadMasks result;
+  double voxelMm3 = 0.0;
+  std::size_t count;
+  const void* data;
+  int scalarType;
+};
 
-  // 1. Threshold: everything denser than air.
-  reporter.report(0.0, "Thresholding at the skin threshold");
-  Mask::Pointer threshold = newMask(dims, spacing);
-  switch (ct->GetScalarType())
+/// The working grid of about 1 mm the opening runs on: each working voxel
+/// covers factor[a] CT voxels along axis a.
+struct WorkingGrid
+{
+  explicit WorkingGrid(const CtGrid& ct)
   {
-    vtkTemplateMacro(thresholdBuffer(static_cast<const VTK_TT*>(ctData), count,
-                                     parameters.skinThresholdHu,
+    for (int a = 0; a < 3; ++a)
+    {
+      factor[a] = std::max(1, static_cast<int>(std::floor(1.2 / std::abs(ct.spacing[a]))));
+      dims[a] = (ct.dims[a] + factor[a] - 1) / factor[a];
+      spacing[a] = std::abs(ct.spacing[a]) * factor[a];
+    }
+  }
+  /// The working voxel holding CT voxel (i, j, k).
+  std::int64_t index(int i, int j, int k) const
+  {
+    return (k / factor[2]) * (std::int64_t{dims[0]} * dims[1]) + std::int64_t{j / factor[1]} * dims[0] +
+           i / factor[0];
+  }
+  int factor[3], dims[3];
+  double spacing[3];
+};
+
+/// 1. Threshold: everything denser than air.
+Mask::Pointer thresholdAboveAir(const CtGrid& ct, double thresholdHu)
+{
+  Mask::Pointer threshold = newMask(ct.dims, ct.spacing);
+  switch (ct.scalarType)
+  {
+    vtkTemplateMacro(thresholdBuffer(static_cast<const VTK_TT*>(ct.data), ct.count, thresholdHu,
                                      threshold->GetBufferPointer()));
   default:
     throw std::invalid_argument("The CT volume has an unsupported voxel type.");
   }
-  const std::size_t thresholdCount = countOnes(threshold->GetBufferPointer(), count);
-  if (thresholdCount == 0)
+  if (countOnes(threshold->GetBufferPointer(), ct.count) == 0)
     throw std::invalid_argument("No voxel of the CT lies above the skin threshold (" +
-                                std::to_string(parameters.skinThresholdHu) +
-                                " HU): is it in Hounsfield units?");
+                                std::to_string(thresholdHu) + " HU): is it in Hounsfield units?");
+  return threshold;
+}
 
-  // 2. Opening, on a working grid of about 1 mm (the opening only has to
-  // tell the body from the table, so full resolution would only cost time):
-  // thin structures (the shells of the table and the head holder, the thin
-  // contacts between them and the body, noise) vanish. A working voxel is set
-  // only when all the CT voxels it covers are (which erodes by at most one
-  // working voxel more than the ball).
-  Mask::Pointer body = threshold;
+/// 2a. The opened body on the working grid: a working voxel is set only when
+/// all the CT voxels it covers are (which erodes by at most one working
+/// voxel more than the ball); eroded, its largest piece, dilated back by the
+/// opening radius and the reconstruction margin.
+Mask::Pointer openedBodyOnTheWorkingGrid(const Mask* threshold, const CtGrid& ct, const WorkingGrid& work,
+                                         const SegmentationParameters& parameters, const Reporter& reporter)
+{
+  Mask::Pointer low = newMask(work.dims, work.spacing);
+  unsigned char* lowData = low->GetBufferPointer();
+  std::fill_n(lowData, low->GetLargestPossibleRegion().GetNumberOfPixels(), static_cast<unsigned char>(1));
+  const unsigned char* t = threshold->GetBufferPointer();
+  std::size_t n = 0;
+  for (int k = 0; k < ct.dims[2]; ++k)
+    for (int j = 0; j < ct.dims[1]; ++j)
+      for (int i = 0; i < ct.dims[0]; ++i, ++n)
+        if (!t[n])
+          lowData[work.index(i, j, k)] = 0;
+
+  using Erode = itk::BinaryErodeImageFilter<Mask, Mask, Kernel>;
+  auto erode = Erode::New();
+  erode->SetInput(low);
+  erode->SetKernel(ballKernel(parameters.openingRadiusMm, work.spacing));
+  erode->SetForegroundValue(1);
+  erode->SetBackgroundValue(0);
+  erode->SetBoundaryToForeground(true); // the body continues beyond the scanned slab
+  runFilter(erode, reporter, 0.03, 0.15, "Separating the body from the table (erosion)");
+  Mask::Pointer eroded = erode->GetOutput();
+  eroded->DisconnectPipeline();
+  erode = nullptr;
+  low = nullptr;
+  // The body's core is by far the largest piece left. Picking it before
+  // the dilation that completes the opening means only it gets dilated.
+  Mask::Pointer seed = largestComponent(eroded, reporter, 0.15, 0.2, "Finding the body (largest component)");
+  eroded = nullptr;
+  // Dilation by the opening radius completes the opening of the body; the
+  // margin more restores detail the opening rounded off.
+  using Dilate = itk::BinaryDilateImageFilter<Mask, Mask, Kernel>;
+  auto dilate = Dilate::New();
+  dilate->SetInput(seed);
+  dilate->SetKernel(ballKernel(parameters.openingRadiusMm + parameters.reconstructionMarginMm, work.spacing));
+  dilate->SetForegroundValue(1);
+  dilate->SetBackgroundValue(0);
+  dilate->SetBoundaryToForeground(false);
+  runFilter(dilate, reporter, 0.2, 0.3, "Restoring the body's detail (dilation)");
+  Mask::Pointer grown = dilate->GetOutput();
+  grown->DisconnectPipeline();
+  return grown;
+}
+
+/// 2c. Pieces the opening cut off the body (label 2 in @a threshold) are
+/// small; the table and the holder are not. The small pieces come back as 1
+/// (those not touching the body drop out with the largest component).
+/// Returns the voxels put back.
+std::size_t reattachSmallPieces(Mask* threshold, double voxelMm3, double maxPieceMm3, const Reporter& reporter)
+{
+  using LabelMap = itk::LabelMap<itk::LabelObject<std::uint32_t, 3>>;
+  using ToLabelMap = itk::BinaryImageToLabelMapFilter<Mask, LabelMap>;
+  auto pieces = ToLabelMap::New();
+  pieces->SetInput(threshold);
+  pieces->SetInputForegroundValue(2);
+  pieces->SetFullyConnected(false);
+  runFilter(pieces, reporter, 0.32, 0.4, "Restoring the body's detail (small pieces)");
+  LabelMap* labels = pieces->GetOutput();
   std::size_t reattached = 0;
-  if (parameters.openingRadiusMm > 0)
+  for (std::size_t n = 0; n < labels->GetNumberOfLabelObjects(); ++n)
   {
-    int factor[3], lowDims[3];
-    double lowSpacing[3];
-    for (int a = 0; a < 3; ++a)
+    const auto* object = labels->GetNthLabelObject(n);
+    if (object->Size() * voxelMm3 > maxPieceMm3)
+      continue;
+    for (std::size_t l = 0; l < object->GetNumberOfLines(); ++l)
     {
-      factor[a] = std::max(1, static_cast<int>(std::floor(1.2 / std::abs(spacing[a]))));
-      lowDims[a] = (dims[a] + factor[a] - 1) / factor[a];
-      lowSpacing[a] = std::abs(spacing[a]) * factor[a];
+      const auto& line = object->GetLine(l);
+      auto idx = line.GetIndex();
+      for (itk::SizeValueType m = 0; m < line.GetLength(); ++m, ++idx[0])
+        threshold->SetPixel(idx, 1);
     }
-    Mask::Pointer low = newMask(lowDims, lowSpacing);
-    unsigned char* lowData = low->GetBufferPointer();
-    const std::int64_t lowStrideZ = std::int64_t{lowDims[0]} * lowDims[1];
-    auto lowIndex = [&](int i, int j, int k) {
-      return (k / factor[2]) * lowStrideZ + std::int64_t{j / factor[1]} * lowDims[0] + i / factor[0];
-    };
-    std::fill_n(lowData, low->GetLargestPossibleRegion().GetNumberOfPixels(),
-                static_cast<unsigned char>(1));
-    {
-      const unsigned char* t = threshold->GetBufferPointer();
-      std::size_t n = 0;
-      for (int k = 0; k < dims[2]; ++k)
-        for (int j = 0; j < dims[1]; ++j)
-          for (int i = 0; i < dims[0]; ++i, ++n)
-            if (!t[n])
-              lowData[lowIndex(i, j, k)] = 0;
-    }
-    using Erode = itk::BinaryErodeImageFilter<Mask, Mask, Kernel>;
-    auto erode = Erode::New();
-    erode->SetInput(low);
-    erode->SetKernel(ballKernel(parameters.openingRadiusMm, lowSpacing));
-    erode->SetForegroundValue(1);
-    erode->SetBackgroundValue(0);
-    erode->SetBoundaryToForeground(true); // the body continues beyond the scanned slab
-    runFilter(erode, reporter, 0.03, 0.15, "Separating the body from the table (erosion)");
-    Mask::Pointer eroded = erode->GetOutput();
-    eroded->DisconnectPipeline();
-    erode = nullptr;
-    low = nullptr;
-    // The body's core is by far the largest piece left. Picking it before
-    // the dilation that completes the opening means only it gets dilated.
-    Mask::Pointer seed = largestComponent(eroded, reporter, 0.15, 0.2,
-                                          "Finding the body (largest component)");
-    eroded = nullptr;
-    // Dilation by the opening radius completes the opening of the body; the
-    // margin more restores detail the opening rounded off.
-    using Dilate = itk::BinaryDilateImageFilter<Mask, Mask, Kernel>;
-    auto dilate = Dilate::New();
-    dilate->SetInput(seed);
-    dilate->SetKernel(
-      ballKernel(parameters.openingRadiusMm + parameters.reconstructionMarginMm, lowSpacing));
-    dilate->SetForegroundValue(1);
-    dilate->SetBackgroundValue(0);
-    dilate->SetBoundaryToForeground(false);
-    runFilter(dilate, reporter, 0.2, 0.3, "Restoring the body's detail (dilation)");
-    seed = nullptr;
-    Mask::Pointer grown = dilate->GetOutput();
-    grown->DisconnectPipeline();
-    dilate = nullptr;
-
-    // Back at full resolution: 1 = above the threshold and inside the grown
-    // body, 2 = above the threshold but outside it (the table, the holder,
-    // and whatever the opening cut off the body: the ear rims, the nose tip).
-    reporter.report(0.3, "Restoring the body's detail (full resolution)");
-    const unsigned char* g = grown->GetBufferPointer();
-    unsigned char* t = threshold->GetBufferPointer();
-    {
-      std::size_t n = 0;
-      for (int k = 0; k < dims[2]; ++k)
-        for (int j = 0; j < dims[1]; ++j)
-          for (int i = 0; i < dims[0]; ++i, ++n)
-            if (t[n])
-              t[n] = g[lowIndex(i, j, k)] ? 1 : 2;
-    }
-    grown = nullptr;
-    // Pieces cut off the body are small; the table and the holder are not.
-    // Small pieces come back (those not touching the body drop out with the
-    // largest-component step below).
-    if (parameters.maxReattachedPieceMm3 > 0)
-    {
-      using LabelMap = itk::LabelMap<itk::LabelObject<std::uint32_t, 3>>;
-      using ToLabelMap = itk::BinaryImageToLabelMapFilter<Mask, LabelMap>;
-      auto pieces = ToLabelMap::New();
-      pieces->SetInput(threshold);
-      pieces->SetInputForegroundValue(2);
-      pieces->SetFullyConnected(false);
-      runFilter(pieces, reporter, 0.32, 0.4, "Restoring the body's detail (small pieces)");
-      LabelMap* labels = pieces->GetOutput();
-      for (std::size_t n = 0; n < labels->GetNumberOfLabelObjects(); ++n)
-      {
-        const auto* object = labels->GetNthLabelObject(n);
-        if (object->Size() * voxelMm3 > parameters.maxReattachedPieceMm3)
-          continue;
-        for (std::size_t l = 0; l < object->GetNumberOfLines(); ++l)
-        {
-          const auto& line = object->GetLine(l);
-          auto idx = line.GetIndex();
-          for (itk::SizeValueType m = 0; m < line.GetLength(); ++m, ++idx[0])
-            threshold->SetPixel(idx, 1);
-        }
-        reattached += object->Size();
-      }
-    }
-    for (std::size_t i = 0; i < count; ++i)
-      t[i] = t[i] == 1 ? 1 : 0;
+    reattached += object->Size();
   }
+  return reattached;
+}
+
+/// 2. Opening, on a working grid of about 1 mm (the opening only has to
+/// tell the body from the table, so full resolution would only cost time):
+/// thin structures (the shells of the table and the head holder, the thin
+/// contacts between them and the body, noise) vanish from @a threshold,
+/// except small pieces the opening cut off the body. Returns the voxels of
+/// those put back.
+std::size_t separateTheBodyFromTheTable(Mask* threshold, const CtGrid& ct, const SegmentationParameters& parameters,
+                                        const Reporter& reporter)
+{
+  const WorkingGrid work(ct);
+  Mask::Pointer grown = openedBodyOnTheWorkingGrid(threshold, ct, work, parameters, reporter);
+
+  // 2b. Back at full resolution: 1 = above the threshold and inside the
+  // grown body, 2 = above the threshold but outside it (the table, the
+  // holder, and whatever the opening cut off the body: the ear rims, the
+  // nose tip).
+  reporter.report(0.3, "Restoring the body's detail (full resolution)");
+  const unsigned char* g = grown->GetBufferPointer();
+  unsigned char* t = threshold->GetBufferPointer();
+  std::size_t n = 0;
+  for (int k = 0; k < ct.dims[2]; ++k)
+    for (int j = 0; j < ct.dims[1]; ++j)
+      for (int i = 0; i < ct.dims[0]; ++i, ++n)
+        if (t[n])
+          t[n] = g[work.index(i, j, k)] ? 1 : 2;
+  grown = nullptr;
+
+  const std::size_t reattached = parameters.maxReattachedPieceMm3 > 0
+                                   ? reattachSmallPieces(threshold, ct.voxelMm3, parameters.maxReattachedPieceMm3,
+                                                         reporter)
+                                   : 0;
+  for (std::size_t i = 0; i < ct.count; ++i)
+    t[i] = t[i] == 1 ? 1 : 0;
+  return reattached;
+}
+
+/// 3. Internal air: per axial slice (the image axis closest to patient
+/// superior), then the 3D cavities. Returns the note saying how much.
+std::string fillInternalAir(Mask* body, vtkImageData* ct, const CtGrid& grid, const Reporter& reporter)
+{
+  int axial = 2;
+  if (vtkMatrix3x3* direction = ct->GetDirectionMatrix())
+  {
+    double best = -1;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(direction->GetElement(2, a)) > best)
+      {
+        best = std::abs(direction->GetElement(2, a));
+        axial = a;
+      }
+  }
+  const std::size_t inSlices = fillHolesInSlices(body->GetBufferPointer(), grid.dims, axial, reporter, 0.58, 0.7);
+  const auto [inCavities, cavities] = fillCavities3d(body, reporter, 0.7, 0.76);
+  std::ostringstream note;
+  note << "Internal air filled: " << formatVolume(inSlices * grid.voxelMm3) << " enclosed in axial slices, "
+       << formatVolume(inCavities * grid.voxelMm3) << " in " << cavities << " closed cavities.";
+  return note.str();
+}
+
+/// @a mask without its components (26-connected when @a fullyConnected)
+/// smaller than @a lambdaMm3.
+Mask::Pointer withoutSmallComponents(Mask* mask, bool fullyConnected, double lambdaMm3, const Reporter& reporter,
+                                     double begin, double end, const std::string& step)
+{
+  using Opening = itk::BinaryShapeOpeningImageFilter<Mask>;
+  auto opening = Opening::New();
+  opening->SetInput(mask);
+  opening->SetForegroundValue(1);
+  opening->SetBackgroundValue(0);
+  opening->SetFullyConnected(fullyConnected);
+  opening->SetAttribute(Opening::LabelObjectType::PHYSICAL_SIZE);
+  opening->SetLambda(lambdaMm3);
+  runFilter(opening, reporter, begin, end, step);
+  Mask::Pointer out = opening->GetOutput();
+  out->DisconnectPipeline();
+  return out;
+}
+
+/// 4b. The small cavities of @a bone filled: the small components of its
+/// complement (6-connected, the complement of 26-connected bone).
+Mask::Pointer withSmallCavitiesFilled(Mask* bone, std::size_t count, double maxHoleMm3, const Reporter& reporter)
+{
+  auto invert = [count](Mask* mask) {
+    unsigned char* b = mask->GetBufferPointer();
+    for (std::size_t i = 0; i < count; ++i)
+      b[i] = 1 - b[i];
+  };
+  invert(bone);
+  Mask::Pointer filled =
+    withoutSmallComponents(bone, false, maxHoleMm3, reporter, 0.88, 0.97, "Filling small cavities in bone");
+  invert(filled);
+  return filled;
+}
+
+} // namespace
+
+HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters,
+                      const ProgressCallback& progress)
+{
+  checkSegmentationInputs(ct, parameters);
+  const Reporter reporter(progress);
+  const CtGrid grid(ct);
+  HeadMasks result;
+
+  // 1. Threshold: everything denser than air.
+  reporter.report(0.0, "Thresholding at the skin threshold");
+  Mask::Pointer body = thresholdAboveAir(grid, parameters.skinThresholdHu);
+  const std::size_t thresholdCount = countOnes(body->GetBufferPointer(), grid.count);
+
+  // 2. The body apart from the table and the head holder: an opening, the
+  // small pieces it cut off put back, the largest component.
+  const std::size_t reattached =
+    parameters.openingRadiusMm > 0 ? separateTheBodyFromTheTable(body, grid, parameters, reporter) : 0;
   body = largestComponent(body, reporter, 0.4, 0.58, "Finding the body (largest component)");
-  const std::size_t bodyBeforeFill = countOnes(body->GetBufferPointer(), count);
+  const std::size_t bodyBeforeFill = countOnes(body->GetBufferPointer(), grid.count);
   {
     std::ostringstream note;
     note << "Body: largest component above " << parameters.skinThresholdHu << " HU after a "
          << parameters.openingRadiusMm << " mm opening, with the small pieces it cut off; "
-         << formatVolume((thresholdCount - bodyBeforeFill) * voxelMm3)
+         << formatVolume((thresholdCount - bodyBeforeFill) * grid.voxelMm3)
          << " above the threshold left out (table, head holder, clothes, noise); "
-         << formatVolume(reattached * voxelMm3) << " in small pieces put back.";
+         << formatVolume(reattached * grid.voxelMm3) << " in small pieces put back.";
     result.notes.push_back(note.str());
   }
-  threshold = nullptr;
 
-  // 3. Internal air: per axial slice (the image axis closest to patient
-  // superior), then the 3D cavities.
+  // 3. Internal air filled.
   if (parameters.fillInternalAir)
-  {
-    int axial = 2;
-    if (vtkMatrix3x3* direction = ct->GetDirectionMatrix())
-    {
-      double best = -1;
-      for (int a = 0; a < 3; ++a)
-        if (std::abs(direction->GetElement(2, a)) > best)
-        {
-          best = std::abs(direction->GetElement(2, a));
-          axial = a;
-        }
-    }
-    const std::size_t inSlices =
-      fillHolesInSlices(body->GetBufferPointer(), dims, axial, reporter, 0.58, 0.7);
-    const auto [inCavities, cavities] = fillCavities3d(body, reporter, 0.7, 0.76);
-    std::ostringstream note;
-    note << "Internal air filled: " << formatVolume(inSlices * voxelMm3)
-         << " enclosed in axial slices, " << formatVolume(inCavities * voxelMm3) << " in "
-         << cavities << " closed cavities.";
-    result.notes.push_back(note.str());
-  }
-  const std::size_t bodyCount = countOnes(body->GetBufferPointer(), count);
-  result.notes.push_back("Body volume " + formatVolume(bodyCount * voxelMm3) + ".");
+    result.notes.push_back(fillInternalAir(body, ct, grid, reporter));
+  const std::size_t bodyCount = countOnes(body->GetBufferPointer(), grid.count);
+  result.notes.push_back("Body volume " + formatVolume(bodyCount * grid.voxelMm3) + ".");
 
   // 4. Bone: dense voxels inside the body, small islands removed, small
   // cavities filled.
   reporter.report(0.76, "Thresholding bone");
-  Mask::Pointer bone = newMask(dims, spacing);
-  switch (ct->GetScalarType())
+  Mask::Pointer bone = newMask(grid.dims, grid.spacing);
+  switch (grid.scalarType)
   {
-    vtkTemplateMacro(thresholdInside(static_cast<const VTK_TT*>(ctData),
-                                     body->GetBufferPointer(), count, parameters.boneThresholdHu,
-                                     bone->GetBufferPointer()));
+    vtkTemplateMacro(thresholdInside(static_cast<const VTK_TT*>(grid.data), body->GetBufferPointer(), grid.count,
+                                     parameters.boneThresholdHu, bone->GetBufferPointer()));
   }
-  const std::size_t boneRaw = countOnes(bone->GetBufferPointer(), count);
+  const std::size_t boneRaw = countOnes(bone->GetBufferPointer(), grid.count);
   result.body = toVtkMask(body, ct);
   body = nullptr;
   if (parameters.minBoneIslandMm3 > 0)
-  {
-    using Opening = itk::BinaryShapeOpeningImageFilter<Mask>;
-    auto islands = Opening::New();
-    islands->SetInput(bone);
-    islands->SetForegroundValue(1);
-    islands->SetBackgroundValue(0);
-    islands->SetFullyConnected(true);
-    islands->SetAttribute(Opening::LabelObjectType::PHYSICAL_SIZE);
-    islands->SetLambda(parameters.minBoneIslandMm3);
-    runFilter(islands, reporter, 0.8, 0.88, "Removing small bone islands");
-    bone = islands->GetOutput();
-    bone->DisconnectPipeline();
-  }
-  const std::size_t boneKept = countOnes(bone->GetBufferPointer(), count);
+    bone = withoutSmallComponents(bone, true, parameters.minBoneIslandMm3, reporter, 0.8, 0.88,
+                                  "Removing small bone islands");
+  const std::size_t boneKept = countOnes(bone->GetBufferPointer(), grid.count);
   if (parameters.maxBoneHoleMm3 > 0)
-  {
-    // The cavities are the small components of the complement (6-connected,
-    // the complement of 26-connected bone).
-    unsigned char* b = bone->GetBufferPointer();
-    for (std::size_t i = 0; i < count; ++i)
-      b[i] = 1 - b[i];
-    using Opening = itk::BinaryShapeOpeningImageFilter<Mask>;
-    auto holes = Opening::New();
-    holes->SetInput(bone);
-    holes->SetForegroundValue(1);
-    holes->SetBackgroundValue(0);
-    holes->SetFullyConnected(false);
-    holes->SetAttribute(Opening::LabelObjectType::PHYSICAL_SIZE);
-    holes->SetLambda(parameters.maxBoneHoleMm3);
-    runFilter(holes, reporter, 0.88, 0.97, "Filling small cavities in bone");
-    bone = holes->GetOutput();
-    bone->DisconnectPipeline();
-    b = bone->GetBufferPointer();
-    for (std::size_t i = 0; i < count; ++i)
-      b[i] = 1 - b[i];
-  }
-  const std::size_t boneCount = countOnes(bone->GetBufferPointer(), count);
+    bone = withSmallCavitiesFilled(bone, grid.count, parameters.maxBoneHoleMm3, reporter);
+  const std::size_t boneCount = countOnes(bone->GetBufferPointer(), grid.count);
   {
     std::ostringstream note;
     note << "Bone: above " << parameters.boneThresholdHu << " HU inside the body, "
-         << formatVolume(boneCount * voxelMm3) << "; removed "
-         << formatVolume((boneRaw - boneKept) * voxelMm3) << " in islands under "
+         << formatVolume(boneCount * grid.voxelMm3) << "; removed "
+         << formatVolume((boneRaw - boneKept) * grid.voxelMm3) << " in islands under "
          << parameters.minBoneIslandMm3 << " mm³, filled "
-         << formatVolume((boneCount - boneKept) * voxelMm3) << " of small cavities. "
+         << formatVolume((boneCount - boneKept) * grid.voxelMm3) << " of small cavities. "
          << "In a contrast CT, large contrast-filled vessels can exceed the bone "
             "threshold and count as bone.";
     result.notes.push_back(note.str());
