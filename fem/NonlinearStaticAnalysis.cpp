@@ -208,197 +208,191 @@ DeformationCheck NonlinearStaticAnalysis::deformationCheck(const Eigen::VectorXd
   return evaluate(u, nullptr, nullptr);
 }
 
-NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const IncrementControl& control,
-                                               const NewtonOptions& newton, const NewtonMonitor& monitor) {
-  // 1. Check the input and set up the constrained system once: the pattern
-  //    of K-bar does not change between iterations, so it is analysed once.
-  validate(load);
-  cacheReferenceGeometry();
-  if (!(control.initial > 0.0 && control.initial <= 1.0 && control.minimum > 0.0 &&
-        control.minimum <= control.initial && control.maximum >= control.initial))
-    throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
-  const ConstraintMap map = resolveConstraints(mesh_, constraints_);
-  const Eigen::VectorXd fext = loadVector(load);
-  Eigen::SparseMatrix<double> k = stiffnessPattern(mesh_);
-  Eigen::SparseMatrix<double> kbar = map.reduceMatrix(k);
-  SparseCholeskySolver solver;
-  useNodeGroupedOrdering(mesh_, map, solver);
-  if (map.reducedCount() > 0) solver.analyzePattern(kbar);
+namespace {
 
-  // The residual cannot fall below the rounding of stresses that cancel at
-  // small strain (S from C - I): about eps times the force a unit strain
-  // gives, mu L^2 over the model's size L. Below it, a residual is converged
-  // whatever the load (a nearly stress-free state has no force to compare with).
-  double stiffest = 0.0;
-  for (const auto& [region, material] : materials_) stiffest = std::max(stiffest, material.shearModulus());
-  const double size = mesh_.nodeCount() ? (mesh_.nodes.rowwise().maxCoeff() - mesh_.nodes.rowwise().minCoeff()).norm() : 1.0;
-  const double roundoffForce = 10.0 * std::numeric_limits<double>::epsilon() * stiffest * size * size;
+/**
+ * One large-deformation solve: the load increments (run()), each a modified
+ * or full Newton iteration (increment()), each iteration the tangent when
+ * due, the out-of-balance force, a back-solve, a line search and the
+ * convergence test. The forces and tangents come from @a evaluate (the
+ * analysis's elements).
+ */
+class NewtonSolve {
+public:
+  using Evaluate =
+      std::function<DeformationCheck(const Eigen::VectorXd&, Eigen::SparseMatrix<double>*, Eigen::VectorXd*)>;
 
-  NonlinearResult result;
-  Eigen::VectorXd ubar = Eigen::VectorXd::Zero(map.reducedCount());
-  auto expand = [&map](const Eigen::VectorXd& reduced, double lambda) -> Eigen::VectorXd {
-    return map.expand(reduced).col(0) + (lambda - 1.0) * map.offset;
-  };
+  NewtonSolve(const Mesh& mesh, const HyperelasticTable& materials, const Constraints& constraints,
+              const std::function<Eigen::VectorXd()>& loadVector, Evaluate evaluate, const NewtonOptions& newton,
+              const NewtonMonitor& monitor)
+      : map_(resolveConstraints(mesh, constraints)),
+        fext_(loadVector()),
+        k_(stiffnessPattern(mesh)),
+        kbar_(map_.reduceMatrix(k_)),
+        evaluate_(std::move(evaluate)),
+        newton_(newton),
+        monitor_(monitor),
+        fullNewton_(newton.tangentUpdate == TangentUpdate::EveryIteration),
+        roundoffForce_(roundoffForceOf(mesh, materials)) {
+    // The pattern of K-bar does not change between iterations: analysed once.
+    useNodeGroupedOrdering(mesh, map_, solver_);
+    if (map_.reducedCount() > 0) solver_.analyzePattern(kbar_);
+  }
 
-  TangentReusePolicy reuse;  // measures the costs it weighs
-  // Forces (and tangent) at u, timed.
-  auto timedEvaluate = [&](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces) {
-    const auto t0 = std::chrono::steady_clock::now();
-    struct Tally {
-      double& total;
-      std::chrono::steady_clock::time_point start;
-      ~Tally() { total += secondsSince(start); }
-    } tally{result.assembleSeconds, t0};
-    evaluate(u, tangent, forces);
-    ++result.assemblies;
-    (tangent ? reuse.tangent : reuse.forces).add(secondsSince(t0));
-  };
-  // Factor K-bar of the current k; false (with a reason) when it is not positive definite.
-  auto factor = [&](std::string& reason) {
-    const auto t0 = std::chrono::steady_clock::now();
-    map.reduceValues(k, kbar);
-    solver.factorize(kbar);
-    result.factorSeconds += secondsSince(t0);
-    reuse.factorization.add(secondsSince(t0));
-    ++result.factorizations;
-    if (solver.status() == SolverStatus::Success) return true;
-    reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
-             "at this deformation)";
-    return false;
-  };
+  /// 3. The increments: grow after a fast convergence, cut back on failure.
+  NonlinearResult run(const IncrementControl& control) {
+    Eigen::VectorXd ubar = Eigen::VectorXd::Zero(map_.reducedCount());
+    double lambda = 0.0;
+    double step = std::min(control.initial, 1.0);
+    int accepted = 0;
+    try {
+      while (lambda < 1.0 - 1e-12) {
+        if (int(result_.increments.size()) >= control.maxIncrements) {
+          lastReason_ = "the solve used its " + std::to_string(control.maxIncrements) + " increments";
+          break;
+        }
+        step = std::min(step, 1.0 - lambda);
+        const double target = (1.0 - lambda - step) < 1e-12 ? 1.0 : lambda + step;
+        Eigen::VectorXd state = ubar;
+        const IncrementOutcome o = increment(accepted + 1, lambda, target, state);
+        result_.increments.push_back({accepted + 1, lambda, target, o.iterations, o.residual, o.converged, o.rejection});
+        if (o.converged) {
+          ++accepted;
+          ubar = state;
+          lambda = target;
+          // Grow after a fast convergence: at most 5 tangents (full Newton: 5
+          // iterations), and at most 10 iterations of modified Newton.
+          if (!control.fixed && o.newTangents <= 5 && o.iterations <= 10) step = std::min(control.maximum, 1.5 * step);
+          continue;
+        }
+        lin_ = {};  // it described the failed trial
+        lastReason_ = o.rejection;
+        if (o.worstElement >= 0) lastWorst_ = o.worstElement;
+        if (control.fixed) break;
+        step *= o.worstElement >= 0 ? 0.25 : 0.5;  // an inversion says the step was far too large
+        if (step < control.minimum) break;
+      }
+    } catch (const Cancelled&) {
+      result_.status = NonlinearStatus::Cancelled;
+      result_.message = "cancelled at load fraction " + percent(lambda) + " (the last converged increment)";
+    }
+    return finish(ubar, lambda, accepted);
+  }
 
-  // What the solver holds of the current trial state, between iterations
-  // and from one converged increment into the next.
+private:
+  /// What the solver holds of the current trial state, between iterations
+  /// and from one converged increment into the next.
   struct Linearization {
     Eigen::VectorXd fint;        ///< internal forces at the trial state
     bool forcesCurrent = false;  ///< fint belongs to the trial state
     bool tangentInK = false;     ///< k is the tangent at the trial state
     bool factored = false;       ///< the solver holds a factorization of k (of some earlier state)
-  } lin;
-  const bool fullNewton = newton.tangentUpdate == TangentUpdate::EveryIteration;
+  };
 
-  // 2. One increment from the converged (ubar, lambda0) to lambda1.
-  auto runIncrement = [&](int increment, double lambda0, double lambda1, Eigen::VectorXd& state) {
+  /// Where a line search ended.
+  struct Step {
+    bool accepted = false;
+    double alpha = 1.0;
+    Eigen::VectorXd next, fint, rbar;  ///< the state, its forces and its reduced residual
+    bool tangentInK = false;           ///< k was formed at next (full Newton)
+  };
+
+  /// The residual cannot fall below the rounding of stresses that cancel at
+  /// small strain (S from C - I): about eps times the force a unit strain
+  /// gives, mu L^2 over the model's size L. Below it, a residual is
+  /// converged whatever the load (a nearly stress-free state has no force to
+  /// compare with).
+  static double roundoffForceOf(const Mesh& mesh, const HyperelasticTable& materials) {
+    double stiffest = 0.0;
+    for (const auto& [region, material] : materials) stiffest = std::max(stiffest, material.shearModulus());
+    const double size =
+        mesh.nodeCount() ? (mesh.nodes.rowwise().maxCoeff() - mesh.nodes.rowwise().minCoeff()).norm() : 1.0;
+    return 10.0 * std::numeric_limits<double>::epsilon() * stiffest * size * size;
+  }
+
+  /// The full displacements of the reduced ones at load fraction @a lambda.
+  Eigen::VectorXd expand(const Eigen::VectorXd& reduced, double lambda) const {
+    return map_.expand(reduced).col(0) + (lambda - 1.0) * map_.offset;
+  }
+
+  /// Forces (and tangent) at u, timed.
+  void timedEvaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces) {
+    const auto t0 = std::chrono::steady_clock::now();
+    struct Tally {
+      double& total;
+      std::chrono::steady_clock::time_point start;
+      ~Tally() { total += secondsSince(start); }
+    } tally{result_.assembleSeconds, t0};
+    evaluate_(u, tangent, forces);
+    ++result_.assemblies;
+    (tangent ? reuse_.tangent : reuse_.forces).add(secondsSince(t0));
+  }
+
+  /// Factors K-bar of the current k; false (with a reason) when it is not positive definite.
+  bool factor(std::string& reason) {
+    const auto t0 = std::chrono::steady_clock::now();
+    map_.reduceValues(k_, kbar_);
+    solver_.factorize(kbar_);
+    result_.factorSeconds += secondsSince(t0);
+    reuse_.factorization.add(secondsSince(t0));
+    ++result_.factorizations;
+    if (solver_.status() == SolverStatus::Success) return true;
+    reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
+             "at this deformation)";
+    return false;
+  }
+
+  /// 2. One increment from the converged state (@a state, @a lambda0) to
+  ///    @a lambda1; @a state becomes the converged state when it converges.
+  IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state) {
     IncrementOutcome out;
-    if (map.reducedCount() == 0) {  // everything prescribed: nothing to solve
+    if (map_.reducedCount() == 0) {  // everything prescribed: nothing to solve
       out.converged = true;
       return out;
     }
     Eigen::VectorXd trial = state, rbar;
     double firstEnergy = 0.0;
-    for (int it = 1; it <= newton.maxIterations; ++it) {
+    for (int it = 1; it <= newton_.maxIterations; ++it) {
       out.iterations = it;
-      const double lambdaAtTrial = it == 1 ? lambda0 : lambda1;
-      // a. The tangent: reused, or formed at the trial state and factored.
-      //    Modified Newton starts an increment on the factorization it has
-      //    and forms a new tangent at its second iteration, when the
-      //    increment's own contraction is not known yet.
-      bool refresh = !lin.factored || fullNewton || it == 2;
-      if (!refresh && it > 2)
-        refresh = reuse.wantsNewTangent(out.residual, newton.residualTolerance, newton.maxIterations - it + 1);
-      if ((refresh && !lin.tangentInK) || !lin.forcesCurrent) {
-        try {
-          timedEvaluate(expand(trial, lambdaAtTrial), refresh ? &k : nullptr, &lin.fint);
-        } catch (const InvertedElementError& e) {  // cannot happen at an accepted state, but be safe
-          out.rejection = e.what();
-          out.worstElement = e.element();
-          return out;
-        }
-        lin.forcesCurrent = true;
-        lin.tangentInK = lin.tangentInK || refresh;
-      }
-      if (refresh) {
-        ++out.newTangents;
-        lin.factored = false;
-        if (!factor(out.rejection)) return out;
-        lin.factored = true;
-      }
+      bool refresh = false;
+      if (!tangentWhenDue(it, it == 1 ? lambda0 : lambda1, trial, out, refresh)) return out;
       // b. The out-of-balance force; the first iteration is the predictor:
       //    the prescribed increment (lambda1 - lambda0) g enters as a load
       //    through the (factored) tangent.
       if (it == 1) {
-        const Eigen::VectorXd dg = (lambda1 - lambda0) * map.offset;
-        rbar = map.reduceVector(lin.fint - lambda1 * fext + k.selfadjointView<Eigen::Upper>() * dg).col(0);
+        const Eigen::VectorXd dg = (lambda1 - lambda0) * map_.offset;
+        rbar = map_.reduceVector(lin_.fint - lambda1 * fext_ + k_.selfadjointView<Eigen::Upper>() * dg).col(0);
       }
       const auto solveStart = std::chrono::steady_clock::now();
-      const Eigen::VectorXd delta = -solver.solve(rbar);
-      reuse.backSolve.add(secondsSince(solveStart));
+      const Eigen::VectorXd delta = -solver_.solve(rbar);
+      reuse_.backSolve.add(secondsSince(solveStart));
       const double s0 = delta.dot(rbar);
       if (it == 1) firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
 
-      // c. Line search along delta; an inverting trial halves the step.
-      //    Full Newton builds the next tangent with the first trial.
-      double alpha = 1.0, sPrevAlpha = 0.0, sPrev = s0;
-      Eigen::VectorXd next, nextFint, nextR;
-      bool accepted = false, nextTangent = false;
-      for (int ls = 0; ls <= newton.maxLineSearchSteps + 6; ++ls) {
-        next = trial + alpha * delta;
-        const bool withTangent = fullNewton && ls == 0;
-        try {
-          timedEvaluate(expand(next, lambda1), withTangent ? &k : nullptr, &nextFint);
-        } catch (const InvertedElementError& e) {
-          if (it == 1 || ls >= newton.maxLineSearchSteps + 6) {
-            // The predictor itself inverts an element: the increment is too large.
-            out.rejection = e.what();
-            out.worstElement = e.element();
-            return out;
-          }
-          alpha *= 0.5;
-          continue;
-        }
-        if (withTangent) lin.factored = false;  // k no longer matches the factorization
-        nextR = map.reduceVector(nextFint - lambda1 * fext).col(0);
-        nextTangent = withTangent;
-        if (!newton.lineSearch || it == 1 || ls >= newton.maxLineSearchSteps) {
-          accepted = true;
-          break;
-        }
-        const double s = delta.dot(nextR);
-        if (!std::isfinite(s)) {
-          alpha *= 0.5;
-          continue;
-        }
-        if (std::abs(s) <= newton.lineSearchRatio * std::abs(s0)) {
-          accepted = true;
-          break;
-        }
-        // Secant root of s(alpha) through (alphaPrev, sPrev) and (alpha, s).
-        double root = (sPrev * alpha - s * sPrevAlpha) / (sPrev - s);
-        if (!std::isfinite(root)) root = 0.5 * alpha;
-        sPrevAlpha = alpha;
-        sPrev = s;
-        alpha = std::clamp(root, 0.1 * alpha, alpha == 1.0 ? 1.0 : 2.0 * alpha);
-        if (alpha == sPrevAlpha) {
-          accepted = true;
-          break;
-        }
-      }
-      if (!accepted) {
-        out.rejection = "the line search found no admissible step";
-        return out;
-      }
-      const double energy = std::abs(alpha * delta.dot(nextR));  // the work the correction leaves undone
-      trial = next;
-      lin.fint = nextFint;
-      lin.forcesCurrent = true;
-      lin.tangentInK = nextTangent;
-      rbar = nextR;
+      Step step = lineSearch(it, lambda1, trial, delta, s0, out);
+      if (!step.accepted) return out;
+      const double energy = std::abs(step.alpha * delta.dot(step.rbar));  // the work the correction leaves undone
+      trial = std::move(step.next);
+      lin_.fint = std::move(step.fint);
+      lin_.forcesCurrent = true;
+      lin_.tangentInK = step.tangentInK;
+      rbar = std::move(step.rbar);
 
       // d. Convergence on the residual force and on the energy of the correction.
-      const double scale = std::max({(lambda1 * fext).norm(), lin.fint.norm(), roundoffForce});
-      const double residual = rbar.norm() <= roundoffForce ? 0.0 : rbar.norm() / scale;
+      const double scale = std::max({(lambda1 * fext_).norm(), lin_.fint.norm(), roundoffForce_});
+      const double residual = rbar.norm() <= roundoffForce_ ? 0.0 : rbar.norm() / scale;
       const double relEnergy = energy / firstEnergy;
-      if (it > 1) reuse.record(out.residual, residual, refresh);
+      if (it > 1) reuse_.record(out.residual, residual, refresh);
       out.residual = residual;
-      const NewtonIteration report{increment, lambda1, it, residual, relEnergy, alpha, refresh};
-      result.iterations.push_back(report);
-      if (monitor && !monitor(report)) throw Cancelled{};
+      const NewtonIteration report{number, lambda1, it, residual, relEnergy, step.alpha, refresh};
+      result_.iterations.push_back(report);
+      if (monitor_ && !monitor_(report)) throw Cancelled{};
       if (!std::isfinite(residual) || residual > 1e8) {
         out.rejection = "the Newton iteration diverged (relative residual " + std::to_string(residual) + ")";
         return out;
       }
-      const bool forceSmall = residual <= newton.residualTolerance;
-      const bool energySmall = relEnergy <= newton.energyTolerance || residual == 0.0;
+      const bool forceSmall = residual <= newton_.residualTolerance;
+      const bool energySmall = relEnergy <= newton_.energyTolerance || residual == 0.0;
       if ((forceSmall && energySmall && it > 1) || (it == 1 && residual == 0.0)) {
         // (A zero residual after the first iteration: linear in this increment, e.g. a rigid motion.)
         out.converged = true;
@@ -407,75 +401,161 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
       }
     }
     std::ostringstream m;
-    m << "Newton did not converge in " << newton.maxIterations << " iterations (relative residual " << out.residual
-      << ", tolerance " << newton.residualTolerance << ")";
+    m << "Newton did not converge in " << newton_.maxIterations << " iterations (relative residual " << out.residual
+      << ", tolerance " << newton_.residualTolerance << ")";
     out.rejection = m.str();
     return out;
-  };
+  }
 
-  // 3. The increments: grow after a fast convergence, cut back on failure.
-  double lambda = 0.0;
-  double step = std::min(control.initial, 1.0);
-  int accepted = 0;
-  int lastWorst = -1;
-  std::string lastReason;
-  try {
-    while (lambda < 1.0 - 1e-12) {
-      if (int(result.increments.size()) >= control.maxIncrements) {
-        lastReason = "the solve used its " + std::to_string(control.maxIncrements) + " increments";
-        break;
+  /// a. The tangent: reused, or formed at the trial state and factored
+  ///    (@a refresh says which). Modified Newton starts an increment on the
+  ///    factorization it has and forms a new tangent at its second
+  ///    iteration, when the increment's own contraction is not known yet.
+  ///    False, with the reason in @a out, when the increment must stop.
+  bool tangentWhenDue(int it, double lambdaAtTrial, const Eigen::VectorXd& trial, IncrementOutcome& out,
+                      bool& refresh) {
+    refresh = !lin_.factored || fullNewton_ || it == 2;
+    if (!refresh && it > 2)
+      refresh = reuse_.wantsNewTangent(out.residual, newton_.residualTolerance, newton_.maxIterations - it + 1);
+    if ((refresh && !lin_.tangentInK) || !lin_.forcesCurrent) {
+      try {
+        timedEvaluate(expand(trial, lambdaAtTrial), refresh ? &k_ : nullptr, &lin_.fint);
+      } catch (const InvertedElementError& e) {  // cannot happen at an accepted state, but be safe
+        out.rejection = e.what();
+        out.worstElement = e.element();
+        return false;
       }
-      step = std::min(step, 1.0 - lambda);
-      const double target = (1.0 - lambda - step) < 1e-12 ? 1.0 : lambda + step;
-      Eigen::VectorXd state = ubar;
-      const IncrementOutcome o = runIncrement(accepted + 1, lambda, target, state);
-      IncrementRecord record{accepted + 1, lambda, target, o.iterations, o.residual, o.converged, o.rejection};
-      result.increments.push_back(record);
-      if (o.converged) {
-        ++accepted;
-        ubar = state;
-        lambda = target;
-        // Grow after a fast convergence: at most 5 tangents (full Newton: 5
-        // iterations), and at most 10 iterations of modified Newton.
-        if (!control.fixed && o.newTangents <= 5 && o.iterations <= 10) step = std::min(control.maximum, 1.5 * step);
+      lin_.forcesCurrent = true;
+      lin_.tangentInK = lin_.tangentInK || refresh;
+    }
+    if (refresh) {
+      ++out.newTangents;
+      lin_.factored = false;
+      if (!factor(out.rejection)) return false;
+      lin_.factored = true;
+    }
+    return true;
+  }
+
+  /// c. Line search along @a delta (FEBio's energy criterion); an inverting
+  ///    trial halves the step. Full Newton builds the next tangent with the
+  ///    first trial. Not accepted, with the reason in @a out, when no step is.
+  Step lineSearch(int it, double lambda1, const Eigen::VectorXd& trial, const Eigen::VectorXd& delta, double s0,
+                  IncrementOutcome& out) {
+    Step step;
+    double sPrevAlpha = 0.0, sPrev = s0;
+    double& alpha = step.alpha;
+    for (int ls = 0; ls <= newton_.maxLineSearchSteps + 6; ++ls) {
+      step.next = trial + alpha * delta;
+      const bool withTangent = fullNewton_ && ls == 0;
+      try {
+        timedEvaluate(expand(step.next, lambda1), withTangent ? &k_ : nullptr, &step.fint);
+      } catch (const InvertedElementError& e) {
+        if (it == 1 || ls >= newton_.maxLineSearchSteps + 6) {
+          // The predictor itself inverts an element: the increment is too large.
+          out.rejection = e.what();
+          out.worstElement = e.element();
+          return step;
+        }
+        alpha *= 0.5;
         continue;
       }
-      lin = {};  // it described the failed trial
-      lastReason = o.rejection;
-      if (o.worstElement >= 0) lastWorst = o.worstElement;
-      if (control.fixed) break;
-      step *= o.worstElement >= 0 ? 0.25 : 0.5;  // an inversion says the step was far too large
-      if (step < control.minimum) break;
+      if (withTangent) lin_.factored = false;  // k no longer matches the factorization
+      step.rbar = map_.reduceVector(step.fint - lambda1 * fext_).col(0);
+      step.tangentInK = withTangent;
+      if (!newton_.lineSearch || it == 1 || ls >= newton_.maxLineSearchSteps) {
+        step.accepted = true;
+        return step;
+      }
+      const double s = delta.dot(step.rbar);
+      if (!std::isfinite(s)) {
+        alpha *= 0.5;
+        continue;
+      }
+      if (std::abs(s) <= newton_.lineSearchRatio * std::abs(s0)) {
+        step.accepted = true;
+        return step;
+      }
+      // Secant root of s(alpha) through (alphaPrev, sPrev) and (alpha, s).
+      double root = (sPrev * alpha - s * sPrevAlpha) / (sPrev - s);
+      if (!std::isfinite(root)) root = 0.5 * alpha;
+      sPrevAlpha = alpha;
+      sPrev = s;
+      alpha = std::clamp(root, 0.1 * alpha, alpha == 1.0 ? 1.0 : 2.0 * alpha);
+      if (alpha == sPrevAlpha) {
+        step.accepted = true;
+        return step;
+      }
     }
-  } catch (const Cancelled&) {
-    result.status = NonlinearStatus::Cancelled;
-    result.message = "cancelled at load fraction " + percent(lambda) + " (the last converged increment)";
+    out.rejection = "the line search found no admissible step";
+    return step;
   }
 
-  result.loadFraction = lambda;
-  result.displacements = expand(ubar, lambda);
-  result.check = evaluate(result.displacements, nullptr, nullptr);
-  if (result.status == NonlinearStatus::Cancelled) return result;
-  if (lambda >= 1.0 - 1e-12) {
-    result.status = NonlinearStatus::Converged;
-    result.loadFraction = 1.0;
-    return result;
+  /// 4. The result: the last converged state, its checks, and when the
+  ///    loads were not all applied the message saying how far it got, what
+  ///    failed, and what to try.
+  NonlinearResult finish(const Eigen::VectorXd& ubar, double lambda, int accepted) {
+    NonlinearResult& result = result_;
+    result.loadFraction = lambda;
+    result.displacements = expand(ubar, lambda);
+    result.check = evaluate_(result.displacements, nullptr, nullptr);
+    if (result.status == NonlinearStatus::Cancelled) return std::move(result_);
+    if (lambda >= 1.0 - 1e-12) {
+      result.status = NonlinearStatus::Converged;
+      result.loadFraction = 1.0;
+      return std::move(result_);
+    }
+    result.status = NonlinearStatus::NotConverged;
+    result.failedElement = lastWorst_;
+    std::ostringstream m;
+    m << "the large-deformation solve did not converge: increment " << accepted + 1 << ", from load fraction "
+      << percent(lambda) << ", failed at the smallest allowed size";
+    if (!lastReason_.empty()) m << " (" << lastReason_ << ")";
+    m << "; the last converged state is " << percent(lambda) << " of the loads, prescribed displacements and suture "
+      << "closure, which is not a prediction";
+    if (lastWorst_ >= 0) m << "; the element that failed is " << lastWorst_;
+    else if (result.check.minDetFElement >= 0)
+      m << "; the most compressed element is " << result.check.minDetFElement << " (det F = " << result.check.minDetF
+        << ")";
+    m << ". Try smaller increments, undermining the tissue around the wound, or a finer mesh there";
+    result.message = m.str();
+    return std::move(result_);
   }
-  result.status = NonlinearStatus::NotConverged;
-  result.failedElement = lastWorst;
-  std::ostringstream m;
-  m << "the large-deformation solve did not converge: increment " << accepted + 1 << ", from load fraction "
-    << percent(lambda) << ", failed at the smallest allowed size";
-  if (!lastReason.empty()) m << " (" << lastReason << ")";
-  m << "; the last converged state is " << percent(lambda) << " of the loads, prescribed displacements and suture "
-    << "closure, which is not a prediction";
-  if (lastWorst >= 0) m << "; the element that failed is " << lastWorst;
-  else if (result.check.minDetFElement >= 0)
-    m << "; the most compressed element is " << result.check.minDetFElement << " (det F = " << result.check.minDetF
-      << ")";
-  m << ". Try smaller increments, undermining the tissue around the wound, or a finer mesh there";
-  result.message = m.str();
-  return result;
+
+  const ConstraintMap map_;
+  const Eigen::VectorXd fext_;
+  Eigen::SparseMatrix<double> k_;
+  Eigen::SparseMatrix<double> kbar_;
+  SparseCholeskySolver solver_;
+  Evaluate evaluate_;
+  const NewtonOptions& newton_;
+  const NewtonMonitor& monitor_;
+  const bool fullNewton_;
+  const double roundoffForce_;
+  TangentReusePolicy reuse_;  // measures the costs it weighs
+  Linearization lin_;
+  NonlinearResult result_;
+  int lastWorst_ = -1;
+  std::string lastReason_;
+};
+
+}  // namespace
+
+NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const IncrementControl& control,
+                                               const NewtonOptions& newton, const NewtonMonitor& monitor) {
+  // 1. Check the input and set up the constrained system once.
+  validate(load);
+  cacheReferenceGeometry();
+  if (!(control.initial > 0.0 && control.initial <= 1.0 && control.minimum > 0.0 &&
+        control.minimum <= control.initial && control.maximum >= control.initial))
+    throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
+  NewtonSolve newtonSolve(
+      mesh_, materials_, constraints_, [&] { return loadVector(load); },
+      [this](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
+        return evaluate(u, k, fint);
+      },
+      newton, monitor);
+  return newtonSolve.run(control);
 }
 
 }  // namespace caps::fem
