@@ -194,177 +194,208 @@ std::string shownValue(const ProcedureParameter& p, double apiValue)
 
 double toApi(ParameterUnit u, double v) { return u == ParameterUnit::Degree ? v * degree : v; }
 
-} // namespace
-
-ProcedureFileError::ProcedureFileError(const fs::path& file, int line, const std::string& message)
-  : std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + message),
-    file_(file), line_(line)
+/// What a procedure file says, line by line, before the whole-file checks.
+struct ProcedureFile
 {
+  fs::path file;
+  std::string id, title, reference, generator;
+  int pointsLine = 0, generatorLine = 0, explicitPoints = 0;
+  std::vector<ProcedureParameter> parameters;
+  std::vector<SutureEdges> written;
+  std::vector<int> sutureLines;                          // file line of each written suture
+  std::vector<std::pair<int, std::pair<int, int>>> zips; // line, (from, to) cut points
+  std::map<std::string, int> seenKeys;
+};
+
+void readId(ProcedureFile& read, int lineNo, const std::string& value)
+{
+  static const std::regex idRe(R"(^[a-z0-9][a-z0-9-]*$)");
+  if (!std::regex_match(value, idRe))
+    throw ProcedureFileError(read.file, lineNo, "procedure id '" + value +
+                                                  "' must be lower case letters, digits and '-' (e.g. z-plasty)");
+  read.id = value;
 }
 
-std::vector<std::string> procedureGenerators()
+void readGenerator(ProcedureFile& read, int lineNo, const std::string& value)
 {
-  std::vector<std::string> names;
-  for (const auto& g : generators())
-    names.push_back(g.name);
-  return names;
+  if (!findGenerator(value))
+  {
+    std::string known;
+    for (const auto& g : procedureGenerators())
+      known += (known.empty() ? "" : ", ") + g;
+    throw ProcedureFileError(read.file, lineNo, "unknown generator '" + value + "'; known: " + known);
+  }
+  read.generator = value;
+  read.generatorLine = lineNo;
 }
 
-ProcedureTemplate ProcedureTemplate::load(const fs::path& file)
+void readPoints(ProcedureFile& read, int lineNo, const std::string& value)
+{
+  char* end = nullptr;
+  const long n = std::strtol(value.c_str(), &end, 10);
+  if (value.empty() || *end || n < 3 || n > 65)
+    throw ProcedureFileError(read.file, lineNo, "points must be a whole number from 3 to 65, got '" + value + "'");
+  read.explicitPoints = int(n);
+  read.pointsLine = lineNo;
+}
+
+/// "param NAME = DEFAULT UNIT [MIN, MAX] label", in API units.
+ProcedureParameter readParameter(const ProcedureFile& read, int lineNo, const std::string& paramName,
+                                 const std::string& value)
+{
+  static const std::string number = R"(([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?))";
+  static const std::regex paramRe("^" + number + R"(\s*(mm|deg|ratio)\s*\[\s*)" + number + R"(\s*,\s*)" + number +
+                                  R"(\s*\]\s*(.*)$)");
+  static const std::regex nameRe(R"(^[a-z][a-z0-9_]*$)");
+  const fs::path& file = read.file;
+  if (!std::regex_match(paramName, nameRe))
+    throw ProcedureFileError(file, lineNo, "parameter name '" + paramName +
+                                             "' must be lower case letters, digits and '_'");
+  std::smatch m;
+  if (!std::regex_match(value, m, paramRe))
+    throw ProcedureFileError(file, lineNo, "parameter '" + paramName +
+                                             "': expected 'DEFAULT UNIT [MIN, MAX] label' with UNIT mm, deg "
+                                             "or ratio, e.g. '60 deg [30, 90] limb angle'");
+  for (const auto& p : read.parameters)
+    if (p.name == paramName)
+      throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "' is declared twice (first on line " +
+                                               std::to_string(p.line) + ")");
+  ProcedureParameter p;
+  p.name = paramName;
+  p.unit = m[2] == "mm" ? ParameterUnit::Millimetre : m[2] == "deg" ? ParameterUnit::Degree : ParameterUnit::Ratio;
+  const double def = std::stod(m[1]), lo = std::stod(m[3]), hi = std::stod(m[4]);
+  if (!(lo < hi))
+    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the range [" + std::string(m[3]) + ", " +
+                                             std::string(m[4]) + "] is empty; write [MIN, MAX] with MIN < MAX");
+  if (def < lo || def > hi)
+    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the default " + std::string(m[1]) +
+                                             " is outside its range [" + std::string(m[3]) + ", " +
+                                             std::string(m[4]) + "]");
+  if (p.unit != ParameterUnit::Degree && lo <= 0.0)
+    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': lengths and ratios must be positive; "
+                                             "the range starts at " + std::string(m[3]));
+  p.defaultValue = toApi(p.unit, def);
+  p.minimum = toApi(p.unit, lo);
+  p.maximum = toApi(p.unit, hi);
+  p.label = m[5];
+  p.line = lineNo;
+  return p;
+}
+
+void readSuture(ProcedureFile& read, int lineNo, const std::string& value)
+{
+  static const std::regex edgePairRe(R"(^\(?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*,?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*\)?$)");
+  std::smatch m;
+  if (!std::regex_match(value, m, edgePairRe))
+    throw ProcedureFileError(read.file, lineNo, "expected a pair of border edges like '(5,0) (5,4)' or "
+                                                  "'((5,0),(5,4))', got '" + value + "'");
+  read.written.push_back({{std::stoi(m[1]), std::stoi(m[2])}, {std::stoi(m[3]), std::stoi(m[4])}});
+  read.sutureLines.push_back(lineNo);
+}
+
+/// Kept as written: its range can only be checked once the cut's points are known.
+void readZip(ProcedureFile& read, int lineNo, const std::string& value)
+{
+  static const std::regex zipRe(R"(^(\d+)\s+(\d+)$)");
+  std::smatch m;
+  if (!std::regex_match(value, m, zipRe) || std::stoi(m[1]) >= std::stoi(m[2]))
+    throw ProcedureFileError(read.file, lineNo, "expected 'zip = FIRST LAST' with two cut point numbers, FIRST < "
+                                                  "LAST, got '" + value + "'");
+  read.zips.push_back({lineNo, {std::stoi(m[1]), std::stoi(m[2])}});
+}
+
+/// One non-blank, non-comment line: 'key = value', where "param NAME" keys
+/// carry the parameter's name.
+void readLine(ProcedureFile& read, int lineNo, const std::string& line)
+{
+  const fs::path& file = read.file;
+  const auto eq = line.find('=');
+  if (eq == std::string::npos)
+    throw ProcedureFileError(file, lineNo, "expected 'key = value', got '" + line + "'");
+  std::string key = trim(line.substr(0, eq));
+  const std::string value = trim(line.substr(eq + 1));
+  std::string paramName;
+  if (key.rfind("param", 0) == 0 && key.size() > 5 && (key[5] == ' ' || key[5] == '\t'))
+  {
+    paramName = trim(key.substr(5));
+    key = "param";
+  }
+  const bool repeatable = key == "param" || key == "suture" || key == "zip";
+  if (!repeatable && read.seenKeys.count(key))
+    throw ProcedureFileError(file, lineNo, "'" + key + "' is given twice (first on line " +
+                                             std::to_string(read.seenKeys[key]) + ")");
+  read.seenKeys.emplace(key, lineNo);
+  if (key == "procedure")
+    readId(read, lineNo, value);
+  else if (key == "title")
+    read.title = value;
+  else if (key == "reference")
+    read.reference = value;
+  else if (key == "generator")
+    readGenerator(read, lineNo, value);
+  else if (key == "points")
+    readPoints(read, lineNo, value);
+  else if (key == "param")
+    read.parameters.push_back(readParameter(read, lineNo, paramName, value));
+  else if (key == "suture")
+    readSuture(read, lineNo, value);
+  else if (key == "zip")
+    readZip(read, lineNo, value);
+  else
+    throw ProcedureFileError(file, lineNo, "unknown key '" + key +
+                                             "'; known: procedure, title, reference, generator, points, param, "
+                                             "suture, zip");
+}
+
+/// Every line of the file, each checked on its own.
+ProcedureFile readProcedureFile(const fs::path& file)
 {
   std::ifstream in(file);
   if (!in)
     throw ProcedureFileError(file, 0, "cannot be read");
-  ProcedureTemplate t;
-  t.file_ = file;
-  int pointsLine = 0, generatorLine = 0, explicitPoints = 0;
-  std::vector<int> sutureLines; // file line of each written suture
-  std::map<std::string, int> seenKeys;
-
-  static const std::string number = R"(([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?))";
-  static const std::regex paramRe("^" + number + R"(\s*(mm|deg|ratio)\s*\[\s*)" + number + R"(\s*,\s*)" + number +
-                                  R"(\s*\]\s*(.*)$)");
-  static const std::regex edgePairRe(R"(^\(?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*,?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*\)?$)");
-  static const std::regex zipRe(R"(^(\d+)\s+(\d+)$)");
-  static const std::regex nameRe(R"(^[a-z][a-z0-9_]*$)");
-  static const std::regex idRe(R"(^[a-z0-9][a-z0-9-]*$)");
-
+  ProcedureFile read;
+  read.file = file;
   std::string raw;
   int lineNo = 0;
-  std::vector<std::pair<int, std::pair<int, int>>> zips; // line, (from, to) cut points
   while (std::getline(in, raw))
   {
     ++lineNo;
-    std::string line = trim(raw);
+    const std::string line = trim(raw);
     if (line.empty() || line[0] == '#')
       continue;
-    const auto eq = line.find('=');
-    if (eq == std::string::npos)
-      throw ProcedureFileError(file, lineNo, "expected 'key = value', got '" + line + "'");
-    std::string key = trim(line.substr(0, eq));
-    const std::string value = trim(line.substr(eq + 1));
-    std::string paramName;
-    if (key.rfind("param", 0) == 0 && key.size() > 5 && (key[5] == ' ' || key[5] == '\t'))
-    {
-      paramName = trim(key.substr(5));
-      key = "param";
-    }
-    const bool repeatable = key == "param" || key == "suture" || key == "zip";
-    if (!repeatable && seenKeys.count(key))
-      throw ProcedureFileError(file, lineNo, "'" + key + "' is given twice (first on line " +
-                                               std::to_string(seenKeys[key]) + ")");
-    seenKeys.emplace(key, lineNo);
-    if (key == "procedure")
-    {
-      if (!std::regex_match(value, idRe))
-        throw ProcedureFileError(file, lineNo, "procedure id '" + value +
-                                                 "' must be lower case letters, digits and '-' (e.g. z-plasty)");
-      t.id_ = value;
-    }
-    else if (key == "title")
-      t.title_ = value;
-    else if (key == "reference")
-      t.reference_ = value;
-    else if (key == "generator")
-    {
-      if (!findGenerator(value))
-      {
-        std::string known;
-        for (const auto& g : procedureGenerators())
-          known += (known.empty() ? "" : ", ") + g;
-        throw ProcedureFileError(file, lineNo, "unknown generator '" + value + "'; known: " + known);
-      }
-      t.generator_ = value;
-      generatorLine = lineNo;
-    }
-    else if (key == "points")
-    {
-      char* end = nullptr;
-      const long n = std::strtol(value.c_str(), &end, 10);
-      if (value.empty() || *end || n < 3 || n > 65)
-        throw ProcedureFileError(file, lineNo, "points must be a whole number from 3 to 65, got '" + value + "'");
-      explicitPoints = int(n);
-      pointsLine = lineNo;
-    }
-    else if (key == "param")
-    {
-      if (!std::regex_match(paramName, nameRe))
-        throw ProcedureFileError(file, lineNo, "parameter name '" + paramName +
-                                                 "' must be lower case letters, digits and '_'");
-      std::smatch m;
-      if (!std::regex_match(value, m, paramRe))
-        throw ProcedureFileError(file, lineNo, "parameter '" + paramName +
-                                                 "': expected 'DEFAULT UNIT [MIN, MAX] label' with UNIT mm, deg "
-                                                 "or ratio, e.g. '60 deg [30, 90] limb angle'");
-      for (const auto& p : t.parameters_)
-        if (p.name == paramName)
-          throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "' is declared twice (first on line " +
-                                                   std::to_string(p.line) + ")");
-      ProcedureParameter p;
-      p.name = paramName;
-      p.unit = m[2] == "mm" ? ParameterUnit::Millimetre : m[2] == "deg" ? ParameterUnit::Degree : ParameterUnit::Ratio;
-      const double def = std::stod(m[1]), lo = std::stod(m[3]), hi = std::stod(m[4]);
-      if (!(lo < hi))
-        throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the range [" + std::string(m[3]) + ", " +
-                                                 std::string(m[4]) + "] is empty; write [MIN, MAX] with MIN < MAX");
-      if (def < lo || def > hi)
-        throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the default " + std::string(m[1]) +
-                                                 " is outside its range [" + std::string(m[3]) + ", " +
-                                                 std::string(m[4]) + "]");
-      if (p.unit != ParameterUnit::Degree && lo <= 0.0)
-        throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': lengths and ratios must be positive; "
-                                                 "the range starts at " + std::string(m[3]));
-      p.defaultValue = toApi(p.unit, def);
-      p.minimum = toApi(p.unit, lo);
-      p.maximum = toApi(p.unit, hi);
-      p.label = m[5];
-      p.line = lineNo;
-      t.parameters_.push_back(p);
-    }
-    else if (key == "suture")
-    {
-      std::smatch m;
-      if (!std::regex_match(value, m, edgePairRe))
-        throw ProcedureFileError(file, lineNo, "expected a pair of border edges like '(5,0) (5,4)' or "
-                                                 "'((5,0),(5,4))', got '" + value + "'");
-      t.written_.push_back({{std::stoi(m[1]), std::stoi(m[2])}, {std::stoi(m[3]), std::stoi(m[4])}});
-      sutureLines.push_back(lineNo);
-    }
-    else if (key == "zip")
-    {
-      std::smatch m;
-      if (!std::regex_match(value, m, zipRe) || std::stoi(m[1]) >= std::stoi(m[2]))
-        throw ProcedureFileError(file, lineNo, "expected 'zip = FIRST LAST' with two cut point numbers, FIRST < "
-                                                 "LAST, got '" + value + "'");
-      zips.push_back({lineNo, {std::stoi(m[1]), std::stoi(m[2])}});
-    }
-    else
-      throw ProcedureFileError(file, lineNo, "unknown key '" + key +
-                                               "'; known: procedure, title, reference, generator, points, param, "
-                                               "suture, zip");
+    readLine(read, lineNo, line);
   }
+  return read;
+}
 
-  // Whole-file checks: what must be there, and whether it fits together.
+void checkRequiredKeys(const ProcedureFile& read)
+{
   for (const char* key : {"procedure", "generator"})
-    if (!seenKeys.count(key))
-      throw ProcedureFileError(file, 0, std::string("'") + key + " = ...' is missing");
-  if (t.title_.empty())
-    t.title_ = t.id_;
-  const Generator& g = *findGenerator(t.generator_);
+    if (!read.seenKeys.count(key))
+      throw ProcedureFileError(read.file, 0, std::string("'") + key + " = ...' is missing");
+}
+
+/// The generator's own count, or the file's for generators that take one.
+int cutPoints(const ProcedureFile& read, const Generator& g)
+{
   if (g.fixedPoints > 0)
   {
-    if (explicitPoints && explicitPoints != g.fixedPoints)
-      throw ProcedureFileError(file, pointsLine, "the '" + g.name + "' generator cuts " +
-                                                   std::to_string(g.fixedPoints) + " points, not " +
-                                                   std::to_string(explicitPoints));
-    t.pathPoints_ = g.fixedPoints;
+    if (read.explicitPoints && read.explicitPoints != g.fixedPoints)
+      throw ProcedureFileError(read.file, read.pointsLine, "the '" + g.name + "' generator cuts " +
+                                                             std::to_string(g.fixedPoints) + " points, not " +
+                                                             std::to_string(read.explicitPoints));
+    return g.fixedPoints;
   }
-  else
-  {
-    if (!explicitPoints)
-      throw ProcedureFileError(file, generatorLine, "the '" + g.name + "' generator needs 'points = N' (cut points)");
-    t.pathPoints_ = explicitPoints;
-  }
+  if (!read.explicitPoints)
+    throw ProcedureFileError(read.file, read.generatorLine,
+                             "the '" + g.name + "' generator needs 'points = N' (cut points)");
+  return read.explicitPoints;
+}
+
+/// The file declares exactly the generator's parameters, in their units.
+void checkParameters(const ProcedureTemplate& t, const Generator& g, int generatorLine)
+{
+  const fs::path& file = t.file();
   std::set<std::string> expected;
   for (const auto& [names, unit] : g.required)
   {
@@ -387,39 +418,50 @@ ProcedureTemplate ProcedureTemplate::load(const fs::path& file)
       throw ProcedureFileError(file, p.line, "parameter '" + p.name + "' is measured in " + unitName(want) +
                                                ", not " + unitName(p.unit));
   }
-  for (const auto& p : t.parameters_)
+  for (const auto& p : t.parameters())
     if (!expected.count(p.name))
       throw ProcedureFileError(file, p.line, "the '" + g.name + "' generator has no parameter '" + p.name + "'");
+}
 
-  for (const auto& [line, range] : zips)
+/// Appends each zip's sutures to the written ones, with the zip's line.
+void expandZips(ProcedureFile& read, int pathPoints)
+{
+  for (const auto& [line, range] : read.zips)
   {
-    if (range.second >= t.pathPoints_)
-      throw ProcedureFileError(file, line, "zip to cut point " + std::to_string(range.second) + ", but the cut has " +
-                                             std::to_string(t.pathPoints_) + " points (0.." +
-                                             std::to_string(t.pathPoints_ - 1) + ")");
+    if (range.second >= pathPoints)
+      throw ProcedureFileError(read.file, line, "zip to cut point " + std::to_string(range.second) +
+                                                  ", but the cut has " + std::to_string(pathPoints) + " points (0.." +
+                                                  std::to_string(pathPoints - 1) + ")");
     // The two sides of the cut between the two points, sewn back together.
     for (int i = range.first; i < range.second; ++i)
     {
-      t.written_.push_back({{i, i + 1},
-                            {rightSideVertex(i, t.pathPoints_), rightSideVertex(i + 1, t.pathPoints_)}});
-      sutureLines.push_back(line);
+      read.written.push_back({{i, i + 1}, {rightSideVertex(i, pathPoints), rightSideVertex(i + 1, pathPoints)}});
+      read.sutureLines.push_back(line);
     }
   }
-  if (t.written_.empty())
-    throw ProcedureFileError(file, 0, "no sutures: give 'suture = (a,b) (c,d)' or 'zip = FIRST LAST' lines");
+}
+
+/// A suture error points at the file line that wrote the offending suture.
+std::vector<fem::SutureEdgePair> resolvedSutures(const ProcedureTemplate& t, const std::vector<int>& sutureLines)
+{
+  if (t.writtenSutures().empty())
+    throw ProcedureFileError(t.file(), 0, "no sutures: give 'suture = (a,b) (c,d)' or 'zip = FIRST LAST' lines");
   try
   {
-    t.sutures_ = resolveSutures(t.holeVertices(), t.written_);
+    return resolveSutures(t.holeVertices(), t.writtenSutures());
   }
   catch (const SutureError& e)
   {
     const int line = e.suture() >= 0 ? sutureLines[e.suture()] : 0;
-    throw ProcedureFileError(file, line, std::string(e.what()) + " (the hole of a " + std::to_string(t.pathPoints_) +
-                                           "-point cut has border points 0.." +
-                                           std::to_string(t.holeVertices() - 1) + ")");
+    throw ProcedureFileError(t.file(), line, std::string(e.what()) + " (the hole of a " +
+                                               std::to_string(t.pathPoints()) + "-point cut has border points 0.." +
+                                               std::to_string(t.holeVertices() - 1) + ")");
   }
+}
 
-  // The default cut must be a valid hole: distinct points, sides not swapped.
+/// The default cut must be a valid hole: distinct points, sides not swapped.
+void checkDefaultCut(const ProcedureTemplate& t, int generatorLine)
+{
   try
   {
     const ProcedureCut cut = t.cut(t.resolveValues({}));
@@ -440,8 +482,47 @@ ProcedureTemplate ProcedureTemplate::load(const fs::path& file)
   }
   catch (const std::invalid_argument& e)
   {
-    throw ProcedureFileError(file, generatorLine, e.what());
+    throw ProcedureFileError(t.file(), generatorLine, e.what());
   }
+}
+
+} // namespace
+
+ProcedureFileError::ProcedureFileError(const fs::path& file, int line, const std::string& message)
+  : std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + message),
+    file_(file), line_(line)
+{
+}
+
+std::vector<std::string> procedureGenerators()
+{
+  std::vector<std::string> names;
+  for (const auto& g : generators())
+    names.push_back(g.name);
+  return names;
+}
+
+ProcedureTemplate ProcedureTemplate::load(const fs::path& file)
+{
+  ProcedureFile read = readProcedureFile(file);
+
+  // Whole-file checks: what must be there, and whether it fits together.
+  checkRequiredKeys(read);
+  // The template first, so the checks can use its own lookups (parameter(), cut()).
+  ProcedureTemplate t;
+  t.file_ = file;
+  t.id_ = read.id;
+  t.title_ = read.title.empty() ? read.id : read.title;
+  t.reference_ = read.reference;
+  t.generator_ = read.generator;
+  t.parameters_ = std::move(read.parameters);
+  const Generator& g = *findGenerator(t.generator_);
+  t.pathPoints_ = cutPoints(read, g);
+  checkParameters(t, g, read.generatorLine);
+  expandZips(read, t.pathPoints_);
+  t.written_ = std::move(read.written);
+  t.sutures_ = resolvedSutures(t, read.sutureLines);
+  checkDefaultCut(t, read.generatorLine);
   return t;
 }
 
