@@ -25,6 +25,7 @@
 #include "planning/PlanDisplay.h"
 #include "planning/PlanRecipe.h"
 #include "planning/PlanSimulation.h"
+#include "planning/UnderminingStudy.h"
 #include "modules/incision/StudyPlot.h"
 #include "planning/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
@@ -333,6 +334,304 @@ void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m
     throw std::runtime_error("cannot write " + file.string() + ": check the folder's permissions and space");
 }
 
+/// One `caps plan` run, step by step: run() is the table of contents.
+class PlanRun
+{
+public:
+  PlanRun(IncisionLogic& logic, PlanArgs args, std::ostream& out, std::ostream& err)
+    : logic_(logic), args_(std::move(args)), out_(out), err_(err)
+  {
+  }
+
+  void run()
+  {
+    readTheProcedureOrRecipe(); // a typo stops us before the long part
+    cli::makeOutputFolder(args_.out);
+    readTheCt();
+    takeTheRangeMaps();
+    recordThePlan();
+    saveTheRecipe(); // before the long solve: the plan is kept even if the prediction fails
+    predict();
+    printThePrediction();
+    writeTheFiles();
+    if (!args_.undermineWidths.empty())
+      studyTheUndermining();
+  }
+
+private:
+  /// The procedure and its values, or the plan file to replay (its
+  /// procedures checked).
+  void readTheProcedureOrRecipe()
+  {
+    if (args_.replay)
+    {
+      replay_ = incision::readRecipe(*args_.replay);
+      for (const auto& operation : replay_->operations)
+        if (const auto* place = std::get_if<incision::PlaceProcedure>(&operation))
+          incision::findProcedure(logic_.procedures(), place->procedure);
+      return;
+    }
+    const incision::ProcedureTemplate& procedure = incision::findProcedure(logic_.procedures(), args_.procedure);
+    // Every value recorded, defaults too: a default changed in the
+    // procedure file later does not change the replayed plan.
+    values_ = procedure.resolveValues(apiValues(procedure, args_.params)); // range errors now
+  }
+
+  /// The CT, and for a replay the check that it is the one the plan was
+  /// made on (refused unless --other-ct) by this version of CAPS (warned).
+  void readTheCt()
+  {
+    args_.read.progress = cli::consoleProgress(err_);
+    volume_ = cli::loadCt(logic_, args_.ct, args_.read, err_);
+    ctHash_ = incision::ctContentHash(volume_->image());
+    if (!replay_)
+      return;
+    const std::string file = args_.replay->string();
+    if (replay_->ctSha256 != ctHash_)
+    {
+      const std::string made = replay_->ctSha256.empty() ? std::string("a CT it does not name")
+                                                         : "a CT of SHA-256 " + replay_->ctSha256;
+      if (!args_.otherCt)
+        throw std::invalid_argument(file + " was made on " + made + ", not on this CT (SHA-256 " + ctHash_ +
+                                    "): another scan or another patient. Replay it on the CT it was made on, "
+                                    "or give --other-ct to apply its operations to this CT anyway.");
+      err_ << "caps plan: warning: " << file << " was made on " << made
+           << "; its operations are applied to this CT (--other-ct), the prediction is a new one.\n";
+    }
+    if (replay_->softwareVersion != incision::softwareVersion())
+      err_ << "caps plan: warning: " << file << " was made by CAPS "
+           << (replay_->softwareVersion.empty() ? std::string("of an unknown version") : replay_->softwareVersion)
+           << ", this is CAPS " << incision::softwareVersion()
+           << ": the plan is rebuilt from the same operations, but the prediction may differ from the one made "
+              "then.\n";
+  }
+
+  /// The range maps: those already in the scene when it holds this one CT
+  /// (`caps demo` made them a step earlier), else made now.
+  void takeTheRangeMaps()
+  {
+    const auto [skinNode, boneNode] = RangeMapLogic::newestMaps(logic_.scene());
+    if (skinNode && boneNode && logic_.scene().nodesOfType(NodeType::Volume).size() == 1)
+    {
+      maps_.skin = RangeMapLogic::toRangeMap(*skinNode);
+      maps_.bone = RangeMapLogic::toRangeMap(*boneNode);
+      skinMapId_ = skinNode->id();
+      return;
+    }
+    RangeMapLogic rangeMaps(logic_.scene());
+    skinMapId_ = rangeMaps.run(*volume_, RangeMapLogic::Parameters{}, cli::consoleProgress(err_), &maps_).skinId;
+  }
+
+  /// The plan as the operations that make it, each checked as it is
+  /// applied: the placed procedure or the replayed operations, then the
+  /// edits and the undermined regions of the command line.
+  void recordThePlan()
+  {
+    const seg::RangeMap& skin = maps_.skin;
+    recorded_.emplace(ctHash_);
+    if (replay_)
+    {
+      try
+      {
+        for (const auto& operation : replay_->operations)
+          recorded_->apply(operation, skin, logic_.procedures());
+      }
+      catch (const incision::RecipeError& e)
+      {
+        throw incision::RecipeError(e.operation(), args_.replay->string() + ": " + e.what());
+      }
+    }
+    else
+      recorded_->apply(incision::PlaceProcedure{args_.procedure, {args_.at->first * kDegree, args_.at->second}, values_},
+                       skin, logic_.procedures());
+    for (const PlanEdit& e : args_.edits)
+      if (e.move)
+        recorded_->apply(
+          incision::MoveCutPoint{e.index, incision::normalizedFromSkinPoint(skin.frame(), {e.a * kDegree, e.b})}, skin,
+          logic_.procedures());
+      else
+        recorded_->apply(incision::OffsetBorderPoint{e.index, {e.a, e.b}}, skin, logic_.procedures());
+    for (const auto& points : args_.undermineRegions)
+    {
+      incision::UndermineRegion region;
+      for (const auto& [theta, z] : points)
+        region.region.push_back(incision::normalizedFromSkinPoint(skin.frame(), {theta * kDegree, z}));
+      recorded_->apply(region, skin, logic_.procedures());
+    }
+  }
+
+  /// plan.json: the operations, with the prediction's element size and cut
+  /// depth so a replay meshes the same.
+  void saveTheRecipe()
+  {
+    const double elementSize =
+      args_.elementSize.value_or(replay_ && replay_->elementSize > 0.0 ? replay_->elementSize : 2.0);
+    const int cutLayers = args_.cutLayers.value_or(replay_ ? replay_->cutLayers : 0);
+    saved_ = recorded_->recipe();
+    saved_.elementSize = elementSize;
+    saved_.cutLayers = cutLayers;
+    incision::writeRecipe(saved_, args_.out / "plan.json");
+    options_.elementSize = elementSize;
+    options_.cutLayers = cutLayers;
+    options_.threads = 2;
+  }
+
+  /// The measurements on the skin, the prediction and its wound stress.
+  void predict()
+  {
+    const incision::IncisionPlan& plan = recorded_->plan();
+    procedure_ = &incision::findProcedure(logic_.procedures(), plan.procedure());
+    measured_ = incision::measurePlan(plan, maps_.skin);
+    prediction_ = incision::simulatePlan(maps_.skin, maps_.bone, plan, options_);
+    excisedVolume_ = incision::excisedVolume(plan, maps_.skin, maps_.bone, options_.noBoneDepth);
+    // The meshed region cut short (a shape the mesher could not grow round,
+    // or the end of the scan) changes the prediction: say so.
+    if (!prediction_.surface.message.empty())
+      err_ << "caps plan: note: " << prediction_.surface.message
+           << (prediction_.surface.stoppedEarly ? "; the skin beyond is left out of the model, which makes the "
+                                                  "closure look easier than it is: move the plan points a little "
+                                                  "and run again"
+                                                : "")
+           << "\n";
+    woundStress_ = incision::woundSkinStress(prediction_, kWoundStressRadius);
+    peakAt_ = maps_.skin.frame().toCylindrical(woundStress_.original);
+  }
+
+  void printThePrediction()
+  {
+    const incision::IncisionPlan& plan = recorded_->plan();
+    const incision::PlanPrediction& p = prediction_;
+    out_ << std::fixed << std::setprecision(1);
+    if (replay_)
+      out_ << "Replayed " << replay_->operations.size() << " operations of " << args_.replay->string() << "\n";
+    out_ << "Plan: " << procedure_->title() << " at theta " << plan.centre().theta / kDegree << " deg, z "
+         << plan.centre().z << " mm, " << recorded_->recipe().operations.size() << " operations\n";
+    for (const auto& l : measured_.limbs)
+      out_ << "  limb p" << l.from << "-p" << l.to << ": " << l.skin << " mm on the skin\n";
+    for (const auto& a : measured_.limbAngles)
+      out_ << "  angle at p" << a.point << ": " << a.skin / kDegree << " deg on the skin\n";
+    if (measured_.excisedArea > 0.0)
+      out_ << "  excised area: " << measured_.excisedArea << " mm2, volume " << p.excisedVolume
+           << " mm3 (elements; " << excisedVolume_ << " mm3 to the bone by the range maps)\n";
+    if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
+      out_ << "  cut through " << options_.cutLayers << " of " << options_.layerCount
+           << " tissue layers: the tissue below stays whole\n";
+    out_ << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size()
+         << " elements, " << p.dofCount << " DOF (" << p.reducedDofCount << " free); mesh " << std::setprecision(3)
+         << p.times.mesh << " s, assemble " << p.times.assemble << " s, factor " << p.times.factor << " s, solve "
+         << p.times.solve << " s\n";
+    if (!plan.underminedRegions().empty())
+      out_ << "Undermined: " << plan.underminedRegions().size() << " region(s), "
+           << p.continuum.underminedNodes.size() << " bone nodes released\n";
+    out_ << std::setprecision(2) << "Wound " << p.maxSutureGapBefore << " mm wide before, sutures within "
+         << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
+    out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum << " N over all sutures, largest suture "
+         << p.closure.largest << " N\n";
+    const incision::WoundStress& w = woundStress_;
+    out_ << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
+         << 1e3 * w.peakVonMises << " kPa at theta " << peakAt_.theta / kDegree << " deg, z " << peakAt_.z << " mm ("
+         << w.distance << " mm from the wound edge), largest principal " << 1e3 * w.peakMaxPrincipal
+         << " kPa, mean von Mises " << 1e3 * w.meanVonMises << " kPa\n";
+    if (p.zPlasty)
+      out_ << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * p.zPlasty->predicted.fraction
+           << " %, theoretical " << 100.0 * p.zPlasty->theoretical << " % (Fig. 2.2)\n";
+    out_.unsetf(std::ios::floatfield);
+  }
+
+  /// measurements.csv, the display surfaces (§4.7: subdivided skin faces
+  /// with range detail, coloured by the tissue a little under the skin, the
+  /// CT has no colour), the prediction in the scene (`caps demo` saves it,
+  /// numbered among the plans there) and model.vtu.
+  void writeTheFiles()
+  {
+    const incision::IncisionPlan& plan = recorded_->plan();
+    writeMeasurements(args_.out / "measurements.csv", measured_, prediction_, excisedVolume_, woundStress_, peakAt_);
+    const seg::ColourMap shade = seg::skinShadeFromCt(volume_->image(), maps_.skin);
+    const incision::PlanDisplay display = incision::buildPlanDisplay(prediction_, maps_.skin, &shade);
+    incision::writePlanDisplay(display, args_.out / "skin-before.vtp", args_.out / "skin-after.vtp");
+    const std::string name =
+      procedure_->title() + " " + std::to_string(logic_.scene().nodesOfType(NodeType::Plan).size() + 1);
+    logic_.addPrediction(name, plan, saved_, prediction_, display, skinMapId_);
+    const Eigen::Map<const Eigen::Matrix3Xd> u(prediction_.displacements.data(), 3,
+                                               prediction_.displacements.size() / 3);
+    fem::writeVtu((args_.out / "model.vtu").string(), prediction_.continuum.mesh,
+                  {{"displacement_mm", Eigen::MatrixXd(u)}});
+    for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
+      out_ << "wrote " << (args_.out / file).string() << "\n";
+  }
+
+  /// The surgeon's question: how far must I undermine? The same plan and
+  /// mesh, the bone released under a band around the sutured edges
+  /// (incision::studyUndermining()), as undermining.csv and a plot.
+  void studyTheUndermining()
+  {
+    const incision::IncisionPlan& plan = recorded_->plan();
+    out_ << "Undermining study (closure force and peak skin stress within " << std::lround(kWoundStressRadius)
+         << " mm of the wound against width):\n";
+    const incision::UnderminingStudy study =
+      incision::studyUndermining(maps_.skin, maps_.bone, plan, options_, args_.undermineWidths, kWoundStressRadius);
+    if (study.regionRadius > incision::SimulationOptions{}.regionRadius)
+      out_ << "  (meshed region " << study.regionRadius << " mm around the wound, for the widest band)\n";
+    const fs::path csv = args_.out / "undermining.csv";
+    std::ofstream table(csv);
+    table << std::setprecision(10)
+          << "undermining width (mm),released bone nodes,closure force (sum over sutures) (N),"
+             "largest suture force (N),suture gap after closure (mm),peak skin von Mises near wound (kPa),"
+             "mean skin von Mises near wound (kPa)\n";
+    incision::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
+    incision::PlotSeries stress{
+      "peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) + " mm of the wound (kPa)",
+      {},
+      {},
+      0xc0392b};
+    for (const incision::UnderminingStudyRow& row : study.rows)
+    {
+      table << row.width << "," << row.releasedBoneNodes << "," << row.closureForce << "," << row.largestSutureForce
+            << "," << row.sutureGap << "," << row.peakVonMisesKPa << "," << row.meanVonMisesKPa << "\n";
+      force.x.push_back(row.width);
+      force.y.push_back(row.closureForce);
+      stress.x.push_back(row.width);
+      stress.y.push_back(row.peakVonMisesKPa);
+      out_ << std::fixed << std::setprecision(1) << "  " << row.width << " mm: " << std::setprecision(3)
+           << row.closureForce << " N, largest suture " << row.largestSutureForce << " N, peak skin stress "
+           << std::setprecision(1) << row.peakVonMisesKPa << " kPa (mean " << row.meanVonMisesKPa << " kPa)\n";
+      out_.unsetf(std::ios::floatfield);
+    }
+    if (!table)
+      throw std::runtime_error("cannot write " + csv.string() + ": check the folder's permissions and space");
+    out_ << "wrote " << csv.string() << "\n";
+    std::ostringstream title;
+    title << std::fixed << std::setprecision(1) << "Undermining: " << procedure_->title() << " at theta "
+          << plan.centre().theta / kDegree << " deg, z " << plan.centre().z << " mm";
+    incision::XyPlot plot;
+    plot.title = title.str();
+    plot.xLabel = "undermining width (mm)";
+    plot.series = {force, stress};
+    incision::writeXyPlotPng(plot, args_.out / "undermining.png");
+    out_ << "wrote " << (args_.out / "undermining.png").string() << "\n";
+  }
+
+  IncisionLogic& logic_;
+  PlanArgs args_;
+  std::ostream& out_;
+  std::ostream& err_;
+  std::optional<incision::PlanRecipe> replay_;
+  std::map<std::string, double> values_;
+  VolumeNode* volume_ = nullptr;
+  std::string ctHash_;
+  RangeMapOutput maps_;
+  NodeId skinMapId_;
+  std::optional<incision::RecordedPlan> recorded_;
+  incision::PlanRecipe saved_;
+  incision::SimulationOptions options_;
+  const incision::ProcedureTemplate* procedure_ = nullptr;
+  incision::PlanMeasurements measured_;
+  incision::PlanPrediction prediction_;
+  double excisedVolume_ = 0.0;
+  incision::WoundStress woundStress_;
+  seg::CylindricalPoint peakAt_;
+};
+
 int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
             std::ostream& err)
 {
@@ -347,238 +646,9 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
     out << kPlanUsage;
     return 0;
   }
-  auto& logic = static_cast<IncisionLogic&>(moduleLogic);
   try
   {
-    // The procedure and its values (or the plan file) first: a typo stops us
-    // before the long part.
-    std::optional<incision::PlanRecipe> replay;
-    std::map<std::string, double> values;
-    if (args.replay)
-    {
-      replay = incision::readRecipe(*args.replay);
-      for (const auto& operation : replay->operations)
-        if (const auto* place = std::get_if<incision::PlaceProcedure>(&operation))
-          incision::findProcedure(logic.procedures(), place->procedure);
-    }
-    else
-    {
-      const incision::ProcedureTemplate& procedure = incision::findProcedure(logic.procedures(), args.procedure);
-      // Every value recorded, defaults too: a default changed in the
-      // procedure file later does not change the replayed plan.
-      values = procedure.resolveValues(apiValues(procedure, args.params)); // range errors now
-    }
-    cli::makeOutputFolder(args.out);
-
-    args.read.progress = cli::consoleProgress(err);
-    VolumeNode* volume = cli::loadCt(logic, args.ct, args.read, err);
-    const std::string ctHash = incision::ctContentHash(volume->image());
-    if (replay)
-    {
-      const std::string file = args.replay->string();
-      if (replay->ctSha256 != ctHash)
-      {
-        const std::string made = replay->ctSha256.empty() ? std::string("a CT it does not name")
-                                                           : "a CT of SHA-256 " + replay->ctSha256;
-        if (!args.otherCt)
-          throw std::invalid_argument(file + " was made on " + made + ", not on this CT (SHA-256 " + ctHash +
-                                      "): another scan or another patient. Replay it on the CT it was made on, "
-                                      "or give --other-ct to apply its operations to this CT anyway.");
-        err << "caps plan: warning: " << file << " was made on " << made
-            << "; its operations are applied to this CT (--other-ct), the prediction is a new one.\n";
-      }
-      if (replay->softwareVersion != incision::softwareVersion())
-        err << "caps plan: warning: " << file << " was made by CAPS "
-            << (replay->softwareVersion.empty() ? std::string("of an unknown version") : replay->softwareVersion)
-            << ", this is CAPS " << incision::softwareVersion()
-            << ": the plan is rebuilt from the same operations, but the prediction may differ from the one made "
-               "then.\n";
-    }
-    // The range maps: those already in the scene when it holds this one CT
-    // (`caps demo` made them a step earlier), else made now.
-    RangeMapOutput maps;
-    NodeId skinMapId;
-    {
-      const auto [skinNode, boneNode] = RangeMapLogic::newestMaps(logic.scene());
-      if (skinNode && boneNode && logic.scene().nodesOfType(NodeType::Volume).size() == 1)
-      {
-        maps.skin = RangeMapLogic::toRangeMap(*skinNode);
-        maps.bone = RangeMapLogic::toRangeMap(*boneNode);
-        skinMapId = skinNode->id();
-      }
-      else
-      {
-        RangeMapLogic rangeMaps(logic.scene());
-        skinMapId = rangeMaps.run(*volume, RangeMapLogic::Parameters{}, cli::consoleProgress(err), &maps).skinId;
-      }
-    }
-
-    // The plan as the operations that make it, each checked as it is applied.
-    incision::RecordedPlan recorded(ctHash);
-    if (replay)
-    {
-      try
-      {
-        for (const auto& operation : replay->operations)
-          recorded.apply(operation, maps.skin, logic.procedures());
-      }
-      catch (const incision::RecipeError& e)
-      {
-        throw incision::RecipeError(e.operation(), args.replay->string() + ": " + e.what());
-      }
-    }
-    else
-      recorded.apply(incision::PlaceProcedure{args.procedure, {args.at->first * kDegree, args.at->second}, values},
-                     maps.skin, logic.procedures());
-    for (const PlanEdit& e : args.edits)
-      if (e.move)
-        recorded.apply(incision::MoveCutPoint{e.index, incision::normalizedFromSkinPoint(
-                                                         maps.skin.frame(), {e.a * kDegree, e.b})},
-                       maps.skin, logic.procedures());
-      else
-        recorded.apply(incision::OffsetBorderPoint{e.index, {e.a, e.b}}, maps.skin, logic.procedures());
-    for (const auto& points : args.undermineRegions)
-    {
-      incision::UndermineRegion region;
-      for (const auto& [theta, z] : points)
-        region.region.push_back(incision::normalizedFromSkinPoint(maps.skin.frame(), {theta * kDegree, z}));
-      recorded.apply(region, maps.skin, logic.procedures());
-    }
-    const incision::IncisionPlan& plan = recorded.plan();
-    // The prediction's element size is kept with the plan so a replay meshes the same.
-    const double elementSize =
-      args.elementSize.value_or(replay && replay->elementSize > 0.0 ? replay->elementSize : 2.0);
-    const int cutLayers = args.cutLayers.value_or(replay ? replay->cutLayers : 0);
-    incision::PlanRecipe saved = recorded.recipe();
-    saved.elementSize = elementSize;
-    saved.cutLayers = cutLayers;
-    // Written before the long solve: the plan is kept even if the prediction fails.
-    incision::writeRecipe(saved, args.out / "plan.json");
-    const incision::ProcedureTemplate& procedure = incision::findProcedure(logic.procedures(), plan.procedure());
-    const incision::PlanMeasurements measured = incision::measurePlan(plan, maps.skin);
-    incision::SimulationOptions options;
-    options.elementSize = elementSize;
-    options.cutLayers = cutLayers;
-    options.threads = 2;
-    const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, plan, options);
-    const double excisedVolume = incision::excisedVolume(plan, maps.skin, maps.bone, options.noBoneDepth);
-    // The meshed region cut short (a shape the mesher could not grow round,
-    // or the end of the scan) changes the prediction: say so.
-    if (!prediction.surface.message.empty())
-      err << "caps plan: note: " << prediction.surface.message
-          << (prediction.surface.stoppedEarly ? "; the skin beyond is left out of the model, which makes the closure "
-                                                "look easier than it is: move the plan points a little and run again"
-                                              : "")
-          << "\n";
-
-    out << std::fixed << std::setprecision(1);
-    if (replay)
-      out << "Replayed " << replay->operations.size() << " operations of " << args.replay->string() << "\n";
-    out << "Plan: " << procedure.title() << " at theta " << plan.centre().theta / kDegree << " deg, z "
-        << plan.centre().z << " mm, " << recorded.recipe().operations.size() << " operations\n";
-    for (const auto& l : measured.limbs)
-      out << "  limb p" << l.from << "-p" << l.to << ": " << l.skin << " mm on the skin\n";
-    for (const auto& a : measured.limbAngles)
-      out << "  angle at p" << a.point << ": " << a.skin / kDegree << " deg on the skin\n";
-    if (measured.excisedArea > 0.0)
-      out << "  excised area: " << measured.excisedArea << " mm2, volume " << prediction.excisedVolume
-          << " mm3 (elements; " << excisedVolume << " mm3 to the bone by the range maps)\n";
-    if (options.cutLayers != 0 && options.cutLayers != options.layerCount)
-      out << "  cut through " << options.cutLayers << " of " << options.layerCount
-          << " tissue layers: the tissue below stays whole\n";
-    out << "Model: " << prediction.continuum.mesh.nodeCount() << " nodes, "
-        << prediction.continuum.mesh.elements.size() << " elements, " << prediction.dofCount << " DOF ("
-        << prediction.reducedDofCount << " free); mesh " << std::setprecision(3) << prediction.times.mesh
-        << " s, assemble " << prediction.times.assemble << " s, factor " << prediction.times.factor
-        << " s, solve " << prediction.times.solve << " s\n";
-    if (!plan.underminedRegions().empty())
-      out << "Undermined: " << plan.underminedRegions().size() << " region(s), "
-          << prediction.continuum.underminedNodes.size() << " bone nodes released\n";
-    out << std::setprecision(2) << "Wound " << prediction.maxSutureGapBefore << " mm wide before, sutures within "
-        << std::scientific << prediction.maxSutureGap << std::fixed << " mm after closure\n";
-    out << std::setprecision(3) << "Closure force: " << prediction.closure.magnitudeSum
-        << " N over all sutures, largest suture " << prediction.closure.largest << " N\n";
-    const incision::WoundStress woundStress = incision::woundSkinStress(prediction, kWoundStressRadius);
-    const seg::CylindricalPoint peakAt = maps.skin.frame().toCylindrical(woundStress.original);
-    out << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
-        << 1e3 * woundStress.peakVonMises << " kPa at theta " << peakAt.theta / kDegree << " deg, z " << peakAt.z
-        << " mm (" << woundStress.distance << " mm from the wound edge), largest principal "
-        << 1e3 * woundStress.peakMaxPrincipal << " kPa, mean von Mises " << 1e3 * woundStress.meanVonMises << " kPa\n";
-    if (prediction.zPlasty)
-      out << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * prediction.zPlasty->predicted.fraction
-          << " %, theoretical " << 100.0 * prediction.zPlasty->theoretical << " % (Fig. 2.2)\n";
-    out.unsetf(std::ios::floatfield);
-
-    writeMeasurements(args.out / "measurements.csv", measured, prediction, excisedVolume, woundStress, peakAt);
-    // The display surfaces (§4.7): subdivided skin faces with range detail,
-    // coloured by the tissue a little under the skin (the CT has no colour).
-    const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin);
-    const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, maps.skin, &shade);
-    incision::writePlanDisplay(display, args.out / "skin-before.vtp", args.out / "skin-after.vtp");
-    // And into the scene (`caps demo` saves it), numbered among the plans there.
-    const std::string name = procedure.title() + " " +
-                             std::to_string(logic.scene().nodesOfType(NodeType::Plan).size() + 1);
-    logic.addPrediction(name, plan, saved, prediction, display, skinMapId);
-    const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3,
-                                               prediction.displacements.size() / 3);
-    fem::writeVtu((args.out / "model.vtu").string(), prediction.continuum.mesh,
-                  {{"displacement_mm", Eigen::MatrixXd(u)}});
-    for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
-      out << "wrote " << (args.out / file).string() << "\n";
-
-    // The surgeon's question: how far must I undermine? The same plan and
-    // mesh, the bone released under a band around the sutured edges.
-    if (!args.undermineWidths.empty())
-    {
-      std::ofstream table(args.out / "undermining.csv");
-      table << std::setprecision(10)
-            << "undermining width (mm),released bone nodes,closure force (sum over sutures) (N),"
-               "largest suture force (N),suture gap after closure (mm),peak skin von Mises near wound (kPa),"
-               "mean skin von Mises near wound (kPa)\n";
-      out << "Undermining study (closure force and peak skin stress within " << std::lround(kWoundStressRadius)
-          << " mm of the wound against width):\n";
-      incision::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
-      incision::PlotSeries stress{"peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) +
-                                    " mm of the wound (kPa)",
-                                  {}, {}, 0xc0392b};
-      // One meshed region for every width, reaching 15 mm beyond the widest
-      // band: a band as wide as the region would free every bone node and
-      // leave the skin nothing to hold it.
-      const double widest = *std::max_element(args.undermineWidths.begin(), args.undermineWidths.end());
-      options.regionRadius = std::max(options.regionRadius, widest + 15.0);
-      if (options.regionRadius > incision::SimulationOptions{}.regionRadius)
-        out << "  (meshed region " << options.regionRadius << " mm around the wound, for the widest band)\n";
-      for (const double width : args.undermineWidths)
-      {
-        options.underminingWidth = width;
-        const incision::PlanPrediction p = incision::simulatePlan(maps.skin, maps.bone, plan, options);
-        const incision::WoundStress near = incision::woundSkinStress(p, kWoundStressRadius);
-        const double peak = 1e3 * near.peakVonMises;
-        table << width << "," << p.continuum.underminedNodes.size() << "," << p.closure.magnitudeSum << ","
-              << p.closure.largest << "," << p.maxSutureGap << "," << peak << "," << 1e3 * near.meanVonMises << "\n";
-        force.x.push_back(width);
-        force.y.push_back(p.closure.magnitudeSum);
-        stress.x.push_back(width);
-        stress.y.push_back(peak);
-        out << std::fixed << std::setprecision(1) << "  " << width << " mm: " << std::setprecision(3)
-            << p.closure.magnitudeSum << " N, largest suture " << p.closure.largest << " N, peak skin stress "
-            << std::setprecision(1) << peak << " kPa (mean " << 1e3 * near.meanVonMises << " kPa)\n";
-        out.unsetf(std::ios::floatfield);
-      }
-      if (!table)
-        throw std::runtime_error("cannot write " + (args.out / "undermining.csv").string() +
-                                 ": check the folder's permissions and space");
-      out << "wrote " << (args.out / "undermining.csv").string() << "\n";
-      std::ostringstream title;
-      title << std::fixed << std::setprecision(1) << "Undermining: " << procedure.title() << " at theta "
-            << plan.centre().theta / kDegree << " deg, z " << plan.centre().z << " mm";
-      incision::XyPlot plot;
-      plot.title = title.str();
-      plot.xLabel = "undermining width (mm)";
-      plot.series = {force, stress};
-      incision::writeXyPlotPng(plot, args.out / "undermining.png");
-      out << "wrote " << (args.out / "undermining.png").string() << "\n";
-    }
+    PlanRun(static_cast<IncisionLogic&>(moduleLogic), std::move(args), out, err).run();
     return 0;
   }
   catch (const fem::ElementError& e)
