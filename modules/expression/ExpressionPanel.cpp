@@ -102,6 +102,27 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   : QWidget(parent), logic_(logic), host_(host)
 {
   auto* layout = new QVBoxLayout(this);
+  addModelControls(layout);
+  addExpressionSliders(layout);
+  addMuscleSliders(layout);
+  addPlaybackControls(layout);
+  QVBoxLayout* planLayout = addPlanStudy();
+  addFingertip(planLayout);
+  layout->addWidget(planBox_);
+  addSavedExpressions(layout);
+  animation_ = new QTimer(this);
+  animation_->setInterval(20);
+
+  connectControls();
+  observeTheScene();
+  dropModel({});
+  refreshSaved();
+  refreshPlans();
+}
+
+/// The Build button and the model's status.
+void ExpressionPanel::addModelControls(QVBoxLayout* layout)
+{
   build_ = new QPushButton(tr("Build face model"), this);
   build_->setObjectName("expression.build");
   build_->setToolTip(tr("Mesh the whole face from the skin to the bone, fit the muscles to the landmarks and solve "
@@ -112,6 +133,10 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   status_->setWordWrap(true);
   layout->addWidget(status_);
 
+}
+
+void ExpressionPanel::addExpressionSliders(QVBoxLayout* layout)
+{
   // One slider per built-in expression.
   auto* expressions = new QGroupBox(tr("Expressions"), this);
   auto* expressionForm = new QFormLayout(expressions);
@@ -133,6 +158,10 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   expressionBox_ = expressions;
   layout->addWidget(expressions);
 
+}
+
+void ExpressionPanel::addMuscleSliders(QVBoxLayout* layout)
+{
   // One slider per muscle, made with the model (its fitted muscles).
   auto* muscles = new QGroupBox(tr("Muscles: slider added to the expressions, number the muscle's activation"), this);
   auto* muscleLayout = new QVBoxLayout(muscles);
@@ -147,6 +176,11 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   muscleLayout->addWidget(scroll);
   layout->addWidget(muscles, 1);
 
+}
+
+/// Play, Rest, Export and what they report.
+void ExpressionPanel::addPlaybackControls(QVBoxLayout* layout)
+{
   auto* buttons = new QHBoxLayout;
   play_ = new QPushButton(tr("Play"), this);
   play_->setObjectName("expression.play");
@@ -168,6 +202,11 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   info_->setWordWrap(true);
   layout->addWidget(info_);
 
+}
+
+/// The group of the plan under expression; returns its layout.
+QVBoxLayout* ExpressionPanel::addPlanStudy()
+{
   // A predicted plan in the face (§5.4): its skin after the operation under
   // the sliders and under a fingertip, its contour bumps against rest.
   planBox_ = new QGroupBox(tr("Plan under expression"), this);
@@ -198,6 +237,15 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   bumps_->setToolTip(tr("Contour bumps within 20 mm of the cut: each skin vertex's height above or below the smooth "
                         "surface fitted to the skin within 10 mm around it (a dog-ear or a ridge stands out)"));
   planLayout->addWidget(bumps_);
+  bumpsTimer_ = new QTimer(this);
+  bumpsTimer_->setSingleShot(true);
+  bumpsTimer_->setInterval(kBumpsDelayMs);
+  return planLayout;
+}
+
+/// The fingertip pushing the plan's skin along a path of corners.
+void ExpressionPanel::addFingertip(QVBoxLayout* planLayout)
+{
   auto* pushForm = new QFormLayout;
   fingertip_ = new QPushButton(tr("Fingertip..."), planBox_);
   fingertip_->setObjectName("expression.fingertip");
@@ -242,11 +290,11 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   pathInfo_->setObjectName("expression.push.info");
   pathInfo_->setWordWrap(true);
   planLayout->addWidget(pathInfo_);
-  layout->addWidget(planBox_);
-  bumpsTimer_ = new QTimer(this);
-  bumpsTimer_->setSingleShot(true);
-  bumpsTimer_->setInterval(kBumpsDelayMs);
 
+}
+
+void ExpressionPanel::addSavedExpressions(QVBoxLayout* layout)
+{
   auto* store = new QGroupBox(tr("Saved expressions"), this);
   auto* storeForm = new QFormLayout(store);
   name_ = new QLineEdit(store);
@@ -265,9 +313,10 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
   storeForm->addRow(tr("Recall:"), saved_);
   layout->addWidget(store);
 
-  animation_ = new QTimer(this);
-  animation_->setInterval(20);
+}
 
+void ExpressionPanel::connectControls()
+{
   connect(build_, &QPushButton::clicked, this, &ExpressionPanel::build);
   connect(play_, &QPushButton::clicked, this, &ExpressionPanel::play);
   connect(rest_, &QPushButton::clicked, this, &ExpressionPanel::rest);
@@ -304,6 +353,13 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
       buildFingertip(planStudy_->currentFingertip().centre);
   });
 
+}
+
+/// Follows the scene: the face removed by someone else, a leftover face of a
+/// saved scene, the plan's skin gone, plans, solutions and expressions
+/// added or removed.
+void ExpressionPanel::observeTheScene()
+{
   observer_ = logic_.scene().addObserver([this](SceneEvent event, const Node& node) {
     if (event == SceneEvent::NodeAboutToBeRemoved && node.id() == faceId_)
     {
@@ -341,9 +397,6 @@ ExpressionPanel::ExpressionPanel(ExpressionLogic& logic, ModuleHost& host, QWidg
       QTimer::singleShot(0, this, &ExpressionPanel::refreshSaved);
     }
   });
-  dropModel({});
-  refreshSaved();
-  refreshPlans();
 }
 
 ExpressionPanel::~ExpressionPanel()

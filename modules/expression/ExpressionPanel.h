@@ -26,6 +26,7 @@ class QLineEdit;
 class QPushButton;
 class QSlider;
 class QTimer;
+class QVBoxLayout;
 class vtkPolyData;
 
 namespace caps {
@@ -48,6 +49,18 @@ protected:
   void hideEvent(QHideEvent* event) override;
 
 private:
+  /// @name The panel's parts, top to bottom, and their wiring
+  ///@{
+  void addModelControls(QVBoxLayout* layout);
+  void addExpressionSliders(QVBoxLayout* layout);
+  void addMuscleSliders(QVBoxLayout* layout);
+  void addPlaybackControls(QVBoxLayout* layout);
+  QVBoxLayout* addPlanStudy();
+  void addFingertip(QVBoxLayout* planLayout);
+  void addSavedExpressions(QVBoxLayout* layout);
+  void connectControls();
+  void observeTheScene();
+  ///@}
   void build();
   /// Takes a freshly built model: the sliders, the face node, the camera.
   void setModel(std::shared_ptr<const expression::ExpressionModel> model);
