@@ -86,218 +86,285 @@ std::vector<double> niceTicks(double lo, double hi, int targetCount)
   return ticks;
 }
 
-XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file)
-{
-  validate(plot);
-  const caps::GuiForPainting gui;
-  const bool twoAxes = plot.series.size() == 2;
+namespace {
 
-  // The axes: nice ticks over the data.
-  double xLo = plot.series[0].x[0], xHi = xLo;
-  for (const PlotSeries& s : plot.series)
-    for (double x : s.x)
-    {
-      xLo = std::min(xLo, x);
-      xHi = std::max(xHi, x);
-    }
-  const std::vector<double> xTicks = niceTicks(xLo, xHi, 6);
-  std::vector<std::vector<double>> yTicks;
-  for (const PlotSeries& s : plot.series)
+/// One plot drawn onto an image, step by step: draw() is the table of
+/// contents. Sizes scale with the image height (600 px: 20 px title).
+class XyPlotPainter
+{
+public:
+  explicit XyPlotPainter(const XyPlot& plot)
+    : plot_(plot), twoAxes_(plot.series.size() == 2), scale_(plot.height / 600.0), titleFont_(font(20, 10, true)),
+      labelFont_(font(15, 9, false)), tickFont_(font(13, 8, false)), titleMetrics_(titleFont_),
+      labelMetrics_(labelFont_), tickMetrics_(tickFont_), pad_(10.0 * scale_),
+      image_(plot.width, plot.height, QImage::Format_RGB32)
   {
-    // A little headroom, so no curve runs along the frame.
-    const auto [low, high] = std::minmax_element(s.y.begin(), s.y.end());
-    double lo = *low, hi = *high;
-    if (plot.yFromZero && lo > 0.0)
-      lo = 0.0;
-    if (plot.yFromZero && hi < 0.0)
-      hi = 0.0;
-    const double margin = 0.04 * (hi - lo);
-    yTicks.push_back(niceTicks(lo == 0.0 ? lo : lo - margin, hi == 0.0 ? hi : hi + margin, 6));
+    chooseTicks();
+    layOut();
   }
 
-  // Sizes scale with the image height (600 px: 20 px title).
-  const double scale = plot.height / 600.0;
-  QFont titleFont("DejaVu Sans");
-  titleFont.setPixelSize(std::max(10, int(std::lround(20 * scale))));
-  titleFont.setBold(true);
-  QFont labelFont("DejaVu Sans");
-  labelFont.setPixelSize(std::max(9, int(std::lround(15 * scale))));
-  QFont tickFont("DejaVu Sans");
-  tickFont.setPixelSize(std::max(8, int(std::lround(13 * scale))));
-  const QFontMetricsF titleMetrics(titleFont), labelMetrics(labelFont), tickMetrics(tickFont);
+  const XyPlotGeometry& geometry() const { return g_; }
 
-  // Room for the tick labels and axis titles on each side.
-  auto widestTick = [&](const std::vector<double>& ticks) {
+  QImage draw()
+  {
+    image_.fill(Qt::white);
+    painter_.begin(&image_);
+    painter_.setRenderHint(QPainter::Antialiasing, true);
+    painter_.setRenderHint(QPainter::TextAntialiasing, true);
+    drawGridAndFrame();
+    drawXTicks();
+    for (std::size_t s = 0; s < plot_.series.size(); ++s)
+      drawYAxis(s);
+    drawTitles();
+    for (std::size_t s = 0; s < plot_.series.size(); ++s)
+      drawCurve(s);
+    drawLegend();
+    painter_.end();
+    return image_;
+  }
+
+private:
+  QFont font(int pixelsAt600, int smallest, bool bold) const
+  {
+    QFont f("DejaVu Sans");
+    f.setPixelSize(std::max(smallest, int(std::lround(pixelsAt600 * scale_))));
+    f.setBold(bold);
+    return f;
+  }
+
+  /// The axes: nice ticks over the data, a little headroom on y so no
+  /// curve runs along the frame.
+  void chooseTicks()
+  {
+    double xLo = plot_.series[0].x[0], xHi = xLo;
+    for (const PlotSeries& s : plot_.series)
+      for (double x : s.x)
+      {
+        xLo = std::min(xLo, x);
+        xHi = std::max(xHi, x);
+      }
+    xTicks_ = niceTicks(xLo, xHi, 6);
+    for (const PlotSeries& s : plot_.series)
+    {
+      const auto [low, high] = std::minmax_element(s.y.begin(), s.y.end());
+      double lo = *low, hi = *high;
+      if (plot_.yFromZero && lo > 0.0)
+        lo = 0.0;
+      if (plot_.yFromZero && hi < 0.0)
+        hi = 0.0;
+      const double margin = 0.04 * (hi - lo);
+      yTicks_.push_back(niceTicks(lo == 0.0 ? lo : lo - margin, hi == 0.0 ? hi : hi + margin, 6));
+    }
+  }
+
+  double widestTick(const std::vector<double>& ticks) const
+  {
     double w = 0.0;
     for (double t : ticks)
-      w = std::max(w, tickMetrics.horizontalAdvance(tickLabel(t, ticks[1] - ticks[0])));
+      w = std::max(w, tickMetrics_.horizontalAdvance(tickLabel(t, ticks[1] - ticks[0])));
     return w;
-  };
-  const double pad = 10.0 * scale;
-  XyPlotGeometry g;
-  g.left = pad + labelMetrics.height() + pad + widestTick(yTicks[0]) + pad;
-  g.right = plot.width - (twoAxes ? pad + labelMetrics.height() + pad + widestTick(yTicks[1]) + pad : 3.0 * pad);
-  g.top = pad + titleMetrics.height() + pad + labelMetrics.height() + 1.5 * pad;
-  g.bottom = plot.height - (pad + labelMetrics.height() + pad + tickMetrics.height() + pad);
-  g.xRange = {xTicks.front(), xTicks.back()};
-  for (const auto& t : yTicks)
-    g.yRange.push_back({t.front(), t.back()});
-
-  QImage image(plot.width, plot.height, QImage::Format_RGB32);
-  image.fill(Qt::white);
-  QPainter painter(&image);
-  painter.setRenderHint(QPainter::Antialiasing, true);
-  painter.setRenderHint(QPainter::TextAntialiasing, true);
-  const QColor ink(40, 40, 40), grid(225, 225, 225), frame(110, 110, 110);
-  const QRectF area(QPointF(g.left, g.top), QPointF(g.right, g.bottom));
-
-  // Grid: the x ticks and the left axis's ticks.
-  painter.setPen(QPen(grid, 1.0));
-  for (double t : xTicks)
-  {
-    const double x = g.pixel(0, t, g.yRange[0][0])[0];
-    painter.drawLine(QPointF(x, g.top), QPointF(x, g.bottom));
   }
-  for (double t : yTicks[0])
-  {
-    const double y = g.pixel(0, g.xRange[0], t)[1];
-    painter.drawLine(QPointF(g.left, y), QPointF(g.right, y));
-  }
-  painter.setPen(QPen(frame, 1.2));
-  painter.setBrush(Qt::NoBrush);
-  painter.drawRect(area);
 
-  // Ticks and their values.
-  const double tickLength = 6.0 * scale;
-  painter.setFont(tickFont);
-  for (double t : xTicks)
+  /// The data area: room for the tick labels and axis titles on each side.
+  void layOut()
   {
-    const double x = g.pixel(0, t, g.yRange[0][0])[0];
-    painter.setPen(QPen(frame, 1.2));
-    painter.drawLine(QPointF(x, g.bottom), QPointF(x, g.bottom + tickLength));
-    painter.setPen(ink);
-    const QString text = tickLabel(t, xTicks[1] - xTicks[0]);
-    const double w = tickMetrics.horizontalAdvance(text);
-    painter.drawText(QPointF(x - w / 2.0, g.bottom + tickLength + pad / 2.0 + tickMetrics.ascent()), text);
+    const double pad = pad_;
+    g_.left = pad + labelMetrics_.height() + pad + widestTick(yTicks_[0]) + pad;
+    g_.right = plot_.width -
+               (twoAxes_ ? pad + labelMetrics_.height() + pad + widestTick(yTicks_[1]) + pad : 3.0 * pad);
+    g_.top = pad + titleMetrics_.height() + pad + labelMetrics_.height() + 1.5 * pad;
+    g_.bottom = plot_.height - (pad + labelMetrics_.height() + pad + tickMetrics_.height() + pad);
+    g_.xRange = {xTicks_.front(), xTicks_.back()};
+    for (const auto& t : yTicks_)
+      g_.yRange.push_back({t.front(), t.back()});
   }
-  for (std::size_t s = 0; s < plot.series.size(); ++s)
+
+  /// Grid: the x ticks and the left axis's ticks; then the frame.
+  void drawGridAndFrame()
   {
-    const QColor c = colour(plot.series[s].rgb);
-    const bool leftSide = s == 0;
-    const double edge = leftSide ? g.left : g.right;
-    if (twoAxes) // each axis in its curve's colour
+    painter_.setPen(QPen(kGrid, 1.0));
+    for (double t : xTicks_)
     {
-      painter.setPen(QPen(c, 2.0));
-      painter.drawLine(QPointF(edge, g.top), QPointF(edge, g.bottom));
+      const double x = g_.pixel(0, t, g_.yRange[0][0])[0];
+      painter_.drawLine(QPointF(x, g_.top), QPointF(x, g_.bottom));
     }
-    for (double t : yTicks[s])
+    for (double t : yTicks_[0])
     {
-      const double y = g.pixel(s, g.xRange[0], t)[1];
-      painter.setPen(QPen(twoAxes ? c : frame, 1.2));
-      painter.drawLine(QPointF(edge, y), QPointF(edge + (leftSide ? -tickLength : tickLength), y));
-      painter.setPen(ink);
-      const QString text = tickLabel(t, yTicks[s][1] - yTicks[s][0]);
-      const double w = tickMetrics.horizontalAdvance(text);
-      const double x = leftSide ? edge - tickLength - pad / 2.0 - w : edge + tickLength + pad / 2.0;
-      painter.drawText(QPointF(x, y + (tickMetrics.ascent() - tickMetrics.descent()) / 2.0), text);
+      const double y = g_.pixel(0, g_.xRange[0], t)[1];
+      painter_.drawLine(QPointF(g_.left, y), QPointF(g_.right, y));
+    }
+    painter_.setPen(QPen(kFrame, 1.2));
+    painter_.setBrush(Qt::NoBrush);
+    painter_.drawRect(QRectF(QPointF(g_.left, g_.top), QPointF(g_.right, g_.bottom)));
+  }
+
+  /// The x ticks and their values.
+  void drawXTicks()
+  {
+    painter_.setFont(tickFont_);
+    for (double t : xTicks_)
+    {
+      const double x = g_.pixel(0, t, g_.yRange[0][0])[0];
+      painter_.setPen(QPen(kFrame, 1.2));
+      painter_.drawLine(QPointF(x, g_.bottom), QPointF(x, g_.bottom + tickLength()));
+      painter_.setPen(kInk);
+      const QString text = tickLabel(t, xTicks_[1] - xTicks_[0]);
+      const double w = tickMetrics_.horizontalAdvance(text);
+      painter_.drawText(QPointF(x - w / 2.0, g_.bottom + tickLength() + pad_ / 2.0 + tickMetrics_.ascent()), text);
+    }
+  }
+
+  /// The y axis of series @a s (left for the first, right for the second):
+  /// in the curve's colour when there are two, its ticks, values and title.
+  void drawYAxis(std::size_t s)
+  {
+    const QColor c = colour(plot_.series[s].rgb);
+    const bool leftSide = s == 0;
+    const double edge = leftSide ? g_.left : g_.right;
+    if (twoAxes_)
+    {
+      painter_.setPen(QPen(c, 2.0));
+      painter_.drawLine(QPointF(edge, g_.top), QPointF(edge, g_.bottom));
+    }
+    for (double t : yTicks_[s])
+    {
+      const double y = g_.pixel(s, g_.xRange[0], t)[1];
+      painter_.setPen(QPen(twoAxes_ ? c : kFrame, 1.2));
+      painter_.drawLine(QPointF(edge, y), QPointF(edge + (leftSide ? -tickLength() : tickLength()), y));
+      painter_.setPen(kInk);
+      const QString text = tickLabel(t, yTicks_[s][1] - yTicks_[s][0]);
+      const double w = tickMetrics_.horizontalAdvance(text);
+      const double x = leftSide ? edge - tickLength() - pad_ / 2.0 - w : edge + tickLength() + pad_ / 2.0;
+      painter_.drawText(QPointF(x, y + (tickMetrics_.ascent() - tickMetrics_.descent()) / 2.0), text);
     }
     // The axis title, along the axis, in the curve's colour.
-    painter.save();
-    painter.setFont(labelFont);
-    painter.setPen(twoAxes ? c.darker(115) : ink);
-    const QString title = QString::fromStdString(plot.series[s].label);
-    const double w = labelMetrics.horizontalAdvance(title);
-    const double centre = (g.top + g.bottom) / 2.0;
+    painter_.save();
+    painter_.setFont(labelFont_);
+    painter_.setPen(twoAxes_ ? c.darker(115) : kInk);
+    const QString title = QString::fromStdString(plot_.series[s].label);
+    const double w = labelMetrics_.horizontalAdvance(title);
+    const double centre = (g_.top + g_.bottom) / 2.0;
     if (leftSide)
     {
-      painter.translate(pad + labelMetrics.ascent(), centre + w / 2.0);
-      painter.rotate(-90.0);
+      painter_.translate(pad_ + labelMetrics_.ascent(), centre + w / 2.0);
+      painter_.rotate(-90.0);
     }
     else
     {
-      painter.translate(plot.width - pad - labelMetrics.ascent(), centre - w / 2.0);
-      painter.rotate(90.0);
+      painter_.translate(plot_.width - pad_ - labelMetrics_.ascent(), centre - w / 2.0);
+      painter_.rotate(90.0);
     }
-    painter.drawText(QPointF(0.0, 0.0), title);
-    painter.restore();
-    painter.setFont(tickFont);
+    painter_.drawText(QPointF(0.0, 0.0), title);
+    painter_.restore();
+    painter_.setFont(tickFont_);
   }
 
-  // The x axis title and the plot title.
-  painter.setPen(ink);
-  painter.setFont(labelFont);
+  /// The x axis title and the plot title.
+  void drawTitles()
   {
-    const QString text = QString::fromStdString(plot.xLabel);
-    const double w = labelMetrics.horizontalAdvance(text);
-    painter.drawText(QPointF((g.left + g.right - w) / 2.0, plot.height - pad - labelMetrics.descent()), text);
-  }
-  painter.setFont(titleFont);
-  {
-    const QString text = QString::fromStdString(plot.title);
-    const double w = titleMetrics.horizontalAdvance(text);
-    painter.drawText(QPointF((plot.width - w) / 2.0, pad + titleMetrics.ascent()), text);
+    painter_.setPen(kInk);
+    painter_.setFont(labelFont_);
+    {
+      const QString text = QString::fromStdString(plot_.xLabel);
+      const double w = labelMetrics_.horizontalAdvance(text);
+      painter_.drawText(QPointF((g_.left + g_.right - w) / 2.0, plot_.height - pad_ - labelMetrics_.descent()), text);
+    }
+    painter_.setFont(titleFont_);
+    const QString text = QString::fromStdString(plot_.title);
+    const double w = titleMetrics_.horizontalAdvance(text);
+    painter_.drawText(QPointF((plot_.width - w) / 2.0, pad_ + titleMetrics_.ascent()), text);
   }
 
-  // The curves, then their markers on top.
-  const double markerRadius = 4.5 * scale;
-  auto drawMarker = [&](std::size_t s, const QPointF& p) {
+  /// Series 0 marks its points with discs, series 1 with squares.
+  void drawMarker(std::size_t s, const QPointF& p)
+  {
+    const double r = 4.5 * scale_;
     if (s == 0)
-      painter.drawEllipse(p, markerRadius, markerRadius);
+      painter_.drawEllipse(p, r, r);
     else
-      painter.drawRect(QRectF(p.x() - markerRadius, p.y() - markerRadius, 2.0 * markerRadius, 2.0 * markerRadius));
-  };
-  for (std::size_t s = 0; s < plot.series.size(); ++s)
+      painter_.drawRect(QRectF(p.x() - r, p.y() - r, 2.0 * r, 2.0 * r));
+  }
+
+  /// Series @a s: the curve, then its markers on top.
+  void drawCurve(std::size_t s)
   {
-    const PlotSeries& series = plot.series[s];
+    const PlotSeries& series = plot_.series[s];
     const QColor c = colour(series.rgb);
     QPainterPath path;
     for (std::size_t i = 0; i < series.x.size(); ++i)
     {
-      const auto p = g.pixel(s, series.x[i], series.y[i]);
+      const auto p = g_.pixel(s, series.x[i], series.y[i]);
       if (i == 0)
         path.moveTo(p[0], p[1]);
       else
         path.lineTo(p[0], p[1]);
     }
-    painter.setBrush(Qt::NoBrush);
-    painter.setPen(QPen(c, 2.5 * scale, Qt::SolidLine, Qt::RoundCap, Qt::RoundJoin));
-    painter.drawPath(path);
-    painter.setPen(QPen(c, 1.5 * scale));
-    painter.setBrush(c);
+    painter_.setBrush(Qt::NoBrush);
+    painter_.setPen(QPen(c, 2.5 * scale_, Qt::SolidLine, Qt::RoundCap, Qt::RoundJoin));
+    painter_.drawPath(path);
+    painter_.setPen(QPen(c, 1.5 * scale_));
+    painter_.setBrush(c);
     for (std::size_t i = 0; i < series.x.size(); ++i)
     {
-      const auto p = g.pixel(s, series.x[i], series.y[i]);
+      const auto p = g_.pixel(s, series.x[i], series.y[i]);
       drawMarker(s, QPointF(p[0], p[1]));
     }
   }
 
-  // The legend, centred between the title and the data area.
-  painter.setFont(labelFont);
-  const double sample = 34.0 * scale, gap = 8.0 * scale, spacing = 28.0 * scale;
-  double total = 0.0;
-  for (const PlotSeries& s : plot.series)
-    total += sample + gap + labelMetrics.horizontalAdvance(QString::fromStdString(s.label));
-  total += spacing * double(plot.series.size() - 1);
-  double x = (g.left + g.right - total) / 2.0;
-  const double y = pad + titleMetrics.height() + pad + labelMetrics.height() / 2.0;
-  for (std::size_t s = 0; s < plot.series.size(); ++s)
+  /// The legend, centred between the title and the data area.
+  void drawLegend()
   {
-    const QColor c = colour(plot.series[s].rgb);
-    painter.setPen(QPen(c, 2.5 * scale, Qt::SolidLine, Qt::RoundCap));
-    painter.drawLine(QPointF(x, y), QPointF(x + sample, y));
-    painter.setPen(QPen(c, 1.5 * scale));
-    painter.setBrush(c);
-    drawMarker(s, QPointF(x + sample / 2.0, y));
-    painter.setPen(ink);
-    const QString text = QString::fromStdString(plot.series[s].label);
-    painter.drawText(QPointF(x + sample + gap, y + (labelMetrics.ascent() - labelMetrics.descent()) / 2.0), text);
-    x += sample + gap + labelMetrics.horizontalAdvance(text) + spacing;
+    painter_.setFont(labelFont_);
+    const double sample = 34.0 * scale_, gap = 8.0 * scale_, spacing = 28.0 * scale_;
+    double total = 0.0;
+    for (const PlotSeries& s : plot_.series)
+      total += sample + gap + labelMetrics_.horizontalAdvance(QString::fromStdString(s.label));
+    total += spacing * double(plot_.series.size() - 1);
+    double x = (g_.left + g_.right - total) / 2.0;
+    const double y = pad_ + titleMetrics_.height() + pad_ + labelMetrics_.height() / 2.0;
+    for (std::size_t s = 0; s < plot_.series.size(); ++s)
+    {
+      const QColor c = colour(plot_.series[s].rgb);
+      painter_.setPen(QPen(c, 2.5 * scale_, Qt::SolidLine, Qt::RoundCap));
+      painter_.drawLine(QPointF(x, y), QPointF(x + sample, y));
+      painter_.setPen(QPen(c, 1.5 * scale_));
+      painter_.setBrush(c);
+      drawMarker(s, QPointF(x + sample / 2.0, y));
+      painter_.setPen(kInk);
+      const QString text = QString::fromStdString(plot_.series[s].label);
+      painter_.drawText(QPointF(x + sample + gap, y + (labelMetrics_.ascent() - labelMetrics_.descent()) / 2.0),
+                        text);
+      x += sample + gap + labelMetrics_.horizontalAdvance(text) + spacing;
+    }
   }
-  painter.end();
 
+  double tickLength() const { return 6.0 * scale_; }
+
+  inline static const QColor kInk{40, 40, 40}, kGrid{225, 225, 225}, kFrame{110, 110, 110};
+  const XyPlot& plot_;
+  const bool twoAxes_;
+  const double scale_;
+  const QFont titleFont_, labelFont_, tickFont_;
+  const QFontMetricsF titleMetrics_, labelMetrics_, tickMetrics_;
+  const double pad_;
+  std::vector<double> xTicks_;
+  std::vector<std::vector<double>> yTicks_;
+  XyPlotGeometry g_;
+  QImage image_;
+  QPainter painter_;
+};
+
+} // namespace
+
+XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file)
+{
+  validate(plot);
+  const caps::GuiForPainting gui;
+  XyPlotPainter painter(plot);
+  const QImage image = painter.draw();
   if (!image.save(QString::fromStdString(file.string()), "PNG"))
     throw std::runtime_error("cannot write " + file.string() + ": check the folder's permissions and space");
-  return g;
+  return painter.geometry();
 }
 
 } // namespace caps::incision
