@@ -87,6 +87,14 @@ private:
   AttachmentDefinition point(const std::string& value, bool isOrigin) const;
   void checkAnchorSide(const std::string& anchor) const;
   void finishMuscle();
+  /// One 'key = value' line, in the block it belongs to.
+  void readKey(const std::string& key, const std::string& value);
+  void checkKeyBelongsHere(const std::string& key) const;
+  void startMuscle(const std::string& value);
+  void startFunction(const std::string& value);
+  void readFunctionKey(const std::string& key, const std::string& value);
+  void readMuscleKey(const std::string& key, const std::string& value);
+  void readSetKey(const std::string& key, const std::string& value);
 
   fs::path file_;
   int line_ = 0;
@@ -264,18 +272,26 @@ void Parser::finishMuscle()
   }
 }
 
+namespace keys {
+// The keys of each block of a muscle set file (data/muscles/README.md).
+const std::set<std::string> set = {"muscle_set", "title", "reference", "load_scale", "muscle"};
+const std::set<std::string> muscle = {"title", "side", "reference", "load", "load_scale", "function", "muscle"};
+const std::set<std::string> function = {"origin", "insertion", "load", "falloff", "mirror", "function", "muscle"};
+} // namespace keys
+
+/// Lower case letters, digits and '_', starting with a letter.
+bool isId(const std::string& text)
+{
+  static const std::regex idRe(R"(^[a-z][a-z0-9_]*$)");
+  return std::regex_match(text, idRe);
+}
+
 MuscleSet Parser::run()
 {
   std::ifstream in(file_);
   if (!in)
     fail("cannot be read; check the path", 0);
   set_.file = file_;
-  static const std::regex idRe(R"(^[a-z][a-z0-9_]*$)");
-  static const std::set<std::string> setKeys = {"muscle_set", "title", "reference", "load_scale", "muscle"};
-  static const std::set<std::string> muscleKeys = {"title", "side", "reference", "load", "load_scale", "function",
-                                                   "muscle"};
-  static const std::set<std::string> functionKeys = {"origin", "insertion", "load", "falloff", "mirror",
-                                                     "function", "muscle"};
   std::string raw;
   while (std::getline(in, raw))
   {
@@ -291,154 +307,7 @@ MuscleSet Parser::run()
     // A trailing comment after the value.
     if (const auto hash = value.find(" #"); hash != std::string::npos)
       value = trim(value.substr(0, hash));
-
-    const std::set<std::string>& allowed = function_ ? functionKeys : muscle_ ? muscleKeys : setKeys;
-    if (!allowed.count(key))
-    {
-      const bool known = setKeys.count(key) || muscleKeys.count(key) || functionKeys.count(key);
-      if (!known)
-      {
-        std::vector<std::string> names(allowed.begin(), allowed.end());
-        fail("unknown key '" + key + "'; here the keys are: " + joined(names));
-      }
-      if (function_ && muscleKeys.count(key))
-        fail("'" + key + "' belongs to the muscle: write it before the muscle's first 'function =' line");
-      if (functionKeys.count(key))
-        fail("'" + key + "' belongs to a function: start one with " +
-             std::string(muscle_ ? "" : "'muscle = ID' and then ") + "'function = NAME' first");
-      if (muscleKeys.count(key) && !muscle_)
-        fail("'" + key + "' belongs to a muscle: start one with 'muscle = ID' first");
-      fail("'" + key + "' belongs at the top of the file, before the first 'muscle ='");
-    }
-    if (key == "muscle")
-    {
-      finishMuscle();
-      if (!std::regex_match(value, idRe))
-        fail("muscle id '" + value + "' must be lower case letters, digits and '_' (e.g. zygomaticus_major)");
-      if (endsWith(value, "_left") || endsWith(value, "_right"))
-        fail("muscle id '" + value + "' must not end in _left or _right: the fit adds the side; say it with 'side ='");
-      if (const MuscleDefinition* other = set_.find(value))
-        fail("muscle '" + value + "' is defined twice (first on line " + std::to_string(other->line) + ")");
-      set_.muscles.emplace_back();
-      muscle_ = &set_.muscles.back();
-      muscle_->id = value;
-      muscle_->line = line_;
-      function_ = nullptr;
-      muscleLoad_.reset();
-      sideGiven_ = false;
-      ends_.clear();
-      ownLoad_.clear();
-      seen_.clear();
-      continue;
-    }
-    if (key == "function")
-    {
-      if (!std::regex_match(value, idRe))
-        fail("function name '" + value + "' must be lower case letters, digits and '_' (e.g. main, ala)");
-      for (const auto& f : muscle_->functions)
-        if (f.name == value)
-          fail("function '" + value + "' is given twice in muscle '" + muscle_->id + "' (first on line " +
-               std::to_string(f.line) + ")");
-      muscle_->functions.emplace_back();
-      function_ = &muscle_->functions.back();
-      function_->name = value;
-      function_->line = line_;
-      ends_.emplace_back(false, false);
-      ownLoad_.push_back(false);
-      seen_.clear();
-      continue;
-    }
-    if (auto [it, fresh] = seen_.emplace(key, line_); !fresh)
-      fail("'" + key + "' is given twice here (first on line " + std::to_string(it->second) + ")");
-
-    if (function_)
-    {
-      if (key == "origin")
-      {
-        function_->origin = point(value, true);
-        ends_.back().first = true;
-      }
-      else if (key == "insertion")
-      {
-        function_->insertion = point(value, false);
-        ends_.back().second = true;
-      }
-      else if (key == "load")
-      {
-        function_->load = number(value, "load");
-        if (function_->load <= 0.0)
-          fail("load " + value + " must be > 0 (N/mm^4): a muscle pulls its insertion towards its origin");
-        ownLoad_.back() = true;
-      }
-      else if (key == "falloff")
-      {
-        function_->falloff = number(value, "falloff");
-        if (function_->falloff < 0.0)
-          fail("falloff " + value + " is negative; write a width in mm (0 for the sharp sphere of eq. 4.41)");
-      }
-      else if (key == "mirror")
-      {
-        if (value != "yes" && value != "no")
-          fail("mirror must be 'yes' or 'no', got '" + value + "'");
-        function_->mirror = value == "yes";
-        if (function_->mirror && muscle_->side != MuscleSide::Midline)
-          fail("'mirror = yes' is for the functions of a midline muscle (half a ring written once); a side = " +
-               std::string(sideName(muscle_->side)) + " muscle is mirrored as a whole by 'side = both'");
-      }
-    }
-    else if (muscle_)
-    {
-      if (key == "title")
-        muscle_->title = value;
-      else if (key == "reference")
-        muscle_->reference = value;
-      else if (key == "side")
-      {
-        if (value == "left")
-          muscle_->side = MuscleSide::Left;
-        else if (value == "right")
-          muscle_->side = MuscleSide::Right;
-        else if (value == "both")
-          muscle_->side = MuscleSide::Both;
-        else if (value == "midline")
-          muscle_->side = MuscleSide::Midline;
-        else
-          fail("side must be both (the left muscle, mirrored to the right), left, right or midline; got '" + value +
-               "'");
-        sideGiven_ = true;
-      }
-      else if (key == "load")
-      {
-        muscleLoad_ = number(value, "load");
-        if (*muscleLoad_ <= 0.0)
-          fail("load " + value + " must be > 0 (N/mm^4): a muscle pulls its insertion towards its origin");
-      }
-      else if (key == "load_scale")
-      {
-        muscle_->loadScale = number(value, "load_scale");
-        if (muscle_->loadScale <= 0.0)
-          fail("load_scale " + value + " must be > 0");
-      }
-    }
-    else
-    {
-      if (key == "muscle_set")
-      {
-        if (!std::regex_match(value, idRe))
-          fail("muscle_set id '" + value + "' must be lower case letters, digits and '_' (e.g. default)");
-        set_.id = value;
-      }
-      else if (key == "title")
-        set_.title = value;
-      else if (key == "reference")
-        set_.reference = value;
-      else if (key == "load_scale")
-      {
-        set_.loadScale = number(value, "load_scale");
-        if (set_.loadScale <= 0.0)
-          fail("load_scale " + value + " must be > 0");
-      }
-    }
+    readKey(key, value);
   }
   finishMuscle();
   if (set_.muscles.empty())
@@ -448,6 +317,177 @@ MuscleSet Parser::run()
   if (set_.title.empty())
     set_.title = set_.id;
   return set_;
+}
+
+void Parser::readKey(const std::string& key, const std::string& value)
+{
+  checkKeyBelongsHere(key);
+  if (key == "muscle")
+    return startMuscle(value);
+  if (key == "function")
+    return startFunction(value);
+  if (auto [it, fresh] = seen_.emplace(key, line_); !fresh)
+    fail("'" + key + "' is given twice here (first on line " + std::to_string(it->second) + ")");
+  if (function_)
+    readFunctionKey(key, value);
+  else if (muscle_)
+    readMuscleKey(key, value);
+  else
+    readSetKey(key, value);
+}
+
+/// A key of another block says where it belongs; an unknown one lists the
+/// keys of the block it is in.
+void Parser::checkKeyBelongsHere(const std::string& key) const
+{
+  const std::set<std::string>& allowed = function_ ? keys::function : muscle_ ? keys::muscle : keys::set;
+  if (allowed.count(key))
+    return;
+  const bool known = keys::set.count(key) || keys::muscle.count(key) || keys::function.count(key);
+  if (!known)
+  {
+    std::vector<std::string> names(allowed.begin(), allowed.end());
+    fail("unknown key '" + key + "'; here the keys are: " + joined(names));
+  }
+  if (function_ && keys::muscle.count(key))
+    fail("'" + key + "' belongs to the muscle: write it before the muscle's first 'function =' line");
+  if (keys::function.count(key))
+    fail("'" + key + "' belongs to a function: start one with " +
+         std::string(muscle_ ? "" : "'muscle = ID' and then ") + "'function = NAME' first");
+  if (keys::muscle.count(key) && !muscle_)
+    fail("'" + key + "' belongs to a muscle: start one with 'muscle = ID' first");
+  fail("'" + key + "' belongs at the top of the file, before the first 'muscle ='");
+}
+
+/// 'muscle = ID': the previous muscle finished (and checked), a new one begun.
+void Parser::startMuscle(const std::string& value)
+{
+  finishMuscle();
+  if (!isId(value))
+    fail("muscle id '" + value + "' must be lower case letters, digits and '_' (e.g. zygomaticus_major)");
+  if (endsWith(value, "_left") || endsWith(value, "_right"))
+    fail("muscle id '" + value + "' must not end in _left or _right: the fit adds the side; say it with 'side ='");
+  if (const MuscleDefinition* other = set_.find(value))
+    fail("muscle '" + value + "' is defined twice (first on line " + std::to_string(other->line) + ")");
+  set_.muscles.emplace_back();
+  muscle_ = &set_.muscles.back();
+  muscle_->id = value;
+  muscle_->line = line_;
+  function_ = nullptr;
+  muscleLoad_.reset();
+  sideGiven_ = false;
+  ends_.clear();
+  ownLoad_.clear();
+  seen_.clear();
+}
+
+/// 'function = NAME': a new force function of the current muscle.
+void Parser::startFunction(const std::string& value)
+{
+  if (!isId(value))
+    fail("function name '" + value + "' must be lower case letters, digits and '_' (e.g. main, ala)");
+  for (const auto& f : muscle_->functions)
+    if (f.name == value)
+      fail("function '" + value + "' is given twice in muscle '" + muscle_->id + "' (first on line " +
+           std::to_string(f.line) + ")");
+  muscle_->functions.emplace_back();
+  function_ = &muscle_->functions.back();
+  function_->name = value;
+  function_->line = line_;
+  ends_.emplace_back(false, false);
+  ownLoad_.push_back(false);
+  seen_.clear();
+}
+
+void Parser::readFunctionKey(const std::string& key, const std::string& value)
+{
+  if (key == "origin")
+  {
+    function_->origin = point(value, true);
+    ends_.back().first = true;
+  }
+  else if (key == "insertion")
+  {
+    function_->insertion = point(value, false);
+    ends_.back().second = true;
+  }
+  else if (key == "load")
+  {
+    function_->load = number(value, "load");
+    if (function_->load <= 0.0)
+      fail("load " + value + " must be > 0 (N/mm^4): a muscle pulls its insertion towards its origin");
+    ownLoad_.back() = true;
+  }
+  else if (key == "falloff")
+  {
+    function_->falloff = number(value, "falloff");
+    if (function_->falloff < 0.0)
+      fail("falloff " + value + " is negative; write a width in mm (0 for the sharp sphere of eq. 4.41)");
+  }
+  else if (key == "mirror")
+  {
+    if (value != "yes" && value != "no")
+      fail("mirror must be 'yes' or 'no', got '" + value + "'");
+    function_->mirror = value == "yes";
+    if (function_->mirror && muscle_->side != MuscleSide::Midline)
+      fail("'mirror = yes' is for the functions of a midline muscle (half a ring written once); a side = " +
+           std::string(sideName(muscle_->side)) + " muscle is mirrored as a whole by 'side = both'");
+  }
+}
+
+void Parser::readMuscleKey(const std::string& key, const std::string& value)
+{
+  if (key == "title")
+    muscle_->title = value;
+  else if (key == "reference")
+    muscle_->reference = value;
+  else if (key == "side")
+  {
+    if (value == "left")
+      muscle_->side = MuscleSide::Left;
+    else if (value == "right")
+      muscle_->side = MuscleSide::Right;
+    else if (value == "both")
+      muscle_->side = MuscleSide::Both;
+    else if (value == "midline")
+      muscle_->side = MuscleSide::Midline;
+    else
+      fail("side must be both (the left muscle, mirrored to the right), left, right or midline; got '" + value +
+           "'");
+    sideGiven_ = true;
+  }
+  else if (key == "load")
+  {
+    muscleLoad_ = number(value, "load");
+    if (*muscleLoad_ <= 0.0)
+      fail("load " + value + " must be > 0 (N/mm^4): a muscle pulls its insertion towards its origin");
+  }
+  else if (key == "load_scale")
+  {
+    muscle_->loadScale = number(value, "load_scale");
+    if (muscle_->loadScale <= 0.0)
+      fail("load_scale " + value + " must be > 0");
+  }
+}
+
+void Parser::readSetKey(const std::string& key, const std::string& value)
+{
+  if (key == "muscle_set")
+  {
+    if (!isId(value))
+      fail("muscle_set id '" + value + "' must be lower case letters, digits and '_' (e.g. default)");
+    set_.id = value;
+  }
+  else if (key == "title")
+    set_.title = value;
+  else if (key == "reference")
+    set_.reference = value;
+  else if (key == "load_scale")
+  {
+    set_.loadScale = number(value, "load_scale");
+    if (set_.loadScale <= 0.0)
+      fail("load_scale " + value + " must be > 0");
+  }
 }
 
 /// "FILE:LINE: message" ("FILE: message" for line 0), built with += (GCC 12
