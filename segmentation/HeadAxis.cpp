@@ -69,30 +69,39 @@ double median(std::vector<double> v)
   return *mid;
 }
 
-} // namespace
-
-HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
+/// The body mask cut into slices across the index axis that points most
+/// nearly superior: each slice's voxel count, index sum and bounding box.
+struct SlicedMask
 {
-  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
-      bodyMask->GetNumberOfScalarComponents() != 1)
-    throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
-  const ImageGeometry g = ImageGeometry::of(bodyMask);
+  ImageGeometry g;
+  int sliceAxis = 0;
+  int inPlane[2] = {1, 2};
+  Eigen::Vector3d sliceNormal = Eigen::Vector3d::UnitZ(); ///< pointing superior
+  std::vector<SliceSums> sums;                           ///< per index along sliceAxis
+
+  /// The world position of index @a idx.
+  Eigen::Vector3d world(const Eigen::Vector3d& idx) const
+  {
+    return g.indexToWorld(Eigen::Vector3d(g.extent[0], g.extent[2], g.extent[4]) + idx);
+  }
+};
+
+SlicedMask sliceTheMask(vtkImageData* bodyMask)
+{
+  SlicedMask m;
+  m.g = ImageGeometry::of(bodyMask);
+  const ImageGeometry& g = m.g;
   const auto dims = g.dimensions();
   const auto* mask = static_cast<const unsigned char*>(bodyMask->GetScalarPointer());
   if (!mask)
     throw std::invalid_argument("The body mask has no voxels.");
-
-  // Slices across the index axis that points most nearly superior.
-  int sliceAxis = 0;
   for (int a = 1; a < 3; ++a)
-    if (std::abs(g.direction(2, a)) > std::abs(g.direction(2, sliceAxis)))
-      sliceAxis = a;
-  const Eigen::Vector3d sliceNormal =
-    g.direction.col(sliceAxis).normalized() * (g.direction(2, sliceAxis) < 0 ? -1.0 : 1.0);
-  const int inPlane[2] = {(sliceAxis + 1) % 3, (sliceAxis + 2) % 3};
-  const double voxelArea = g.spacing[inPlane[0]] * g.spacing[inPlane[1]];
-
-  std::vector<SliceSums> sums(static_cast<std::size_t>(dims[sliceAxis]));
+    if (std::abs(g.direction(2, a)) > std::abs(g.direction(2, m.sliceAxis)))
+      m.sliceAxis = a;
+  m.sliceNormal = g.direction.col(m.sliceAxis).normalized() * (g.direction(2, m.sliceAxis) < 0 ? -1.0 : 1.0);
+  m.inPlane[0] = (m.sliceAxis + 1) % 3;
+  m.inPlane[1] = (m.sliceAxis + 2) % 3;
+  m.sums.resize(static_cast<std::size_t>(dims[m.sliceAxis]));
   std::size_t offset = 0;
   for (int k = 0; k < dims[2]; ++k)
     for (int j = 0; j < dims[1]; ++j)
@@ -101,73 +110,89 @@ HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
         if (!mask[offset])
           continue;
         const Eigen::Vector3i idx(i, j, k);
-        SliceSums& s = sums[static_cast<std::size_t>(idx[sliceAxis])];
+        SliceSums& s = m.sums[static_cast<std::size_t>(idx[m.sliceAxis])];
         ++s.count;
         s.indexSum += idx.cast<double>();
         s.lo = s.lo.cwiseMin(idx);
         s.hi = s.hi.cwiseMax(idx);
       }
+  return m;
+}
 
-  const Eigen::Vector3d extentStart(g.extent[0], g.extent[2], g.extent[4]);
-  struct Slice
-  {
-    Eigen::Vector3d centroid;
-    double area;
-    double s;
-    std::size_t index;
-  };
+/// A slice of the body: its centroid, area, position along the superior
+/// direction and index.
+struct Slice
+{
+  Eigen::Vector3d centroid;
+  double area;
+  double s;
+  std::size_t index;
+};
+
+/// The non-empty slices, from the feet up.
+std::vector<Slice> slicesFromBelow(const SlicedMask& m)
+{
+  const double voxelArea = m.g.spacing[m.inPlane[0]] * m.g.spacing[m.inPlane[1]];
   std::vector<Slice> slices;
-  for (std::size_t k = 0; k < sums.size(); ++k)
-    if (sums[k].count > 0)
+  for (std::size_t k = 0; k < m.sums.size(); ++k)
+    if (m.sums[k].count > 0)
     {
-      const Eigen::Vector3d c = g.indexToWorld(extentStart + sums[k].indexSum / sums[k].count);
-      slices.push_back({c, sums[k].count * voxelArea, c.dot(sliceNormal), k});
+      const Eigen::Vector3d c = m.world(m.sums[k].indexSum / m.sums[k].count);
+      slices.push_back({c, m.sums[k].count * voxelArea, c.dot(m.sliceNormal), k});
     }
   std::sort(slices.begin(), slices.end(), [](const Slice& a, const Slice& b) { return a.s < b.s; });
   if (slices.size() < 2)
     throw std::invalid_argument("The body mask covers fewer than two slices: no head axis can be fitted.");
+  return slices;
+}
 
-  // Reference (head) area: median over the upper half of the body's extent.
+/// 1 for the head's slices, 0 for the others: from the top down until the
+/// shoulders (an area well above the head's, or growing again past a neck),
+/// leaving out slices too small to be the head (the vertex). The head's area
+/// is the median over the upper half of the body's extent.
+std::vector<double> headSlices(const std::vector<Slice>& slices, const HeadAxisOptions& options)
+{
   const double sMid = 0.5 * (slices.front().s + slices.back().s);
   std::vector<double> upper;
   for (const Slice& s : slices)
     if (s.s >= sMid)
       upper.push_back(s.area);
   const double referenceArea = median(upper);
-
   const std::size_t n = slices.size();
-  std::vector<Eigen::Vector3d> c(n);
-  std::vector<double> s(n), area(n), use(n, 0.0);
-  for (std::size_t k = 0; k < n; ++k)
-  {
-    c[k] = slices[k].centroid;
-    s[k] = slices[k].s;
-    area[k] = slices[k].area;
-  }
+  std::vector<double> use(n, 0.0);
   double widest = 0.0;
   double narrowest = std::numeric_limits<double>::max(); // since the widest
   for (std::size_t k = n; k-- > 0;)
   {
-    if (area[k] > widest)
-      narrowest = widest = area[k];
+    const double area = slices[k].area;
+    if (area > widest)
+      narrowest = widest = area;
     else
-      narrowest = std::min(narrowest, area[k]);
-    const bool pastNeck = area[k] > options.shoulderGrowth * narrowest && narrowest < options.neckRatio * widest;
-    if (area[k] > options.shoulderAreaRatio * referenceArea || pastNeck)
+      narrowest = std::min(narrowest, area);
+    const bool pastNeck = area > options.shoulderGrowth * narrowest && narrowest < options.neckRatio * widest;
+    if (area > options.shoulderAreaRatio * referenceArea || pastNeck)
       break; // the shoulders: this slice and all below are out
-    if (area[k] >= options.minimumAreaRatio * referenceArea)
+    if (area >= options.minimumAreaRatio * referenceArea)
       use[k] = 1.0;
   }
+  return use;
+}
 
-  std::vector<double> w(n);
+/// The line through the head slices' centroids, weighted by area, then
+/// reweighted by Tukey's biweight on the distance from the line. @a w
+/// receives the final weights.
+Line robustAxisLine(const std::vector<Eigen::Vector3d>& c, const std::vector<double>& s,
+                    const std::vector<double>& area, const std::vector<double>& use, const HeadAxisOptions& options,
+                    std::vector<double>& w)
+{
+  const std::size_t n = c.size();
+  w.assign(n, 0.0);
   for (std::size_t k = 0; k < n; ++k)
     w[k] = use[k] * area[k];
   Line line;
   if (!fitLine(c, s, w, line))
     throw std::invalid_argument(
       "The body mask has fewer than two head slices (below the shoulders' area) to fit the head axis.");
-
-  // Tukey biweight reweighting on the distance from the line.
   for (int iteration = 0; iteration < options.reweightIterations; ++iteration)
   {
     std::vector<double> d(n), used;
@@ -191,28 +216,57 @@ HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
     line = next;
     w = trial;
   }
+  return line;
+}
 
-  Eigen::Vector3d direction = line.b.normalized();
-  if (direction.z() < 0.0)
-    direction = -direction;
-  const Eigen::Vector3d origin = line.p + line.meanS * line.b;
-
-  // z range: every mask slice's bounding rectangle projected on the axis.
+/// The z range on the axis: every mask slice's bounding rectangle projected on it.
+std::pair<double, double> zRangeOnAxis(const SlicedMask& m, const std::vector<Slice>& slices,
+                                       const Eigen::Vector3d& origin, const Eigen::Vector3d& direction)
+{
   double zMin = std::numeric_limits<double>::max();
   double zMax = std::numeric_limits<double>::lowest();
   for (const Slice& sl : slices)
   {
-    const SliceSums& sum = sums[sl.index];
+    const SliceSums& sum = m.sums[sl.index];
     for (int corner = 0; corner < 4; ++corner)
     {
       Eigen::Vector3i idx = sum.lo;
-      idx[inPlane[0]] = corner & 1 ? sum.hi[inPlane[0]] : sum.lo[inPlane[0]];
-      idx[inPlane[1]] = corner & 2 ? sum.hi[inPlane[1]] : sum.lo[inPlane[1]];
-      const double z = (g.indexToWorld(extentStart + idx.cast<double>()) - origin).dot(direction);
+      idx[m.inPlane[0]] = corner & 1 ? sum.hi[m.inPlane[0]] : sum.lo[m.inPlane[0]];
+      idx[m.inPlane[1]] = corner & 2 ? sum.hi[m.inPlane[1]] : sum.lo[m.inPlane[1]];
+      const double z = (m.world(idx.cast<double>()) - origin).dot(direction);
       zMin = std::min(zMin, z);
       zMax = std::max(zMax, z);
     }
   }
+  return {zMin, zMax};
+}
+
+} // namespace
+
+HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
+{
+  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
+      bodyMask->GetNumberOfScalarComponents() != 1)
+    throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
+  const SlicedMask sliced = sliceTheMask(bodyMask);
+  const std::vector<Slice> slices = slicesFromBelow(sliced);
+  const std::vector<double> use = headSlices(slices, options);
+
+  const std::size_t n = slices.size();
+  std::vector<Eigen::Vector3d> c(n);
+  std::vector<double> s(n), area(n), w;
+  for (std::size_t k = 0; k < n; ++k)
+  {
+    c[k] = slices[k].centroid;
+    s[k] = slices[k].s;
+    area[k] = slices[k].area;
+  }
+  const Line line = robustAxisLine(c, s, area, use, options, w);
+  Eigen::Vector3d direction = line.b.normalized();
+  if (direction.z() < 0.0)
+    direction = -direction;
+  const Eigen::Vector3d origin = line.p + line.meanS * line.b;
+  const auto [zMin, zMax] = zRangeOnAxis(sliced, slices, origin, direction);
 
   HeadAxisFit fit;
   fit.frame = CylindricalFrame(origin, direction, zMin, zMax, options.nTheta, options.nZ);
