@@ -81,24 +81,60 @@ std::string stepLines(const CalculixExportOptions& options, bool hyperelastic) {
   return o.str();
 }
 
-}  // namespace
+/// One deck of calculixInput(), written step by step in the deck's order.
+/// The steps share the resolved constraints, the representative DOF of
+/// each reduced DOF, the equations' offsets and whether the auxiliary node
+/// is needed.
+struct DeckWriter {
+  DeckWriter(const Mesh& mesh, const MaterialTable& materials, const LoadCase& load,
+             const CalculixExportOptions& options, const ConstraintMap& map)
+      : mesh(mesh), materials(materials), load(load), options(options), map(map), n(mesh.nodeCount()), aux(n + 1) {
+    // ccx reads at most 20 characters per field: 13 significant digits always
+    // fit (-1.234567890123e-100 is 20), 14 do not. Fields written through
+    // ccxNumber() also lose rounding noise.
+    o.precision(13);
+    for (const Element& el : mesh.elements) usedRegions.insert(el.region);
+  }
 
-std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
-                          const LoadCase& load, const CalculixExportOptions& options) {
-  validateMesh(mesh, materials);
-  const ConstraintMap map = resolveConstraints(mesh, constraints);
-  const Eigen::Index n = mesh.nodeCount();
+  void writeNodes();
+  void chooseRepresentatives();
+  void computeGeneralOffsets();
+  void writeAuxiliaryNode();
+  void writeElements();
+  void writeMaterials();
+  void writeSutureEquations();
+  void writeGeneralEquations();
+  void writeBoundaries();
+  void writeNodalForces();
+  void writeGravity();
+  void writeFacePressures();
+
+  const Mesh& mesh;
+  const MaterialTable& materials;
+  const LoadCase& load;
+  const CalculixExportOptions& options;
+  const ConstraintMap& map;
+  const Eigen::Index n;
+  const Eigen::Index aux;
   std::ostringstream o;
-  // ccx reads at most 20 characters per field: 13 significant digits always
-  // fit (-1.234567890123e-100 is 20), 14 do not. Fields written through
-  // ccxNumber() also lose rounding noise.
-  o.precision(13);
+  std::set<int> usedRegions;
+  std::vector<int> representative;
+  std::vector<double> generalBeta;
+  bool needAux = false;
+  bool anyHyperelastic = false;
+  bool equationHeader = false;
+};
+
+void DeckWriter::writeNodes() {
   o << "*HEADING\nCAPS finite element model (Bathe 8-to-20 node elements as C3D20)\n";
   o << "*NODE, NSET=NALLNODES\n";
   const double extent = mesh.nodes.size() ? mesh.nodes.cwiseAbs().maxCoeff() : 0.0;
   for (Eigen::Index i = 0; i < n; ++i)
     o << i + 1 << ", " << ccxNumber(mesh.nodes(0, i), extent) << ", " << ccxNumber(mesh.nodes(1, i), extent) << ", "
       << ccxNumber(mesh.nodes(2, i), extent) << "\n";
+}
+
+void DeckWriter::chooseRepresentatives() {
   // Representative DOF of each reduced DOF in the *EQUATIONs. ccx 2.20
   // mis-assembles an equation whose dependent DOF belongs to a node repeated
   // in a degenerate (wedge) C3D20, so such a node is made the independent one.
@@ -107,23 +143,25 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     for (int a = 0; a < kHex20NodeCount; ++a)
       for (int b = a + 1; b < kHex20NodeCount; ++b)
         if (el.nodes[a] >= 0 && el.nodes[a] == el.nodes[b]) repeated[std::size_t(el.nodes[a])] = 1;
-  std::vector<int> representative(map.masterOf);
+  representative = map.masterOf;
   for (std::size_t d = 0; d < map.reduced.size(); ++d) {
     const int r = map.reduced[d];
     if (r >= 0 && repeated[d / 3] && !repeated[std::size_t(representative[std::size_t(r)] / 3)])
       representative[std::size_t(r)] = int(d);
   }
-  bool needAux = false;
   for (std::size_t d = 0; d < map.reduced.size(); ++d) {
     const int r = map.reduced[d];
     if (r >= 0 && representative[std::size_t(r)] != int(d) &&
         map.offset[Eigen::Index(d)] != map.offset[representative[std::size_t(r)]])
       needAux = true;
   }
+}
+
+void DeckWriter::computeGeneralOffsets() {
   // General rows of T (equations), u_d = sum c_k Ubar_k + g_d, written over
   // the representatives: u_d - sum c_k u_rep(k) - beta u_aux = 0 with
   // beta = g_d - sum c_k g_rep(k). A row without terms is a *BOUNDARY.
-  std::vector<double> generalBeta(map.general.size(), 0.0);
+  generalBeta.assign(map.general.size(), 0.0);
   for (std::size_t g = 0; g < map.general.size(); ++g) {
     double beta = map.offset[map.general[g]];
     for (int e = map.generalStart[g]; e < map.generalStart[g + 1]; ++e)
@@ -132,9 +170,13 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     generalBeta[g] = beta;
     if (beta != 0.0 && map.generalStart[g + 1] > map.generalStart[g]) needAux = true;
   }
-  const Eigen::Index aux = n + 1;
-  if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
+}
 
+void DeckWriter::writeAuxiliaryNode() {
+  if (needAux) o << aux << ", " << mesh.nodes(0, 0) << ", " << mesh.nodes(1, 0) << ", " << mesh.nodes(2, 0) << "\n";
+}
+
+void DeckWriter::writeElements() {
   // Elements, grouped by region and type.
   // Type 20 is C3D20 (3x3x3), 21 C3D20R (2x2x2, ccx's reduced brick), 15
   // C3D15 (ccx's 9 points, whatever the element's rule), 8 C3D8 (ccx's 2x2x2).
@@ -171,9 +213,9 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
       o << "\n";
     }
   }
-  std::set<int> usedRegions;
-  for (const Element& el : mesh.elements) usedRegions.insert(el.region);
-  bool anyHyperelastic = false;
+}
+
+void DeckWriter::writeMaterials() {
   for (int region : usedRegions) anyHyperelastic = anyHyperelastic || options.hyperelastic.count(region);
   for (int region : usedRegions) {
     const LinearElasticMaterial& m = materials.at(region);
@@ -187,8 +229,10 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     o << "*SOLID SECTION, ELSET=" << regionName("R", region) << ", MATERIAL=" << regionName("M", region)
       << "\n";
   }
+}
+
+void DeckWriter::writeSutureEquations() {
   // Sutures (resolved): u_i - u_m - beta u_aux = 0, beta = g_i - g_m.
-  bool equationHeader = false;
   for (std::size_t d = 0; d < map.reduced.size(); ++d) {
     if (map.reduced[d] < 0) continue;
     const int master = representative[std::size_t(map.reduced[d])];
@@ -201,6 +245,9 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     if (beta != 0.0) o << ", " << aux << ", 1, " << -beta;
     o << "\n";
   }
+}
+
+void DeckWriter::writeGeneralEquations() {
   // Equations (resolved, so no dependent DOF appears in another equation):
   // ccx reads at most 4 terms (12 fields) per line. The ccx 2.20 fault above
   // also hits an equation whose dependent DOF is on a repeated node, and no
@@ -217,7 +264,7 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     const double beta = generalBeta[g];
     o << 1 + (last - first) + (beta != 0.0 ? 1 : 0) << "\n" << d / 3 + 1 << ", " << d % 3 + 1 << ", 1.0";
     int written = 1;
-    const auto term = [&o, &written](long node, int direction, double coefficient) {
+    const auto term = [this, &written](long node, int direction, double coefficient) {
       o << (written % 4 == 0 ? "\n" : ", ") << node << ", " << direction << ", " << coefficient;
       ++written;
     };
@@ -228,6 +275,9 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     if (beta != 0.0) term(long(aux), 1, -beta);
     o << "\n";
   }
+}
+
+void DeckWriter::writeBoundaries() {
   o << stepLines(options, anyHyperelastic) << "*BOUNDARY\n";
   if (needAux) o << aux << ", 1, 1, 1.0\n" << aux << ", 2, 3, 0.0\n";
   for (std::size_t d = 0, g = 0; d < map.reduced.size(); ++d) {
@@ -239,54 +289,80 @@ std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, cons
     }
     o << d / 3 + 1 << ", " << d % 3 + 1 << ", " << d % 3 + 1 << ", " << map.offset[Eigen::Index(d)] << "\n";
   }
-  if (!load.nodalForces.empty() || !load.muscles.empty()) {
-    // Sum forces per node so each (node, direction) appears once.
-    std::map<int, Eigen::Vector3d> forces;
-    for (const auto& [node, f] : load.nodalForces) {
-      if (node < 0 || node >= n)
-        throw std::invalid_argument("a nodal force is applied to node " + std::to_string(node) +
-                                    ", outside the mesh");
-      auto it = forces.emplace(node, Eigen::Vector3d::Zero()).first;
-      it->second += f;
-    }
-    // ccx has no spherical body force: muscles go in as their consistent nodal loads.
-    if (!load.muscles.empty()) {
-      const Eigen::VectorXd muscle = assembleMuscleLoad(mesh, load.muscles).load;
-      for (Eigen::Index i = 0; i < n; ++i)
-        if (!muscle.segment<3>(3 * i).isZero(0.0))
-          forces.emplace(int(i), Eigen::Vector3d::Zero()).first->second += muscle.segment<3>(3 * i);
-    }
-    o << "*CLOAD\n";
-    for (const auto& [node, f] : forces)
-      for (int d = 0; d < 3; ++d)
-        if (f[d] != 0.0) o << node + 1 << ", " << d + 1 << ", " << ccxNumber(f[d]) << "\n";
+}
+
+void DeckWriter::writeNodalForces() {
+  if (load.nodalForces.empty() && load.muscles.empty()) return;
+  // Sum forces per node so each (node, direction) appears once.
+  std::map<int, Eigen::Vector3d> forces;
+  for (const auto& [node, f] : load.nodalForces) {
+    if (node < 0 || node >= n)
+      throw std::invalid_argument("a nodal force is applied to node " + std::to_string(node) + ", outside the mesh");
+    auto it = forces.emplace(node, Eigen::Vector3d::Zero()).first;
+    it->second += f;
   }
+  // ccx has no spherical body force: muscles go in as their consistent nodal loads.
+  if (!load.muscles.empty()) {
+    const Eigen::VectorXd muscle = assembleMuscleLoad(mesh, load.muscles).load;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!muscle.segment<3>(3 * i).isZero(0.0))
+        forces.emplace(int(i), Eigen::Vector3d::Zero()).first->second += muscle.segment<3>(3 * i);
+  }
+  o << "*CLOAD\n";
+  for (const auto& [node, f] : forces)
+    for (int d = 0; d < 3; ++d)
+      if (f[d] != 0.0) o << node + 1 << ", " << d + 1 << ", " << ccxNumber(f[d]) << "\n";
+}
+
+void DeckWriter::writeGravity() {
   const double g = load.gravity.norm();
-  if (g > 0.0) {
-    const Eigen::Vector3d dir = load.gravity / g;
-    bool header = false;
-    for (int region : usedRegions) {
-      if (materials.at(region).density <= 0.0) continue;
-      if (!header) o << "*DLOAD\n";
-      header = true;
-      o << regionName("R", region) << ", GRAV, " << ccxNumber(g) << ", " << ccxNumber(dir[0], 1.0) << ", "
-        << ccxNumber(dir[1], 1.0) << ", " << ccxNumber(dir[2], 1.0) << "\n";
-    }
+  if (g <= 0.0) return;
+  const Eigen::Vector3d dir = load.gravity / g;
+  bool header = false;
+  for (int region : usedRegions) {
+    if (materials.at(region).density <= 0.0) continue;
+    if (!header) o << "*DLOAD\n";
+    header = true;
+    o << regionName("R", region) << ", GRAV, " << ccxNumber(g) << ", " << ccxNumber(dir[0], 1.0) << ", "
+      << ccxNumber(dir[1], 1.0) << ", " << ccxNumber(dir[2], 1.0) << "\n";
   }
-  if (!load.facePressures.empty()) {
-    validateFacePressures(mesh, load.facePressures);
-    // Our face numbers are CalculiX's for each type written: C3D20 and C3D8
-    // (also a wedge written as a degenerate C3D20), C3D15 for a native
-    // wedge. Pressures on the same face add up in ccx as in LoadCase; one
-    // line per face keeps the deck plain.
-    std::map<std::pair<int, int>, double> pressures;
-    for (const FacePressure& p : load.facePressures) pressures[{p.element, p.face}] += p.pressure;
-    o << "*DLOAD\n";
-    for (const auto& [face, p] : pressures)
-      if (p != 0.0) o << face.first + 1 << ", P" << face.second << ", " << ccxNumber(p) << "\n";
-  }
-  o << "*NODE FILE\nU\n*NODE PRINT, NSET=NALLNODES\nU\n*END STEP\n";
-  return o.str();
+}
+
+void DeckWriter::writeFacePressures() {
+  if (load.facePressures.empty()) return;
+  validateFacePressures(mesh, load.facePressures);
+  // Our face numbers are CalculiX's for each type written: C3D20 and C3D8
+  // (also a wedge written as a degenerate C3D20), C3D15 for a native
+  // wedge. Pressures on the same face add up in ccx as in LoadCase; one
+  // line per face keeps the deck plain.
+  std::map<std::pair<int, int>, double> pressures;
+  for (const FacePressure& p : load.facePressures) pressures[{p.element, p.face}] += p.pressure;
+  o << "*DLOAD\n";
+  for (const auto& [face, p] : pressures)
+    if (p != 0.0) o << face.first + 1 << ", P" << face.second << ", " << ccxNumber(p) << "\n";
+}
+
+}  // namespace
+
+std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
+                          const LoadCase& load, const CalculixExportOptions& options) {
+  validateMesh(mesh, materials);
+  const ConstraintMap map = resolveConstraints(mesh, constraints);
+  DeckWriter deck(mesh, materials, load, options, map);
+  deck.writeNodes();
+  deck.chooseRepresentatives();
+  deck.computeGeneralOffsets();
+  deck.writeAuxiliaryNode();
+  deck.writeElements();
+  deck.writeMaterials();
+  deck.writeSutureEquations();
+  deck.writeGeneralEquations();
+  deck.writeBoundaries();
+  deck.writeNodalForces();
+  deck.writeGravity();
+  deck.writeFacePressures();
+  deck.o << "*NODE FILE\nU\n*NODE PRINT, NSET=NALLNODES\nU\n*END STEP\n";
+  return deck.o.str();
 }
 
 std::string calculixInput(const Mesh& mesh, const MaterialTable& materials, const Constraints& constraints,
