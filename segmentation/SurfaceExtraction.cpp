@@ -89,17 +89,11 @@ double signedVolume6(vtkPolyData* surface)
   return sum;
 }
 
-} // namespace
-
-vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOptions& options)
+/// 1. The mask's bounding box, padded with background, in index space
+/// (spacing 1, origin at the first voxel's absolute index); null for an
+/// empty mask.
+vtkSmartPointer<vtkImageData> paddedMask(vtkImageData* mask)
 {
-  if (!mask || !mask->GetPointData()->GetScalars())
-    throw std::invalid_argument("extractSurface: no mask image.");
-  if (mask->GetNumberOfScalarComponents() != 1)
-    throw std::invalid_argument("extractSurface: the mask must have one component per voxel.");
-
-  // 1. The mask's bounding box, padded with background, in index space
-  // (spacing 1, origin at the first voxel's absolute index).
   int dims[3];
   mask->GetDimensions(dims);
   std::array<int, 3> lo{}, hi{};
@@ -111,9 +105,8 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
   default:
     throw std::invalid_argument("extractSurface: unsupported voxel type.");
   }
-  auto surface = vtkSmartPointer<vtkPolyData>::New();
   if (!any)
-    return surface;
+    return nullptr;
   const int* extent = mask->GetExtent();
   auto padded = vtkSmartPointer<vtkImageData>::New();
   padded->SetDimensions(hi[0] - lo[0] + 3, hi[1] - lo[1] + 3, hi[2] - lo[2] + 3);
@@ -127,8 +120,12 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
     vtkTemplateMacro(copyPadded(static_cast<const VTK_TT*>(mask->GetScalarPointer()), dims, lo,
                                 hi, static_cast<unsigned char*>(padded->GetScalarPointer())));
   }
+  return padded;
+}
 
-  // 2. Flying edges at 0.5: vertices halfway between inside and outside voxels.
+/// 2. Flying edges at 0.5: vertices halfway between inside and outside voxels.
+vtkSmartPointer<vtkPolyData> flyingEdgesAtHalf(vtkImageData* padded)
+{
   auto flyingEdges = vtkSmartPointer<vtkFlyingEdges3D>::New();
   flyingEdges->SetInputData(padded);
   flyingEdges->SetValue(0, 0.5);
@@ -136,13 +133,19 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
   flyingEdges->ComputeGradientsOff();
   flyingEdges->ComputeScalarsOff();
   flyingEdges->Update();
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
   surface->ShallowCopy(flyingEdges->GetOutput());
-  flyingEdges = nullptr;
-  padded = nullptr;
+  return surface;
+}
 
-  // 3. Index to patient frame: x = origin + D * diag(spacing) * ijk, with
-  // ijk the structured index (vtkImageData's origin is the position of index
-  // (0,0,0) even when the extent does not start at 0).
+/// 3. Index to patient frame: x = origin + D * diag(spacing) * ijk, with
+/// ijk the structured index (vtkImageData's origin is the position of index
+/// (0,0,0) even when the extent does not start at 0); then outward: a
+/// closed surface with outward normals encloses a positive volume (a
+/// left-handed direction matrix or negative spacing turns the flying-edges
+/// orientation inside out).
+vtkSmartPointer<vtkPolyData> inPatientFrameOutward(vtkSmartPointer<vtkPolyData> surface, vtkImageData* mask)
+{
   double origin[3], spacing[3], d[3][3];
   mask->GetOrigin(origin);
   mask->GetSpacing(spacing);
@@ -165,9 +168,6 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
     }
     surface->SetPoints(points);
   }
-  // Outward orientation: a closed surface with outward normals encloses a
-  // positive volume. (A left-handed direction matrix or negative spacing
-  // turns the flying-edges orientation inside out.)
   if (signedVolume6(surface) < 0)
   {
     auto reverse = vtkSmartPointer<vtkReverseSense>::New();
@@ -177,49 +177,73 @@ vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOpt
     reverse->Update();
     surface = reverse->GetOutput();
   }
+  return surface;
+}
 
-  // 4. Smoothing in mm (rotation invariant, so after the mapping).
+/// 4. Smoothing in mm (rotation invariant, so after the mapping).
+vtkSmartPointer<vtkPolyData> smoothed(vtkPolyData* surface, const SurfaceOptions& options)
+{
+  auto smoother = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
+  smoother->SetInputData(surface);
+  smoother->SetNumberOfIterations(options.smoothingIterations);
+  smoother->SetPassBand(options.smoothingPassBand);
+  smoother->BoundarySmoothingOff();
+  smoother->FeatureEdgeSmoothingOff();
+  smoother->NonManifoldSmoothingOn();
+  smoother->NormalizeCoordinatesOn();
+  smoother->Update();
+  return smoother->GetOutput();
+}
+
+/// 5. Decimation for display.
+vtkSmartPointer<vtkPolyData> decimated(vtkPolyData* surface, const SurfaceOptions& options)
+{
+  auto decimate = vtkSmartPointer<vtkDecimatePro>::New();
+  decimate->SetInputData(surface);
+  decimate->SetTargetReduction(std::min(options.targetReduction, 0.99));
+  decimate->PreserveTopologyOn();
+  decimate->SplittingOff();
+  decimate->BoundaryVertexDeletionOff();
+  decimate->SetFeatureAngle(45.0);
+  decimate->SetMaximumError(VTK_DOUBLE_MAX);
+  decimate->Update();
+  return decimate->GetOutput();
+}
+
+/// 6. Point normals (the surface is already consistent and outward).
+vtkSmartPointer<vtkPolyData> withPointNormals(vtkPolyData* surface)
+{
+  auto normals = vtkSmartPointer<vtkPolyDataNormals>::New();
+  normals->SetInputData(surface);
+  normals->SplittingOff();
+  normals->ConsistencyOff(); // already consistent and outward
+  normals->AutoOrientNormalsOff();
+  normals->ComputePointNormalsOn();
+  normals->ComputeCellNormalsOff();
+  normals->Update();
+  return normals->GetOutput();
+}
+
+} // namespace
+
+vtkSmartPointer<vtkPolyData> extractSurface(vtkImageData* mask, const SurfaceOptions& options)
+{
+  if (!mask || !mask->GetPointData()->GetScalars())
+    throw std::invalid_argument("extractSurface: no mask image.");
+  if (mask->GetNumberOfScalarComponents() != 1)
+    throw std::invalid_argument("extractSurface: the mask must have one component per voxel.");
+  vtkSmartPointer<vtkImageData> padded = paddedMask(mask);
+  if (!padded)
+    return vtkSmartPointer<vtkPolyData>::New();
+  vtkSmartPointer<vtkPolyData> surface = flyingEdgesAtHalf(padded);
+  padded = nullptr;
+  surface = inPatientFrameOutward(surface, mask);
   if (options.smoothingIterations > 0)
-  {
-    auto smoother = vtkSmartPointer<vtkWindowedSincPolyDataFilter>::New();
-    smoother->SetInputData(surface);
-    smoother->SetNumberOfIterations(options.smoothingIterations);
-    smoother->SetPassBand(options.smoothingPassBand);
-    smoother->BoundarySmoothingOff();
-    smoother->FeatureEdgeSmoothingOff();
-    smoother->NonManifoldSmoothingOn();
-    smoother->NormalizeCoordinatesOn();
-    smoother->Update();
-    surface = smoother->GetOutput();
-  }
-
-  // 5. Decimation for display.
+    surface = smoothed(surface, options);
   if (options.targetReduction > 0)
-  {
-    auto decimate = vtkSmartPointer<vtkDecimatePro>::New();
-    decimate->SetInputData(surface);
-    decimate->SetTargetReduction(std::min(options.targetReduction, 0.99));
-    decimate->PreserveTopologyOn();
-    decimate->SplittingOff();
-    decimate->BoundaryVertexDeletionOff();
-    decimate->SetFeatureAngle(45.0);
-    decimate->SetMaximumError(VTK_DOUBLE_MAX);
-    decimate->Update();
-    surface = decimate->GetOutput();
-  }
-
+    surface = decimated(surface, options);
   if (options.computeNormals)
-  {
-    auto normals = vtkSmartPointer<vtkPolyDataNormals>::New();
-    normals->SetInputData(surface);
-    normals->SplittingOff();
-    normals->ConsistencyOff(); // already consistent and outward
-    normals->AutoOrientNormalsOff();
-    normals->ComputePointNormalsOn();
-    normals->ComputeCellNormalsOff();
-    normals->Update();
-    surface = normals->GetOutput();
-  }
+    surface = withPointNormals(surface);
   return surface;
 }
 
