@@ -241,11 +241,31 @@ private:
   /// coefficient of 1; x = A^-1 [B b].
   void solveGroup(const std::vector<int>& group) {
     const Eigen::Index m = Eigen::Index(group.size());
-    auto local = [&group](int e) {
-      const auto at = std::lower_bound(group.begin(), group.end(), e);
-      return at != group.end() && *at == e ? Eigen::Index(at - group.begin()) : Eigen::Index(-1);
-    };
-    // Columns of the right-hand side: the reduced DOFs the group involves.
+    const std::vector<int> columns = groupColumns(group);
+    const Eigen::Index k = Eigen::Index(columns.size());
+    Eigen::SparseMatrix<double> as(m, m);
+    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m, k + 1);  // last column: the constant
+    assembleGroup(group, columns, as, rhs);
+    Eigen::MatrixXd x;
+    const Eigen::Index undetermined = solveSquare(as, rhs, x);
+    if (undetermined >= 0) throwUndetermined(group, undetermined);
+    for (Eigen::Index row = 0; row < m; ++row) {
+      ResolvedRow r;
+      r.constant = x(row, k);
+      for (Eigen::Index c = 0; c < k; ++c)
+        if (x(row, c) != 0.0) r.terms.push_back({columns[std::size_t(c)], x(row, c)});
+      rows_[std::size_t(group[std::size_t(row)])] = std::move(r);
+    }
+  }
+
+  /// The position of equation @a e in the sorted @a group, or -1.
+  static Eigen::Index localIndex(const std::vector<int>& group, int e) {
+    const auto at = std::lower_bound(group.begin(), group.end(), e);
+    return at != group.end() && *at == e ? Eigen::Index(at - group.begin()) : Eigen::Index(-1);
+  }
+
+  /// Columns of the right-hand side: the reduced DOFs the group involves, ascending.
+  std::vector<int> groupColumns(const std::vector<int>& group) const {
     std::vector<int> columns;
     for (int e : group)
       for (const auto& [dof, c] : equations_[std::size_t(e)].others) {
@@ -253,17 +273,24 @@ private:
         const int f = equationOf_[std::size_t(dof)];
         if (f < 0)
           columns.push_back(reduced_[std::size_t(dof)]);
-        else if (local(f) < 0)
+        else if (localIndex(group, f) < 0)
           for (const auto& t : rows_[std::size_t(f)].terms) columns.push_back(t.first);
       }
     std::sort(columns.begin(), columns.end());
     columns.erase(std::unique(columns.begin(), columns.end()), columns.end());
+    return columns;
+  }
+
+  /// A (@a as) and [B b] (@a rhs) of the group, rows scaled.
+  void assembleGroup(const std::vector<int>& group, const std::vector<int>& columns, Eigen::SparseMatrix<double>& as,
+                     Eigen::MatrixXd& rhs) const {
+    const Eigen::Index m = Eigen::Index(group.size());
     const Eigen::Index k = Eigen::Index(columns.size());
+    auto local = [&group](int e) { return localIndex(group, e); };
     auto column = [&columns](int i) {
       return Eigen::Index(std::lower_bound(columns.begin(), columns.end(), i) - columns.begin());
     };
     std::vector<Eigen::Triplet<double>> a;
-    Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(m, k + 1);  // last column: the constant
     for (Eigen::Index row = 0; row < m; ++row) {
       const RootEquation& q = equations_[std::size_t(group[std::size_t(row)])];
       double scale = std::abs(q.lead);
@@ -287,9 +314,14 @@ private:
         }
       }
     }
-    Eigen::SparseMatrix<double> as(m, m);
     as.setFromTriplets(a.begin(), a.end());  // sums the terms on one dependent
-    Eigen::MatrixXd x;
+  }
+
+  /// Solves @a as x = @a rhs into @a x; returns the local index of a
+  /// dependent the group leaves free, or -1 when it determines them all.
+  static Eigen::Index solveSquare(const Eigen::SparseMatrix<double>& as, const Eigen::MatrixXd& rhs,
+                                  Eigen::MatrixXd& x) {
+    const Eigen::Index m = as.rows();
     Eigen::Index undetermined = -1;  // local index of a dependent the group leaves free
     // Relative to the largest pivot (rows scaled to 1): below it the system is
     // singular for any purpose here.
@@ -314,27 +346,22 @@ private:
         if (!x.allFinite() || residual > 1e-9 * std::max(1.0, rhs.cwiseAbs().maxCoeff())) undetermined = 0;
       }
     }
-    if (undetermined >= 0) {
-      const int free = equations_[std::size_t(group[std::size_t(undetermined)])].dependent;
-      Message msg;
-      msg << "equations whose dependent DOFs (first terms) depend on each other (";
-      constexpr std::size_t kListed = 8;
-      for (std::size_t g = 0; g < group.size() && g < kListed; ++g) {
-        const RootEquation& q = equations_[std::size_t(group[g])];
-        msg << (g ? ", " : "") << EquationRef{q.source} << " on " << DofRef{q.dependent};
-      }
-      if (group.size() > kListed) msg << " and " << std::to_string(group.size() - kListed) << " more";
-      msg << ") form a singular system that does not determine " << DofRef{free}
-          << ": they are linearly dependent or contradict each other; drop one or change its coefficients";
-      throw msg.error();
+    return undetermined;
+  }
+
+  [[noreturn]] void throwUndetermined(const std::vector<int>& group, Eigen::Index undetermined) const {
+    const int free = equations_[std::size_t(group[std::size_t(undetermined)])].dependent;
+    Message msg;
+    msg << "equations whose dependent DOFs (first terms) depend on each other (";
+    constexpr std::size_t kListed = 8;
+    for (std::size_t g = 0; g < group.size() && g < kListed; ++g) {
+      const RootEquation& q = equations_[std::size_t(group[g])];
+      msg << (g ? ", " : "") << EquationRef{q.source} << " on " << DofRef{q.dependent};
     }
-    for (Eigen::Index row = 0; row < m; ++row) {
-      ResolvedRow r;
-      r.constant = x(row, k);
-      for (Eigen::Index c = 0; c < k; ++c)
-        if (x(row, c) != 0.0) r.terms.push_back({columns[std::size_t(c)], x(row, c)});
-      rows_[std::size_t(group[std::size_t(row)])] = std::move(r);
-    }
+    if (group.size() > kListed) msg << " and " << std::to_string(group.size() - kListed) << " more";
+    msg << ") form a singular system that does not determine " << DofRef{free}
+        << ": they are linearly dependent or contradict each other; drop one or change its coefficients";
+    throw msg.error();
   }
 
   const std::vector<RootEquation>& equations_;
@@ -344,6 +371,227 @@ private:
   const std::vector<int>& reduced_;
   std::vector<ResolvedRow> rows_;
 };
+
+/// resolveConstraints() in steps, sharing the state per full DOF (free,
+/// prescribed with a value, or a slave of a node), the suture roots and the
+/// equations moved to root DOFs.
+class ConstraintResolver {
+public:
+  ConstraintResolver(const Mesh& mesh, const Constraints& c)
+      : mesh_(mesh),
+        c_(c),
+        n_(mesh.nodeCount()),
+        ndof_(3 * n_),
+        isPrescribed_(ndof_, 0),
+        value_(Eigen::VectorXd::Zero(ndof_)),
+        sutureTarget_(n_, -1) {}
+
+  void readPrescribed();
+  void readSutures();
+  void findSutureRoots();
+  void readEquations();
+  void numberFreeDofs(ConstraintMap& map) const;
+  void resolveEquations(ConstraintMap& map) const;
+  void placeSlaves(ConstraintMap& map) const;
+
+private:
+  void readEquation(std::size_t e);
+
+  const Mesh& mesh_;
+  const Constraints& c_;
+  const Eigen::Index n_;
+  const Eigen::Index ndof_;
+  std::vector<char> isPrescribed_;
+  Eigen::VectorXd value_;
+  std::vector<int> sutureTarget_;
+  std::vector<int> root_;
+  std::vector<RootEquation> equations_;
+  std::vector<int> equationOf_;
+};
+
+void ConstraintResolver::readPrescribed() {
+  for (const PrescribedDof& p : c_.prescribed) {
+    checkNode(p.node, n_, Message() << "a prescribed displacement");
+    if (p.direction < 0 || p.direction > 2)
+      throw (Message() << "a prescribed displacement of node " << NodeRef{p.node} << " has direction "
+                       << std::to_string(p.direction) << " (0, 1, 2 for x, y, z)")
+          .error();
+    if (!std::isfinite(p.value))
+      throw (Message() << "node " << NodeRef{p.node} << " has a non-finite prescribed " << axisName(p.direction)
+                       << " displacement")
+          .error();
+    const Eigen::Index d = 3 * p.node + p.direction;
+    if (isPrescribed_[d] && value_[d] != p.value)
+      throw (Message() << DofRef{int(d)} << " is prescribed twice, to " << value_[d] << " and " << p.value << " mm")
+          .error();
+    isPrescribed_[d] = 1;
+    value_[d] = p.value;
+  }
+}
+
+void ConstraintResolver::readSutures() {
+  for (const Suture& s : c_.sutures) {
+    checkNode(s.node, n_, Message() << "a suture");
+    checkNode(s.target, n_, Message() << "a suture");
+    if (s.node == s.target) throw (Message() << "node " << NodeRef{s.node} << " is sutured to itself").error();
+    if (sutureTarget_[s.node] >= 0 && sutureTarget_[s.node] != s.target)
+      throw (Message() << "node " << NodeRef{s.node} << " is sutured to two nodes, " << NodeRef{sutureTarget_[s.node]}
+                       << " and " << NodeRef{s.target})
+          .error();
+    for (int d = 0; d < 3; ++d)
+      if (isPrescribed_[3 * s.node + d])
+        throw (Message() << "node " << NodeRef{s.node} << " is sutured to node " << NodeRef{s.target} << " but its "
+                         << axisName(d) << " displacement is also prescribed; suture the other way round")
+            .error();
+    sutureTarget_[s.node] = s.target;
+  }
+}
+
+void ConstraintResolver::findSutureRoots() {
+  // Follow each suture chain to its root node (cycle check on the way).
+  root_.assign(n_, -2);  // -2 unknown, -3 on the current path
+  for (int start = 0; start < n_; ++start) {
+    if (root_[start] != -2) continue;
+    std::vector<int> path;
+    int v = start;
+    while (root_[v] == -2 && sutureTarget_[v] >= 0) {
+      root_[v] = -3;
+      path.push_back(v);
+      v = sutureTarget_[v];
+    }
+    if (root_[v] == -3) {
+      Message loop;
+      loop << "sutures form a closed loop: ";
+      for (int p : path) loop << NodeRef{p} << " -> ";
+      throw (loop << NodeRef{v}).error();
+    }
+    const int r = root_[v] == -2 ? v : root_[v];
+    root_[v] = r;
+    for (int p : path) root_[p] = r;
+  }
+}
+
+void ConstraintResolver::readEquations() {
+  // Equations: terms moved to root DOFs (u_i = u_root + x_root - x_i), summed.
+  equationOf_.assign(c_.equations.empty() ? 0 : std::size_t(ndof_), -1);
+  for (std::size_t e = 0; e < c_.equations.size(); ++e) readEquation(e);
+}
+
+void ConstraintResolver::readEquation(std::size_t e) {
+  const LinearConstraint& q = c_.equations[e];
+  const EquationRef which{int(e)};
+  if (q.terms.empty()) throw (Message() << which << " has no terms").error();
+  for (const ConstraintTerm& t : q.terms) {
+    checkNode(t.node, n_, Message() << which);
+    if (t.direction < 0 || t.direction > 2)
+      throw (Message() << which << " has a term on node " << NodeRef{t.node} << " in direction "
+                       << std::to_string(t.direction) << " (0, 1, 2 for x, y, z)")
+          .error();
+    if (!std::isfinite(t.coefficient))
+      throw (Message() << which << " has a non-finite coefficient for " << DofRef{3 * t.node + t.direction})
+          .error();
+  }
+  const int dependent = 3 * q.terms[0].node + q.terms[0].direction;
+  const auto name = [&]() { return Message() << which << " (dependent DOF " << DofRef{dependent} << ")"; };
+  if (!std::isfinite(q.value)) throw (name() << " has a non-finite value").error();
+  if (q.terms[0].coefficient == 0.0)
+    throw (name() << " has a zero coefficient in its first term, which is the DOF it "
+                     "eliminates; begin it with a term whose coefficient is not zero")
+        .error();
+  if (isPrescribed_[std::size_t(dependent)])
+    throw (Message() << DofRef{dependent} << " is prescribed and also the dependent DOF (first term) of " << which
+                     << "; begin the equation with another term")
+        .error();
+  if (sutureTarget_[std::size_t(q.terms[0].node)] >= 0)
+    throw (Message() << DofRef{dependent} << " is sutured to node " << NodeRef{sutureTarget_[std::size_t(q.terms[0].node)]}
+                     << " and also the dependent DOF (first term) of " << which
+                     << "; begin the equation with another term")
+        .error();
+  if (const int other = equationOf_[std::size_t(dependent)]; other >= 0)
+    throw (Message() << DofRef{dependent} << " is the dependent DOF (first term) of two equations, "
+                     << EquationRef{other} << " and " << which << "; begin one of them with another term")
+        .error();
+  equationOf_[std::size_t(dependent)] = int(equations_.size());
+  RootEquation r;
+  r.dependent = dependent;
+  r.source = int(e);
+  r.value = q.value;
+  for (const ConstraintTerm& t : q.terms) {
+    if (t.coefficient == 0.0) continue;
+    const int rootNode = root_[std::size_t(t.node)];
+    const int dof = 3 * rootNode + t.direction;
+    r.value -= t.coefficient * (mesh_.nodes(t.direction, rootNode) - mesh_.nodes(t.direction, t.node));
+    auto at = std::find_if(r.others.begin(), r.others.end(), [dof](const auto& o) { return o.first == dof; });
+    if (at == r.others.end())
+      r.others.push_back({dof, t.coefficient});
+    else
+      at->second += t.coefficient;
+  }
+  auto lead = std::find_if(r.others.begin(), r.others.end(), [dependent](const auto& o) { return o.first == dependent; });
+  r.lead = lead->second;
+  r.others.erase(lead);
+  if (r.lead == 0.0)
+    throw (name() << ": the terms on its dependent DOF cancel out (coefficients sum to zero)").error();
+  r.others.erase(std::remove_if(r.others.begin(), r.others.end(), [](const auto& o) { return o.second == 0.0; }),
+                 r.others.end());
+  equations_.push_back(std::move(r));
+}
+
+void ConstraintResolver::numberFreeDofs(ConstraintMap& map) const {
+  map.reduced.assign(ndof_, -1);
+  map.offset = Eigen::VectorXd::Zero(ndof_);
+  // Free DOFs of root nodes get reduced indices in node order.
+  for (int i = 0; i < n_; ++i) {
+    if (root_[i] != i) continue;
+    for (int d = 0; d < 3; ++d) {
+      const int dof = 3 * i + d;
+      if (isPrescribed_[dof]) {
+        map.offset[dof] = value_[dof];
+      } else if (!equationOf_.empty() && equationOf_[std::size_t(dof)] >= 0) {
+        continue;  // a general row, below
+      } else {
+        map.reduced[dof] = int(map.masterOf.size());
+        map.masterOf.push_back(dof);
+      }
+    }
+  }
+}
+
+void ConstraintResolver::resolveEquations(ConstraintMap& map) const {
+  if (equations_.empty()) return;
+  // Dependent DOFs of equations: substituted in cascade, coupled ones solved together.
+  std::vector<const ResolvedRow*> rowOfRoot(std::size_t(ndof_), nullptr);
+  const std::vector<ResolvedRow> rows =
+      EquationResolver(equations_, equationOf_, isPrescribed_, value_, map.reduced).resolve();
+  for (std::size_t e = 0; e < equations_.size(); ++e) {
+    map.offset[equations_[e].dependent] = rows[e].constant;
+    rowOfRoot[std::size_t(equations_[e].dependent)] = &rows[e];
+  }
+  // Rows of T for them and for the DOFs sutured onto them, in DOF order.
+  for (int dof = 0; dof < ndof_; ++dof) {
+    const ResolvedRow* r = rowOfRoot[std::size_t(3 * root_[std::size_t(dof / 3)] + dof % 3)];
+    if (!r) continue;
+    map.general.push_back(dof);
+    for (const auto& [i, ci] : r->terms) {
+      map.generalIndex.push_back(i);
+      map.generalCoefficient.push_back(ci);
+    }
+    map.generalStart.push_back(int(map.generalIndex.size()));
+  }
+}
+
+void ConstraintResolver::placeSlaves(ConstraintMap& map) const {
+  // Slaves: u_i = u_root + (x_root - x_i), summed along the chain telescopes to this.
+  for (int i = 0; i < n_; ++i) {
+    const int r = root_[i];
+    if (r == i) continue;
+    for (int d = 0; d < 3; ++d) {
+      const int dof = 3 * i + d, rdof = 3 * r + d;
+      map.reduced[dof] = map.reduced[rdof];
+      map.offset[dof] = map.offset[rdof] + (mesh_.nodes(d, r) - mesh_.nodes(d, i));
+    }
+  }
+}
 
 }  // namespace
 
@@ -358,180 +606,15 @@ std::string ConstraintError::message(const Naming& naming) const {
 }
 
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& c) {
-  const Eigen::Index n = mesh.nodeCount();
-  const Eigen::Index ndof = 3 * n;
-  // State per full DOF: free, prescribed (value), or slave of a node.
-  std::vector<char> isPrescribed(ndof, 0);
-  Eigen::VectorXd value = Eigen::VectorXd::Zero(ndof);
-  std::vector<int> sutureTarget(n, -1);
-
-  for (const PrescribedDof& p : c.prescribed) {
-    checkNode(p.node, n, Message() << "a prescribed displacement");
-    if (p.direction < 0 || p.direction > 2)
-      throw (Message() << "a prescribed displacement of node " << NodeRef{p.node} << " has direction "
-                       << std::to_string(p.direction) << " (0, 1, 2 for x, y, z)")
-          .error();
-    if (!std::isfinite(p.value))
-      throw (Message() << "node " << NodeRef{p.node} << " has a non-finite prescribed " << axisName(p.direction)
-                       << " displacement")
-          .error();
-    const Eigen::Index d = 3 * p.node + p.direction;
-    if (isPrescribed[d] && value[d] != p.value)
-      throw (Message() << DofRef{int(d)} << " is prescribed twice, to " << value[d] << " and " << p.value << " mm")
-          .error();
-    isPrescribed[d] = 1;
-    value[d] = p.value;
-  }
-  for (const Suture& s : c.sutures) {
-    checkNode(s.node, n, Message() << "a suture");
-    checkNode(s.target, n, Message() << "a suture");
-    if (s.node == s.target) throw (Message() << "node " << NodeRef{s.node} << " is sutured to itself").error();
-    if (sutureTarget[s.node] >= 0 && sutureTarget[s.node] != s.target)
-      throw (Message() << "node " << NodeRef{s.node} << " is sutured to two nodes, " << NodeRef{sutureTarget[s.node]}
-                       << " and " << NodeRef{s.target})
-          .error();
-    for (int d = 0; d < 3; ++d)
-      if (isPrescribed[3 * s.node + d])
-        throw (Message() << "node " << NodeRef{s.node} << " is sutured to node " << NodeRef{s.target} << " but its "
-                         << axisName(d) << " displacement is also prescribed; suture the other way round")
-            .error();
-    sutureTarget[s.node] = s.target;
-  }
-
-  // Follow each suture chain to its root node (cycle check on the way).
-  std::vector<int> root(n, -2);  // -2 unknown, -3 on the current path
-  for (int start = 0; start < n; ++start) {
-    if (root[start] != -2) continue;
-    std::vector<int> path;
-    int v = start;
-    while (root[v] == -2 && sutureTarget[v] >= 0) {
-      root[v] = -3;
-      path.push_back(v);
-      v = sutureTarget[v];
-    }
-    if (root[v] == -3) {
-      Message loop;
-      loop << "sutures form a closed loop: ";
-      for (int p : path) loop << NodeRef{p} << " -> ";
-      throw (loop << NodeRef{v}).error();
-    }
-    const int r = root[v] == -2 ? v : root[v];
-    root[v] = r;
-    for (int p : path) root[p] = r;
-  }
-
-  // Equations: terms moved to root DOFs (u_i = u_root + x_root - x_i), summed.
-  std::vector<RootEquation> equations;
-  std::vector<int> equationOf(c.equations.empty() ? 0 : std::size_t(ndof), -1);
-  for (std::size_t e = 0; e < c.equations.size(); ++e) {
-    const LinearConstraint& q = c.equations[e];
-    const EquationRef which{int(e)};
-    if (q.terms.empty()) throw (Message() << which << " has no terms").error();
-    for (const ConstraintTerm& t : q.terms) {
-      checkNode(t.node, n, Message() << which);
-      if (t.direction < 0 || t.direction > 2)
-        throw (Message() << which << " has a term on node " << NodeRef{t.node} << " in direction "
-                         << std::to_string(t.direction) << " (0, 1, 2 for x, y, z)")
-            .error();
-      if (!std::isfinite(t.coefficient))
-        throw (Message() << which << " has a non-finite coefficient for " << DofRef{3 * t.node + t.direction})
-            .error();
-    }
-    const int dependent = 3 * q.terms[0].node + q.terms[0].direction;
-    const auto name = [&]() { return Message() << which << " (dependent DOF " << DofRef{dependent} << ")"; };
-    if (!std::isfinite(q.value)) throw (name() << " has a non-finite value").error();
-    if (q.terms[0].coefficient == 0.0)
-      throw (name() << " has a zero coefficient in its first term, which is the DOF it "
-                       "eliminates; begin it with a term whose coefficient is not zero")
-          .error();
-    if (isPrescribed[std::size_t(dependent)])
-      throw (Message() << DofRef{dependent} << " is prescribed and also the dependent DOF (first term) of " << which
-                       << "; begin the equation with another term")
-          .error();
-    if (sutureTarget[std::size_t(q.terms[0].node)] >= 0)
-      throw (Message() << DofRef{dependent} << " is sutured to node " << NodeRef{sutureTarget[std::size_t(q.terms[0].node)]}
-                       << " and also the dependent DOF (first term) of " << which
-                       << "; begin the equation with another term")
-          .error();
-    if (const int other = equationOf[std::size_t(dependent)]; other >= 0)
-      throw (Message() << DofRef{dependent} << " is the dependent DOF (first term) of two equations, "
-                       << EquationRef{other} << " and " << which << "; begin one of them with another term")
-          .error();
-    equationOf[std::size_t(dependent)] = int(equations.size());
-    RootEquation r;
-    r.dependent = dependent;
-    r.source = int(e);
-    r.value = q.value;
-    for (const ConstraintTerm& t : q.terms) {
-      if (t.coefficient == 0.0) continue;
-      const int rootNode = root[std::size_t(t.node)];
-      const int dof = 3 * rootNode + t.direction;
-      r.value -= t.coefficient * (mesh.nodes(t.direction, rootNode) - mesh.nodes(t.direction, t.node));
-      auto at = std::find_if(r.others.begin(), r.others.end(), [dof](const auto& o) { return o.first == dof; });
-      if (at == r.others.end())
-        r.others.push_back({dof, t.coefficient});
-      else
-        at->second += t.coefficient;
-    }
-    auto lead = std::find_if(r.others.begin(), r.others.end(), [dependent](const auto& o) { return o.first == dependent; });
-    r.lead = lead->second;
-    r.others.erase(lead);
-    if (r.lead == 0.0)
-      throw (name() << ": the terms on its dependent DOF cancel out (coefficients sum to zero)").error();
-    r.others.erase(std::remove_if(r.others.begin(), r.others.end(), [](const auto& o) { return o.second == 0.0; }),
-                   r.others.end());
-    equations.push_back(std::move(r));
-  }
-
+  ConstraintResolver resolver(mesh, c);
+  resolver.readPrescribed();
+  resolver.readSutures();
+  resolver.findSutureRoots();
+  resolver.readEquations();
   ConstraintMap map;
-  map.reduced.assign(ndof, -1);
-  map.offset = Eigen::VectorXd::Zero(ndof);
-  // Free DOFs of root nodes get reduced indices in node order.
-  for (int i = 0; i < n; ++i) {
-    if (root[i] != i) continue;
-    for (int d = 0; d < 3; ++d) {
-      const int dof = 3 * i + d;
-      if (isPrescribed[dof]) {
-        map.offset[dof] = value[dof];
-      } else if (!equationOf.empty() && equationOf[std::size_t(dof)] >= 0) {
-        continue;  // a general row, below
-      } else {
-        map.reduced[dof] = int(map.masterOf.size());
-        map.masterOf.push_back(dof);
-      }
-    }
-  }
-  // Dependent DOFs of equations: substituted in cascade, coupled ones solved together.
-  std::vector<const ResolvedRow*> rowOfRoot(equations.empty() ? 0 : std::size_t(ndof), nullptr);
-  std::vector<ResolvedRow> rows;
-  if (!equations.empty()) {
-    rows = EquationResolver(equations, equationOf, isPrescribed, value, map.reduced).resolve();
-    for (std::size_t e = 0; e < equations.size(); ++e) {
-      map.offset[equations[e].dependent] = rows[e].constant;
-      rowOfRoot[std::size_t(equations[e].dependent)] = &rows[e];
-    }
-    // Rows of T for them and for the DOFs sutured onto them, in DOF order.
-    for (int dof = 0; dof < ndof; ++dof) {
-      const ResolvedRow* r = rowOfRoot[std::size_t(3 * root[std::size_t(dof / 3)] + dof % 3)];
-      if (!r) continue;
-      map.general.push_back(dof);
-      for (const auto& [i, ci] : r->terms) {
-        map.generalIndex.push_back(i);
-        map.generalCoefficient.push_back(ci);
-      }
-      map.generalStart.push_back(int(map.generalIndex.size()));
-    }
-  }
-  // Slaves: u_i = u_root + (x_root - x_i), summed along the chain telescopes to this.
-  for (int i = 0; i < n; ++i) {
-    const int r = root[i];
-    if (r == i) continue;
-    for (int d = 0; d < 3; ++d) {
-      const int dof = 3 * i + d, rdof = 3 * r + d;
-      map.reduced[dof] = map.reduced[rdof];
-      map.offset[dof] = map.offset[rdof] + (mesh.nodes(d, r) - mesh.nodes(d, i));
-    }
-  }
+  resolver.numberFreeDofs(map);
+  resolver.resolveEquations(map);
+  resolver.placeSlaves(map);
   return map;
 }
 
@@ -599,78 +682,100 @@ std::size_t outerHash(const Eigen::SparseMatrix<double>& k) {
   return h;
 }
 
-}  // namespace
+/// Rows of T per full DOF: row d is entries start[d] .. start[d + 1] - 1 of
+/// index (reduced DOFs) and coefficient.
+struct RowsOfT {
+  std::vector<int> start;
+  std::vector<int> index;
+  std::vector<double> coefficient;
+};
 
-Eigen::SparseMatrix<double> ConstraintMap::reduceGeneral(const Eigen::SparseMatrix<double>& k,
-                                                         ReductionPlan* plan) const {
-  // T^T K T entry by entry: K_ij (i <= j) times each pair of row i's and row
-  // j's terms lands on K̄(min, max); from an off-diagonal K_ij a pair on one
-  // reduced DOF lands there twice (K_ij and K_ji). Rows with one coefficient-1
-  // term (sutures) give the weights 1 and 2 of a plain renaming. Counted into
-  // compressed columns directly (a triplet sort took most of the time);
-  // columns are then sorted and their duplicates summed.
-  const Eigen::Index n = reducedCount();
-  // Rows of T per full DOF.
-  std::vector<int> rowStart(reduced.size() + 1, 0);
-  std::vector<int> rowIndex;
-  std::vector<double> rowCoefficient;
-  rowIndex.reserve(reduced.size() + generalIndex.size());
-  rowCoefficient.reserve(rowIndex.capacity());
-  for (std::size_t d = 0, g = 0; d < reduced.size(); ++d) {
-    if (reduced[d] >= 0) {
-      rowIndex.push_back(reduced[d]);
-      rowCoefficient.push_back(1.0);
-    } else if (g < general.size() && general[g] == int(d)) {
-      for (int e = generalStart[g]; e < generalStart[g + 1]; ++e) {
-        rowIndex.push_back(generalIndex[std::size_t(e)]);
-        rowCoefficient.push_back(generalCoefficient[std::size_t(e)]);
+RowsOfT rowsOfT(const ConstraintMap& map) {
+  RowsOfT t;
+  t.start.assign(map.reduced.size() + 1, 0);
+  t.index.reserve(map.reduced.size() + map.generalIndex.size());
+  t.coefficient.reserve(t.index.capacity());
+  for (std::size_t d = 0, g = 0; d < map.reduced.size(); ++d) {
+    if (map.reduced[d] >= 0) {
+      t.index.push_back(map.reduced[d]);
+      t.coefficient.push_back(1.0);
+    } else if (g < map.general.size() && map.general[g] == int(d)) {
+      for (int e = map.generalStart[g]; e < map.generalStart[g + 1]; ++e) {
+        t.index.push_back(map.generalIndex[std::size_t(e)]);
+        t.coefficient.push_back(map.generalCoefficient[std::size_t(e)]);
       }
       ++g;
     }
-    rowStart[d + 1] = int(rowIndex.size());
+    t.start[d + 1] = int(t.index.size());
   }
+  return t;
+}
+
+/// Calls f(K's value index, a, b, weight) for every contribution, in K's order.
+template <class F>
+void forEachContribution(const Eigen::SparseMatrix<double>& k, const RowsOfT& t, F&& f) {
   const int* outerK = k.outerIndexPtr();
   const int* innerK = k.innerIndexPtr();
-  const double* valuesK = k.valuePtr();
   const auto columnEnd = [&k, outerK](Eigen::Index j) {
     return k.isCompressed() ? outerK[j + 1] : outerK[j] + k.innerNonZeroPtr()[j];
   };
-  // Calls f(K's value index, a, b, weight) for every contribution, in K's order.
-  const auto forEach = [&](auto&& f) {
-    for (Eigen::Index j = 0; j < k.outerSize(); ++j)
-      for (int p = outerK[j], end = columnEnd(j); p < end; ++p) {
-        const int i = innerK[p];
-        if (i > j) continue;  // upper triangle only
-        for (int x = rowStart[std::size_t(i)]; x < rowStart[std::size_t(i) + 1]; ++x)
-          for (int y = rowStart[std::size_t(j)]; y < rowStart[std::size_t(j) + 1]; ++y) {
-            int a = rowIndex[std::size_t(x)], b = rowIndex[std::size_t(y)];
-            if (i == j && a > b) continue;  // the pair (b, a) of the same row gives it
-            if (a > b) std::swap(a, b);
-            double w = rowCoefficient[std::size_t(x)] * rowCoefficient[std::size_t(y)];
-            if (a == b && i != j) w *= 2.0;  // K_ij and K_ji both land on the diagonal
-            f(p, a, b, w);
-          }
-      }
-  };
+  for (Eigen::Index j = 0; j < k.outerSize(); ++j)
+    for (int p = outerK[j], end = columnEnd(j); p < end; ++p) {
+      const int i = innerK[p];
+      if (i > j) continue;  // upper triangle only
+      for (int x = t.start[std::size_t(i)]; x < t.start[std::size_t(i) + 1]; ++x)
+        for (int y = t.start[std::size_t(j)]; y < t.start[std::size_t(j) + 1]; ++y) {
+          int a = t.index[std::size_t(x)], b = t.index[std::size_t(y)];
+          if (i == j && a > b) continue;  // the pair (b, a) of the same row gives it
+          if (a > b) std::swap(a, b);
+          double w = t.coefficient[std::size_t(x)] * t.coefficient[std::size_t(y)];
+          if (a == b && i != j) w *= 2.0;  // K_ij and K_ji both land on the diagonal
+          f(p, a, b, w);
+        }
+    }
+}
 
-  std::vector<int> count(std::size_t(n) + 1, 0);
-  forEach([&count](int, int, int b, double) { ++count[std::size_t(b) + 1]; });
+/// The contributions counted into K̄'s columns (start count[b]), in K's
+/// order within a column; with a plan also their sources and weights.
+struct Contributions {
+  std::vector<int> count;
+  std::vector<int> rows;
+  std::vector<double> vals;
+  std::vector<int> sources;
+  std::vector<double> weights;
+};
+
+Contributions scatterContributions(const Eigen::SparseMatrix<double>& k, const RowsOfT& t, Eigen::Index n,
+                                   bool withPlan) {
+  Contributions s;
+  std::vector<int>& count = s.count;
+  count.assign(std::size_t(n) + 1, 0);
+  forEachContribution(k, t, [&count](int, int, int b, double) { ++count[std::size_t(b) + 1]; });
   for (std::size_t c = 0; c < std::size_t(n); ++c) count[c + 1] += count[c];
-  std::vector<int> rows(std::size_t(count.back()));
-  std::vector<double> vals(rows.size());
-  std::vector<int> sources(plan ? rows.size() : 0);
-  std::vector<double> weights(plan ? rows.size() : 0);
+  s.rows.resize(std::size_t(count.back()));
+  s.vals.resize(s.rows.size());
+  s.sources.resize(withPlan ? s.rows.size() : 0);
+  s.weights.resize(withPlan ? s.rows.size() : 0);
   std::vector<int> fill(count.begin(), count.end() - 1);
-  forEach([&](int p, int a, int b, double w) {
+  const double* valuesK = k.valuePtr();
+  forEachContribution(k, t, [&](int p, int a, int b, double w) {
     const int at = fill[std::size_t(b)]++;
-    rows[std::size_t(at)] = a;
-    vals[std::size_t(at)] = valuesK[p] * w;
-    if (plan) {
-      sources[std::size_t(at)] = p;
-      weights[std::size_t(at)] = w;
+    s.rows[std::size_t(at)] = a;
+    s.vals[std::size_t(at)] = valuesK[p] * w;
+    if (withPlan) {
+      s.sources[std::size_t(at)] = p;
+      s.weights[std::size_t(at)] = w;
     }
   });
+  return s;
+}
 
+/// K̄ from the scattered contributions: each column sorted by row and its
+/// duplicates summed; with @a plan, where each contribution went.
+Eigen::SparseMatrix<double> sumContributions(const Contributions& s, Eigen::Index n,
+                                             ConstraintMap::ReductionPlan* plan) {
+  const std::vector<int>& count = s.count;
+  const std::vector<int>& rows = s.rows;
   Eigen::SparseMatrix<double> r(n, n);
   std::vector<int> order;
   std::vector<int> outer(std::size_t(n) + 1, 0);
@@ -698,14 +803,14 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceGeneral(const Eigen::SparseMatr
     if (!std::is_sorted(order.begin(), order.end(), byRow)) std::sort(order.begin(), order.end(), byRow);
     for (int e : order) {
       if (int(inner.size()) > outer[std::size_t(c)] && inner.back() == rows[std::size_t(e)])
-        values.back() += vals[std::size_t(e)];
+        values.back() += s.vals[std::size_t(e)];
       else {
         inner.push_back(rows[std::size_t(e)]);
-        values.push_back(vals[std::size_t(e)]);
+        values.push_back(s.vals[std::size_t(e)]);
       }
       if (plan) {
-        plan->source.push_back(sources[std::size_t(e)]);
-        plan->weight.push_back(weights[std::size_t(e)]);
+        plan->source.push_back(s.sources[std::size_t(e)]);
+        plan->weight.push_back(s.weights[std::size_t(e)]);
         plan->target.push_back(int(inner.size()) - 1);
       }
     }
@@ -715,6 +820,23 @@ Eigen::SparseMatrix<double> ConstraintMap::reduceGeneral(const Eigen::SparseMatr
   std::copy(outer.begin(), outer.end(), r.outerIndexPtr());
   std::copy(inner.begin(), inner.end(), r.innerIndexPtr());
   std::copy(values.begin(), values.end(), r.valuePtr());
+  return r;
+}
+
+}  // namespace
+
+Eigen::SparseMatrix<double> ConstraintMap::reduceGeneral(const Eigen::SparseMatrix<double>& k,
+                                                         ReductionPlan* plan) const {
+  // T^T K T entry by entry: K_ij (i <= j) times each pair of row i's and row
+  // j's terms lands on K̄(min, max); from an off-diagonal K_ij a pair on one
+  // reduced DOF lands there twice (K_ij and K_ji). Rows with one coefficient-1
+  // term (sutures) give the weights 1 and 2 of a plain renaming. Counted into
+  // compressed columns directly (a triplet sort took most of the time);
+  // columns are then sorted and their duplicates summed.
+  const Eigen::Index n = reducedCount();
+  const RowsOfT t = rowsOfT(*this);
+  const Contributions s = scatterContributions(k, t, n, plan != nullptr);
+  Eigen::SparseMatrix<double> r = sumContributions(s, n, plan);
   if (plan) {
     plan->rows = k.rows();
     plan->kNonZeros = k.nonZeros();
