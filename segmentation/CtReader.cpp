@@ -324,14 +324,9 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   return volume;
 }
 
-} // namespace
-
-DicomFolderScan scanDicomFolder(const fs::path& folder)
+/// The regular files of @a folder, sorted by name.
+std::vector<fs::path> filesOf(const fs::path& folder)
 {
-  // GDCM's console warnings (odd VRs in private tags) mean nothing to a user;
-  // what matters is reported through our own messages.
-  gdcm::Trace::WarningOff();
-  DicomFolderScan scan;
   std::vector<fs::path> files;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(folder, ec))
@@ -340,10 +335,153 @@ DicomFolderScan scanDicomFolder(const fs::path& folder)
   if (ec)
     throw CtReadError("Cannot list " + folder.string() + ": " + ec.message() + ".");
   std::sort(files.begin(), files.end());
+  return files;
+}
 
+/// The DICOM tags a series is grouped, sorted and described by, read from
+/// every sound file with GDCM's scanner.
+class SeriesTags
+{
+public:
+  inline static const gdcm::Tag seriesUid{0x0020, 0x000e}, orientation{0x0020, 0x0037}, position{0x0020, 0x0032},
+    instance{0x0020, 0x0013}, rows{0x0028, 0x0010}, columns{0x0028, 0x0011}, spacing{0x0028, 0x0030},
+    thickness{0x0018, 0x0050}, patientName{0x0010, 0x0010}, patientId{0x0010, 0x0020}, studyDate{0x0008, 0x0020},
+    description{0x0008, 0x103e}, modality{0x0008, 0x0060};
+
+  SeriesTags(const gdcm::Directory::FilenamesType& files, const fs::path& folder)
+  {
+    for (const auto& tag : {seriesUid, orientation, position, instance, rows, columns, spacing, thickness,
+                            patientName, patientId, studyDate, description, modality})
+      scanner_.AddTag(tag);
+    if (!scanner_.Scan(files))
+      throw CtReadError("Could not scan " + folder.string() + " for DICOM files.");
+  }
+
+  bool parsed(const std::string& file) const { return scanner_.IsKey(file.c_str()); }
+
+  std::string value(const std::string& file, const gdcm::Tag& tag) const
+  {
+    const char* v = scanner_.GetValue(file.c_str(), tag);
+    return v ? trim(v) : std::string();
+  }
+
+  /// A multi-valued tag's numbers ("a\b\c").
+  std::vector<double> numbers(const std::string& file, const gdcm::Tag& tag) const
+  {
+    std::vector<double> out;
+    std::stringstream in(value(file, tag));
+    std::string item;
+    while (std::getline(in, item, '\\'))
+      out.push_back(std::atof(item.c_str()));
+    return out;
+  }
+
+private:
+  // GetValue and IsKey are not const in GDCM; reading does not change it.
+  mutable gdcm::Scanner scanner_;
+};
+
+/// Groups like ITK's "series details": same UID, orientation and matrix, in
+/// the order first met; files GDCM cannot parse go to @a damaged.
+std::vector<std::vector<std::string>> groupBySeries(const gdcm::Directory::FilenamesType& sound,
+                                                    const SeriesTags& tags,
+                                                    std::vector<std::pair<std::string, std::string>>& damaged)
+{
+  std::map<std::string, std::vector<std::string>> groups;
+  std::vector<std::string> order;
+  for (const auto& file : sound)
+  {
+    if (!tags.parsed(file))
+    {
+      damaged.emplace_back(fs::path(file).filename().string(), "GDCM cannot parse it");
+      continue;
+    }
+    const std::string key = tags.value(file, SeriesTags::seriesUid) + "|" +
+                            tags.value(file, SeriesTags::orientation) + "|" + tags.value(file, SeriesTags::rows) +
+                            "x" + tags.value(file, SeriesTags::columns);
+    if (!groups.count(key))
+      order.push_back(key);
+    groups[key].push_back(file);
+  }
+  std::vector<std::vector<std::string>> out;
+  for (const auto& key : order)
+    out.push_back(std::move(groups[key]));
+  return out;
+}
+
+/// One series: its files sorted along the slice normal (row x column
+/// direction; by instance number when positions are missing), its
+/// identifying fields and its slice geometry.
+DicomSeriesInfo seriesInfoOf(std::vector<std::string> group, const SeriesTags& tags)
+{
+  using T = SeriesTags;
+  const std::string first = group.front();
+  const auto iop = tags.numbers(first, T::orientation);
+  double normal[3] = {0, 0, 1};
+  if (iop.size() == 6)
+  {
+    normal[0] = iop[1] * iop[5] - iop[2] * iop[4];
+    normal[1] = iop[2] * iop[3] - iop[0] * iop[5];
+    normal[2] = iop[0] * iop[4] - iop[1] * iop[3];
+  }
+  const auto along = [&](const std::string& file) {
+    const auto ipp = tags.numbers(file, T::position);
+    if (ipp.size() != 3)
+      return std::atof(tags.value(file, T::instance).c_str());
+    return ipp[0] * normal[0] + ipp[1] * normal[1] + ipp[2] * normal[2];
+  };
+  std::stable_sort(group.begin(), group.end(), [&](const auto& a, const auto& b) { return along(a) < along(b); });
+
+  DicomSeriesInfo info;
+  info.files = group;
+  info.sliceCount = static_cast<int>(group.size());
+  info.seriesUid = tags.value(first, T::seriesUid);
+  info.patientName = tags.value(first, T::patientName);
+  info.patientId = tags.value(first, T::patientId);
+  info.studyDate = tags.value(first, T::studyDate);
+  info.seriesDescription = tags.value(first, T::description);
+  info.modality = tags.value(first, T::modality);
+  const auto pixel = tags.numbers(first, T::spacing);
+  if (pixel.size() == 2)
+  {
+    info.pixelSpacing[0] = pixel[0];
+    info.pixelSpacing[1] = pixel[1];
+    // DICOM Pixel Spacing is (between rows, between columns).
+    info.geometry.pixelSpacing[0] = pixel[1];
+    info.geometry.pixelSpacing[1] = pixel[0];
+  }
+  info.sliceThickness = std::atof(tags.value(first, T::thickness).c_str());
+  if (iop.size() == 6)
+  {
+    info.geometry.row = {iop[0], iop[1], iop[2]};
+    info.geometry.column = {iop[3], iop[4], iop[5]};
+  }
+  for (const auto& file : group)
+  {
+    const auto ipp = tags.numbers(file, T::position);
+    if (ipp.size() != 3)
+    {
+      info.geometry.positions.clear();
+      break;
+    }
+    info.geometry.positions.push_back({ipp[0], ipp[1], ipp[2]});
+  }
+  if (info.geometry.positions.size() > 1)
+    info.sliceSpacing = analyseSliceStack(info.geometry).spacing;
+  return info;
+}
+
+} // namespace
+
+DicomFolderScan scanDicomFolder(const fs::path& folder)
+{
+  // GDCM's console warnings (odd VRs in private tags) mean nothing to a user;
+  // what matters is reported through our own messages.
+  gdcm::Trace::WarningOff();
+  DicomFolderScan scan;
   // Damaged files never reach GDCM (see DicomFileCheck.h).
   gdcm::Directory::FilenamesType sound;
-  for (const auto& file : files)
+  for (const auto& file : filesOf(folder))
   {
     const DicomFileCheck check = checkDicomFile(file);
     if (check.kind == DicomFileKind::Sound)
@@ -353,112 +491,10 @@ DicomFolderScan scanDicomFolder(const fs::path& folder)
   }
   if (sound.empty())
     return scan;
-
-  const gdcm::Tag seriesUid(0x0020, 0x000e), orientation(0x0020, 0x0037),
-    position(0x0020, 0x0032), instance(0x0020, 0x0013), rows(0x0028, 0x0010),
-    columns(0x0028, 0x0011), spacing(0x0028, 0x0030), thickness(0x0018, 0x0050),
-    patientName(0x0010, 0x0010), patientId(0x0010, 0x0020), studyDate(0x0008, 0x0020),
-    description(0x0008, 0x103e), modality(0x0008, 0x0060);
-  gdcm::Scanner scanner;
-  for (const auto& tag : {seriesUid, orientation, position, instance, rows, columns, spacing,
-                          thickness, patientName, patientId, studyDate, description, modality})
-    scanner.AddTag(tag);
-  if (!scanner.Scan(sound))
-    throw CtReadError("Could not scan " + folder.string() + " for DICOM files.");
-  const auto value = [&](const std::string& file, const gdcm::Tag& tag) {
-    const char* v = scanner.GetValue(file.c_str(), tag);
-    return v ? trim(v) : std::string();
-  };
-  const auto numbers = [](const std::string& text) {
-    std::vector<double> out;
-    std::stringstream in(text);
-    std::string item;
-    while (std::getline(in, item, '\\'))
-      out.push_back(std::atof(item.c_str()));
-    return out;
-  };
-
-  // Group like ITK's "series details": same UID, orientation and matrix.
-  std::map<std::string, std::vector<std::string>> groups;
-  std::vector<std::string> order;
-  for (const auto& file : sound)
-  {
-    if (!scanner.IsKey(file.c_str()))
-    {
-      scan.damaged.emplace_back(fs::path(file).filename().string(), "GDCM cannot parse it");
-      continue;
-    }
-    const std::string key = value(file, seriesUid) + "|" + value(file, orientation) + "|" +
-                            value(file, rows) + "x" + value(file, columns);
-    if (!groups.count(key))
-      order.push_back(key);
-    groups[key].push_back(file);
-  }
-
-  for (const auto& key : order)
-  {
-    auto& group = groups[key];
-    const std::string& first = group.front();
-    // Sort along the slice normal (row x column direction), by instance
-    // number when positions are missing.
-    const auto iop = numbers(value(first, orientation));
-    double normal[3] = {0, 0, 1};
-    if (iop.size() == 6)
-    {
-      normal[0] = iop[1] * iop[5] - iop[2] * iop[4];
-      normal[1] = iop[2] * iop[3] - iop[0] * iop[5];
-      normal[2] = iop[0] * iop[4] - iop[1] * iop[3];
-    }
-    const auto along = [&](const std::string& file) {
-      const auto ipp = numbers(value(file, position));
-      if (ipp.size() != 3)
-        return std::atof(value(file, instance).c_str());
-      return ipp[0] * normal[0] + ipp[1] * normal[1] + ipp[2] * normal[2];
-    };
-    std::stable_sort(group.begin(), group.end(),
-                     [&](const auto& a, const auto& b) { return along(a) < along(b); });
-
-    DicomSeriesInfo info;
-    info.files = group;
-    info.sliceCount = static_cast<int>(group.size());
-    info.seriesUid = value(first, seriesUid);
-    info.patientName = value(first, patientName);
-    info.patientId = value(first, patientId);
-    info.studyDate = value(first, studyDate);
-    info.seriesDescription = value(first, description);
-    info.modality = value(first, modality);
-    const auto pixel = numbers(value(first, spacing));
-    if (pixel.size() == 2)
-    {
-      info.pixelSpacing[0] = pixel[0];
-      info.pixelSpacing[1] = pixel[1];
-    }
-    info.sliceThickness = std::atof(value(first, thickness).c_str());
-    // DICOM Pixel Spacing is (between rows, between columns).
-    if (pixel.size() == 2)
-    {
-      info.geometry.pixelSpacing[0] = pixel[1];
-      info.geometry.pixelSpacing[1] = pixel[0];
-    }
-    if (iop.size() == 6)
-    {
-      info.geometry.row = {iop[0], iop[1], iop[2]};
-      info.geometry.column = {iop[3], iop[4], iop[5]};
-    }
-    for (const auto& file : group)
-    {
-      const auto ipp = numbers(value(file, position));
-      if (ipp.size() != 3)
-      {
-        info.geometry.positions.clear();
-        break;
-      }
-      info.geometry.positions.push_back({ipp[0], ipp[1], ipp[2]});
-    }
-    if (info.geometry.positions.size() > 1)
-      info.sliceSpacing = analyseSliceStack(info.geometry).spacing;
-    scan.series.push_back(std::move(info));
-  }
+  const SeriesTags tags(sound, folder);
+  for (auto& group : groupBySeries(sound, tags, scan.damaged))
+    scan.series.push_back(seriesInfoOf(std::move(group), tags));
+  // The largest series first.
   std::stable_sort(scan.series.begin(), scan.series.end(), [](const auto& a, const auto& b) {
     return a.sliceCount > b.sliceCount;
   });
