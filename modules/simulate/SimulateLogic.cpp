@@ -209,21 +209,102 @@ struct DeckResults
   std::vector<fs::path> extraFiles;                        ///< written before (the increment log)
 };
 
+/// The stress invariants at each node of the report's stress field.
+struct NodalInvariants
+{
+  Eigen::VectorXd vonMises, mean;
+  Eigen::Matrix3Xd principal;
+};
+
+NodalInvariants invariantsOf(const fem::NodalStressMatrix& nodalStress)
+{
+  const Eigen::Index n = nodalStress.cols();
+  NodalInvariants v{Eigen::VectorXd(n), Eigen::VectorXd(n), Eigen::Matrix3Xd(3, n)};
+  for (Eigen::Index i = 0; i < n; ++i)
+  {
+    const fem::Vector6d s = nodalStress.col(i);
+    v.vonMises[i] = fem::vonMisesStress(s);
+    v.mean[i] = s.head<3>().sum() / 3.0;
+    v.principal.col(i) = fem::principalStresses(s);
+  }
+  return v;
+}
+
+/// gauss_stresses.csv: the stress at each element's own integration points,
+/// in the order and columns of ccx's *EL PRINT S, for comparison with its .dat.
+void writeGaussStresses(const fem::CalculixModel& model, const DeckResults& results, const fs::path& file)
+{
+  std::size_t count = 0;
+  for (const auto& p : results.gaussStress)
+    count += p.size();
+  CsvText f(count * 120 + 64);
+  f << "element,point,sxx,syy,szz,sxy,sxz,syz\n";
+  // The order depends on the rule only: one per (kind, number of points).
+  std::map<std::pair<fem::ElementKind, std::size_t>, std::vector<std::size_t>> orders;
+  for (std::size_t e = 0; e < results.gaussStress.size(); ++e)
+  {
+    const auto& points = results.gaussStress[e];
+    const fem::ElementKind kind = model.mesh.elements[e].kind;
+    auto it = orders.find({kind, points.size()});
+    if (it == orders.end())
+      it = orders.emplace(std::make_pair(kind, points.size()), ccxPointOrder(points, kind)).first;
+    const auto& order = it->second;
+    for (std::size_t k = 0; k < order.size(); ++k)
+    {
+      const fem::Vector6d& s = points[order[k]].stress; // xx yy zz xy yz zx
+      f << model.elementIds[e] << ',' << k + 1 << ',' << s[0] << ',' << s[1] << ',' << s[2] << ',' << s[3] << ','
+        << s[5] << ',' << s[4] << '\n';
+    }
+  }
+  f.save(file);
+}
+
+/// displacements.csv, stresses.csv and result.vtu.
+void writeNodalResults(const fem::CalculixModel& model, const Eigen::VectorXd& u, const DeckResults& results,
+                       const NodalInvariants& v, const fs::path& displacements, const fs::path& stresses,
+                       const fs::path& vtu)
+{
+  const Eigen::Index n = model.mesh.nodeCount();
+  {
+    CsvText f(std::size_t(n) * 140 + 64);
+    f << "node,x,y,z,ux,uy,uz\n";
+    for (Eigen::Index i = 0; i < n; ++i)
+      f << model.nodeIds[std::size_t(i)] << ',' << model.mesh.nodes(0, i) << ',' << model.mesh.nodes(1, i) << ','
+        << model.mesh.nodes(2, i) << ',' << u[3 * i] << ',' << u[3 * i + 1] << ',' << u[3 * i + 2] << '\n';
+    f.save(displacements);
+  }
+  {
+    CsvText f(std::size_t(n) * 160 + 64);
+    f << "node,sxx,syy,szz,sxy,syz,szx,von_mises\n";
+    for (Eigen::Index i = 0; i < n; ++i)
+    {
+      f << model.nodeIds[std::size_t(i)];
+      for (int c = 0; c < 6; ++c)
+        f << ',' << results.nodalStress(c, i);
+      f << ',' << v.vonMises[i] << '\n';
+    }
+    f.save(stresses);
+  }
+  Eigen::MatrixXd ids(1, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    ids(0, i) = double(model.nodeIds[std::size_t(i)]);
+  std::vector<fem::VtuArray> arrays = {{"displacement", Eigen::Map<const Eigen::MatrixXd>(u.data(), 3, n)},
+                                       {"stress", results.nodalStress},
+                                       {"von_mises", v.vonMises.transpose()},
+                                       {"mean_stress", v.mean.transpose()},
+                                       {"principal_stress", v.principal},
+                                       {"node_id", ids}};
+  arrays.insert(arrays.end(), results.extraArrays.begin(), results.extraArrays.end());
+  fem::writeVtu(vtu.string(), model.mesh, arrays);
+}
+
 /// displacements.csv, stresses.csv, gauss_stresses.csv and result.vtu into
 /// @a outDir; fills the report's maxima and files.
 FemRunReport writeResults(const fem::CalculixModel& model, const Eigen::VectorXd& u, const DeckResults& results,
                           const fs::path& outDir, FemRunReport& report)
 {
   const Eigen::Index n = model.mesh.nodeCount();
-  Eigen::VectorXd vonMises(n), mean(n);
-  Eigen::Matrix3Xd principal(3, n);
-  for (Eigen::Index i = 0; i < n; ++i)
-  {
-    const fem::Vector6d s = results.nodalStress.col(i);
-    vonMises[i] = fem::vonMisesStress(s);
-    mean[i] = s.head<3>().sum() / 3.0;
-    principal.col(i) = fem::principalStresses(s);
-  }
+  const NodalInvariants invariants = invariantsOf(results.nodalStress);
   for (Eigen::Index i = 0; i < n; ++i)
   {
     const double norm = u.segment<3>(3 * i).norm();
@@ -233,7 +314,7 @@ FemRunReport writeResults(const fem::CalculixModel& model, const Eigen::VectorXd
       report.maxDisplacementNode = model.nodeIds[std::size_t(i)];
     }
   }
-  report.maxVonMises = n ? vonMises.maxCoeff() : 0.0;
+  report.maxVonMises = n ? invariants.vonMises.maxCoeff() : 0.0;
 
   const auto t0 = Clock::now();
   try
@@ -243,36 +324,13 @@ FemRunReport writeResults(const fem::CalculixModel& model, const Eigen::VectorXd
     const fs::path stresses = outDir / "stresses.csv";
     const fs::path gaussStresses = outDir / "gauss_stresses.csv";
     const fs::path vtu = outDir / "result.vtu";
-    // Stress at each element's own integration points, in the order and
-    // columns of ccx's *EL PRINT S, for comparison with its .dat; the
-    // largest file, formatted on a second thread beside the others.
+    // The Gauss-point file is the largest: formatted on a second thread
+    // beside the others.
     std::exception_ptr gaussError;
     std::thread gaussWriter([&]() {
       try
       {
-        std::size_t count = 0;
-        for (const auto& p : results.gaussStress)
-          count += p.size();
-        CsvText f(count * 120 + 64);
-        f << "element,point,sxx,syy,szz,sxy,sxz,syz\n";
-        // The order depends on the rule only: one per (kind, number of points).
-        std::map<std::pair<fem::ElementKind, std::size_t>, std::vector<std::size_t>> orders;
-        for (std::size_t e = 0; e < results.gaussStress.size(); ++e)
-        {
-          const auto& points = results.gaussStress[e];
-          const fem::ElementKind kind = model.mesh.elements[e].kind;
-          auto it = orders.find({kind, points.size()});
-          if (it == orders.end())
-            it = orders.emplace(std::make_pair(kind, points.size()), ccxPointOrder(points, kind)).first;
-          const auto& order = it->second;
-          for (std::size_t k = 0; k < order.size(); ++k)
-          {
-            const fem::Vector6d& s = points[order[k]].stress; // xx yy zz xy yz zx
-            f << model.elementIds[e] << ',' << k + 1 << ',' << s[0] << ',' << s[1] << ',' << s[2] << ',' << s[3]
-              << ',' << s[5] << ',' << s[4] << '\n';
-          }
-        }
-        f.save(gaussStresses);
+        writeGaussStresses(model, results, gaussStresses);
       }
       catch (...)
       {
@@ -281,37 +339,7 @@ FemRunReport writeResults(const fem::CalculixModel& model, const Eigen::VectorXd
     });
     try
     {
-      {
-        CsvText f(std::size_t(n) * 140 + 64);
-        f << "node,x,y,z,ux,uy,uz\n";
-        for (Eigen::Index i = 0; i < n; ++i)
-          f << model.nodeIds[std::size_t(i)] << ',' << model.mesh.nodes(0, i) << ',' << model.mesh.nodes(1, i) << ','
-            << model.mesh.nodes(2, i) << ',' << u[3 * i] << ',' << u[3 * i + 1] << ',' << u[3 * i + 2] << '\n';
-        f.save(displacements);
-      }
-      {
-        CsvText f(std::size_t(n) * 160 + 64);
-        f << "node,sxx,syy,szz,sxy,syz,szx,von_mises\n";
-        for (Eigen::Index i = 0; i < n; ++i)
-        {
-          f << model.nodeIds[std::size_t(i)];
-          for (int c = 0; c < 6; ++c)
-            f << ',' << results.nodalStress(c, i);
-          f << ',' << vonMises[i] << '\n';
-        }
-        f.save(stresses);
-      }
-      Eigen::MatrixXd ids(1, n);
-      for (Eigen::Index i = 0; i < n; ++i)
-        ids(0, i) = double(model.nodeIds[std::size_t(i)]);
-      std::vector<fem::VtuArray> arrays = {{"displacement", Eigen::Map<const Eigen::MatrixXd>(u.data(), 3, n)},
-                                           {"stress", results.nodalStress},
-                                           {"von_mises", vonMises.transpose()},
-                                           {"mean_stress", mean.transpose()},
-                                           {"principal_stress", principal},
-                                           {"node_id", ids}};
-      arrays.insert(arrays.end(), results.extraArrays.begin(), results.extraArrays.end());
-      fem::writeVtu(vtu.string(), model.mesh, arrays);
+      writeNodalResults(model, u, results, invariants, displacements, stresses, vtu);
     }
     catch (...)
     {
@@ -424,29 +452,13 @@ FemRunReport solveLargeDeformation(const fem::CalculixModel& model, const fs::pa
 
 } // namespace
 
-FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outDir,
-                                      const FemRunOptions& options)
-{
-  FemRunReport report;
-  fem::CalculixModel model;
-  auto t0 = Clock::now();
-  try
-  {
-    model = fem::readCalculixInput(deck.string());
-  }
-  catch (const std::exception& e)
-  {
-    report.message = e.what();
-    return report;
-  }
-  report.readSeconds = secondsSince(t0);
-  report.nodes = model.mesh.nodeCount();
-  report.elements = Eigen::Index(model.mesh.elements.size());
-  report.dofs = model.mesh.dofCount();
+namespace {
 
-  // DOFs of nodes in no element carry no stiffness: fix those nothing else
-  // holds (ccx leaves them out of the system). Per DOF, as an auxiliary node
-  // of an *EQUATION often has only its x prescribed.
+/// DOFs of nodes in no element carry no stiffness: fix those nothing else
+/// holds (ccx leaves them out of the system). Per DOF, as an auxiliary node
+/// of an *EQUATION often has only its x prescribed.
+void fixDofsNothingHolds(fem::CalculixModel& model)
+{
   const Eigen::Index dofs = model.mesh.dofCount();
   std::vector<char> used(std::size_t(dofs), 0);
   auto use = [&](int node, int direction) {
@@ -471,7 +483,120 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   for (Eigen::Index k = 0; k < dofs; ++k)
     if (!used[std::size_t(k)])
       model.constraints.fix(int(k / 3), int(k % 3));
+}
 
+/// Why the prepared analysis failed, in the deck's terms: a model that is
+/// not positive definite names the deck's node that is free to move.
+void reportPrepareFailure(const fem::CalculixModel& model, const fem::LinearStaticAnalysis& analysis,
+                          fem::SolverStatus status, FemRunReport& report)
+{
+  report.status =
+    status == fem::SolverStatus::NotPositiveDefinite ? FemRunStatus::Unconstrained : FemRunStatus::SolverFailed;
+  report.message = analysis.message();
+  // The analysis numbers CAPS nodes from 0: name the deck's node.
+  const Eigen::Index col = analysis.solver().failedColumn();
+  const fem::ConstraintMap& map = analysis.constraintMap();
+  if (status == fem::SolverStatus::NotPositiveDefinite && col >= 0 && col < map.reducedCount())
+  {
+    const int dof = map.masterOf[std::size_t(col)];
+    report.message = "the model is not sufficiently constrained (rigid-body motion or a loose part): node " +
+                     deckNode(model, dof / 3) + " of the deck is free to move in " + "xyz"[dof % 3] +
+                     "; fix or suture more nodes" +
+                     (map.hasGeneralRows() ? " (or check that the equations do not leave it free)" : "") +
+                     " [solver: " + analysis.solver().message() + "]";
+  }
+}
+
+/// The linear solve: the load vector (one thread over the elements) beside
+/// the assembly and factorization, which leave a core idle while they build
+/// K's pattern; the same vector as analysis.solve(model.load) would make.
+/// False, with the report filled, when the model cannot be solved.
+bool solveLinear(const fem::CalculixModel& model, fem::LinearStaticAnalysis& analysis,
+                 const fem::AssemblyOptions& assembly, Eigen::VectorXd& u, FemRunReport& report)
+{
+  Eigen::VectorXd load;
+  std::exception_ptr loadError;
+  std::thread loadThread([&]() {
+    try
+    {
+      fem::AssemblyOptions one = assembly;
+      one.threads = 1;
+      load = fem::assembleLoadVector(model.mesh, model.materials, model.load, one);
+    }
+    catch (...)
+    {
+      loadError = std::current_exception();
+    }
+  });
+  fem::SolverStatus status = fem::SolverStatus::InvalidInput;
+  try
+  {
+    status = analysis.prepare();
+  }
+  catch (...)
+  {
+    loadThread.join();
+    throw;
+  }
+  loadThread.join();
+  report.times = analysis.times();
+  if (status != fem::SolverStatus::Success)
+  {
+    reportPrepareFailure(model, analysis, status, report);
+    return false;
+  }
+  if (loadError)
+    std::rethrow_exception(loadError);
+  u = analysis.solve(Eigen::MatrixXd(load)).col(0);
+  report.times = analysis.times();
+  return true;
+}
+
+/// Every element's own points, on the analysis's threads; the nodal
+/// stresses are extrapolated from the same points when each element's rule
+/// is the same for both (a deck's C3D20 and C3D20R always are).
+DeckResults linearStresses(const fem::CalculixModel& model, const Eigen::VectorXd& u,
+                           const fem::AssemblyOptions& assembly, const FemRunOptions& options)
+{
+  DeckResults results;
+  results.gaussStress = fem::recoverStressAtAllGaussPoints(model.mesh, model.materials, u,
+                                                           assembly.gaussPointsPerDirection, options.threads);
+  const bool samePoints = std::all_of(model.mesh.elements.begin(), model.mesh.elements.end(), [&](const auto& el) {
+    return fem::integrationPointsOf(el, options.stressPointsPerDirection) ==
+           fem::integrationPointsOf(el, assembly.gaussPointsPerDirection);
+  });
+  results.nodalStress =
+    samePoints ? fem::nodalStressesFromGaussPoints(model.mesh, model.materials, results.gaussStress,
+                                                   options.stressPointsPerDirection)
+                   .stress
+               : fem::recoverNodalStresses(model.mesh, model.materials, u, options.stressPointsPerDirection,
+                                           options.threads)
+                   .stress;
+  return results;
+}
+
+} // namespace
+
+FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outDir,
+                                      const FemRunOptions& options)
+{
+  FemRunReport report;
+  fem::CalculixModel model;
+  auto t0 = Clock::now();
+  try
+  {
+    model = fem::readCalculixInput(deck.string());
+  }
+  catch (const std::exception& e)
+  {
+    report.message = e.what();
+    return report;
+  }
+  report.readSeconds = secondsSince(t0);
+  report.nodes = model.mesh.nodeCount();
+  report.elements = Eigen::Index(model.mesh.elements.size());
+  report.dofs = model.mesh.dofCount();
+  fixDofsNothingHolds(model);
   if (model.step.nlgeom)
     return solveLargeDeformation(model, outDir, options, report);
 
@@ -481,58 +606,8 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   Eigen::VectorXd u;
   try
   {
-    // The load vector (one thread over the elements) beside the assembly
-    // and factorization, which leave a core idle while they build K's
-    // pattern; the same vector as analysis.solve(model.load) would make.
-    Eigen::VectorXd load;
-    std::exception_ptr loadError;
-    std::thread loadThread([&]() {
-      try
-      {
-        fem::AssemblyOptions one = assembly;
-        one.threads = 1;
-        load = fem::assembleLoadVector(model.mesh, model.materials, model.load, one);
-      }
-      catch (...)
-      {
-        loadError = std::current_exception();
-      }
-    });
-    fem::SolverStatus status = fem::SolverStatus::InvalidInput;
-    try
-    {
-      status = analysis.prepare();
-    }
-    catch (...)
-    {
-      loadThread.join();
-      throw;
-    }
-    loadThread.join();
-    report.times = analysis.times();
-    if (status != fem::SolverStatus::Success)
-    {
-      report.status = status == fem::SolverStatus::NotPositiveDefinite ? FemRunStatus::Unconstrained
-                                                                       : FemRunStatus::SolverFailed;
-      report.message = analysis.message();
-      // The analysis numbers CAPS nodes from 0: name the deck's node.
-      const Eigen::Index col = analysis.solver().failedColumn();
-      const fem::ConstraintMap& map = analysis.constraintMap();
-      if (status == fem::SolverStatus::NotPositiveDefinite && col >= 0 && col < map.reducedCount())
-      {
-        const int dof = map.masterOf[std::size_t(col)];
-        report.message = "the model is not sufficiently constrained (rigid-body motion or a loose part): node " +
-                         deckNode(model, dof / 3) + " of the deck is free to move in " + "xyz"[dof % 3] +
-                         "; fix or suture more nodes" +
-                         (map.hasGeneralRows() ? " (or check that the equations do not leave it free)" : "") +
-                         " [solver: " + analysis.solver().message() + "]";
-      }
+    if (!solveLinear(model, analysis, assembly, u, report))
       return report;
-    }
-    if (loadError)
-      std::rethrow_exception(loadError);
-    u = analysis.solve(Eigen::MatrixXd(load)).col(0);
-    report.times = analysis.times();
   }
   catch (const std::exception& e)
   {
@@ -545,22 +620,7 @@ FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outD
   DeckResults results;
   try
   {
-    // Every element's own points, on the analysis's threads; the nodal
-    // stresses are extrapolated from the same points when each element's
-    // rule is the same for both (a deck's C3D20 and C3D20R always are).
-    results.gaussStress = fem::recoverStressAtAllGaussPoints(model.mesh, model.materials, u,
-                                                             assembly.gaussPointsPerDirection, options.threads);
-    const bool samePoints = std::all_of(model.mesh.elements.begin(), model.mesh.elements.end(), [&](const auto& el) {
-      return fem::integrationPointsOf(el, options.stressPointsPerDirection) ==
-             fem::integrationPointsOf(el, assembly.gaussPointsPerDirection);
-    });
-    results.nodalStress =
-        samePoints ? fem::nodalStressesFromGaussPoints(model.mesh, model.materials, results.gaussStress,
-                                                       options.stressPointsPerDirection)
-                         .stress
-                   : fem::recoverNodalStresses(model.mesh, model.materials, u, options.stressPointsPerDirection,
-                                               options.threads)
-                         .stress;
+    results = linearStresses(model, u, assembly, options);
   }
   catch (const std::exception& e)
   {
