@@ -179,6 +179,23 @@ private:
 
   // Stage 2: one layer of quadrilaterals; empty string on success, else why not.
   std::string addLayer(double thickness, double nextThickness);
+  /// The layer addLayer() is building: the new vertices of each border
+  /// vertex, new vertices merged into others (alias) and split points of
+  /// the new border edges (midpoint, per border edge, or -1).
+  struct NewLayer {
+    std::size_t firstPolygon = 0;
+    int firstVertex = 0;
+    std::vector<std::vector<int>> offspring;
+    std::unordered_map<int, int> alias;
+    std::vector<int> midpoint;
+    /// @a id after its merges.
+    int resolve(int id) const;
+  };
+  std::string offsetFront(double thickness, NewLayer& layer);
+  void mergeOrSplitBridges(double thickness, double nextThickness, NewLayer& layer);
+  void mergeShortRuns(double nextThickness, NewLayer& layer);
+  std::vector<int> joinLayer(const NewLayer& layer);
+  void splitBentQuadrilaterals(std::size_t firstPolygon);
   int newVertex(P p, double thickness);
   std::string checkNewPolygons(std::size_t firstNew) const;
 
@@ -375,23 +392,40 @@ int Mesher::newVertex(P p, double thickness) {
 // Stage 2 (§4.5.1): the new border from offsets of the current one, joined
 // to it by quadrilaterals.
 std::string Mesher::addLayer(double l, double lNext) {
-  const std::size_t n = front_.size();
-  const std::size_t firstPolygon = polygons_.size();
-  const int firstVertex = int(vertices_.size());
-  std::vector<std::vector<int>> offspring(n);
-  const double expandTurn = kPi - o_.cornerExpandAngle;
+  NewLayer layer;
+  layer.firstPolygon = polygons_.size();
+  layer.firstVertex = int(vertices_.size());
   auto fail = [&](const std::string& problem) {
-    polygons_.resize(firstPolygon);
-    vertices_.resize(firstVertex);
-    frozen_.resize(firstVertex);
+    polygons_.resize(layer.firstPolygon);
+    vertices_.resize(layer.firstVertex);
+    frozen_.resize(layer.firstVertex);
     return problem;
   };
+  if (std::string problem = offsetFront(l, layer); !problem.empty()) return fail(problem);
+  mergeOrSplitBridges(l, lNext, layer);
+  mergeShortRuns(lNext, layer);
+  const std::vector<int> newFront = joinLayer(layer);
+  splitBentQuadrilaterals(layer.firstPolygon);
+  const std::string problem = checkNewPolygons(layer.firstPolygon);
+  if (!problem.empty()) return fail(problem);
+  front_ = newFront;
+  return {};
+}
 
-  // Substage 1: the new border vertices of each border vertex.
+int Mesher::NewLayer::resolve(int id) const {
+  for (auto it = alias.find(id); it != alias.end(); it = alias.find(id)) id = it->second;
+  return id;
+}
+
+// Substage 1: the new border vertices of each border vertex.
+std::string Mesher::offsetFront(double l, NewLayer& layer) {
+  const std::size_t n = front_.size();
+  const double expandTurn = kPi - o_.cornerExpandAngle;
+  layer.offspring.assign(n, {});
   for (std::size_t i = 0; i < n; ++i) {
     const int v = front_[i];
     if (frozen_[v]) {
-      offspring[i] = {v};
+      layer.offspring[i] = {v};
       continue;
     }
     // Copies: newVertex() grows vertices_ and would leave references dangling.
@@ -412,30 +446,30 @@ std::string Mesher::addLayer(double l, double lNext) {
         fan.push_back(newVertex(p + r * P(std::cos(angle), std::sin(angle)), l));
       }
       for (int s = 0; s < sectors; ++s) polygons_.push_back({v, fan[2 * s + 2], fan[2 * s + 1], fan[2 * s]});
-      offspring[i] = fan;
+      layer.offspring[i] = fan;
     } else {
       // Mitre: the offset lines of both edges meet at distance l / cos(turn/2).
       const double denominator = 1 + n1.dot(n2);
-      if (denominator < 0.1) return problemAt_ = p, fail("the border turns back on itself at " + at(p));
-      offspring[i] = {newVertex(p + l * (n1 + n2) / denominator, l)};
+      if (denominator < 0.1) return problemAt_ = p, "the border turns back on itself at " + at(p);
+      layer.offspring[i] = {newVertex(p + l * (n1 + n2) / denominator, l)};
     }
   }
+  return {};
+}
 
-  // New border edges between the offspring of neighbours ("bridges"): merge
-  // the ends of one that has become short or reversed (a concave corner, or
-  // short edges under a thick layer), split one that has grown long (round a
-  // convex corner), so the next layer's quadrilaterals keep their shape.
-  std::unordered_map<int, int> alias;
+// New border edges between the offspring of neighbours ("bridges"): merge
+// the ends of one that has become short or reversed (a concave corner, or
+// short edges under a thick layer), split one that has grown long (round a
+// convex corner), so the next layer's quadrilaterals keep their shape.
+void Mesher::mergeOrSplitBridges(double l, double lNext, NewLayer& layer) {
+  const std::size_t n = front_.size();
+  const auto& offspring = layer.offspring;
   std::vector<char> merged(vertices_.size() + n, 0);
-  std::vector<int> midpoint(n, -1);
-  auto resolve = [&](int id) {
-    for (auto it = alias.find(id); it != alias.end(); it = alias.find(id)) id = it->second;
-    return id;
-  };
+  layer.midpoint.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t i1 = (i + 1) % n;
     const int x = offspring[i].back(), y = offspring[i1].front();
-    if (x < firstVertex || y < firstVertex || x == y) continue;
+    if (x < layer.firstVertex || y < layer.firstVertex || x == y) continue;
     const P edge = vertices_[front_[i1]] - vertices_[front_[i]];
     const P bridge = vertices_[y] - vertices_[x];
     const double along = bridge.dot(edge.normalized());
@@ -446,57 +480,67 @@ std::string Mesher::addLayer(double l, double lNext) {
       if (frozen_[x] && !frozen_[y]) m = vertices_[x];
       vertices_[x] = m;
       frozen_[x] = frozen_[x] || frozen_[y];
-      alias[y] = x;
+      layer.alias[y] = x;
       merged[x] = merged[y] = 1;
     } else if (bridge.norm() > 3.0 * lNext && bridge.norm() > 1.3 * edge.norm() && !frozen_[x] && !frozen_[y]) {
-      midpoint[i] = newVertex(0.5 * (vertices_[x] + vertices_[y]), l);
+      layer.midpoint[i] = newVertex(0.5 * (vertices_[x] + vertices_[y]), l);
       if (frozen_.back()) {  // a split point must not be pulled off the line
         vertices_.pop_back();
         frozen_.pop_back();
-        midpoint[i] = -1;
+        layer.midpoint[i] = -1;
       }
     }
   }
+}
 
-  // Merging every other short bridge leaves short edges where several come
-  // in a row (a concave bend of the border): the next layer would build
-  // slivers on them. Merge their ends as well, a few passes, each vertex
-  // once per pass, so edges double until they are long enough. The corner
-  // fans keep their vertices (their kites are already built).
-  {
-    std::vector<char> single(vertices_.size(), 0);
+// Merging every other short bridge leaves short edges where several come
+// in a row (a concave bend of the border): the next layer would build
+// slivers on them. Merge their ends as well, a few passes, each vertex
+// once per pass, so edges double until they are long enough. The corner
+// fans keep their vertices (their kites are already built).
+void Mesher::mergeShortRuns(double lNext, NewLayer& layer) {
+  const std::size_t n = front_.size();
+  const auto& offspring = layer.offspring;
+  const auto& midpoint = layer.midpoint;
+  std::vector<char> single(vertices_.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (offspring[i].size() == 1 && offspring[i][0] >= layer.firstVertex) single[std::size_t(offspring[i][0])] = 1;
+    if (midpoint[i] >= 0) single[std::size_t(midpoint[i])] = 1;
+  }
+  for (int pass = 0; pass < 4; ++pass) {
+    std::vector<int> ring;
     for (std::size_t i = 0; i < n; ++i) {
-      if (offspring[i].size() == 1 && offspring[i][0] >= firstVertex) single[std::size_t(offspring[i][0])] = 1;
-      if (midpoint[i] >= 0) single[std::size_t(midpoint[i])] = 1;
+      for (int id : offspring[i])
+        if (ring.empty() || ring.back() != layer.resolve(id)) ring.push_back(layer.resolve(id));
+      if (midpoint[i] >= 0) ring.push_back(layer.resolve(midpoint[i]));
     }
-    for (int pass = 0; pass < 4; ++pass) {
-      std::vector<int> ring;
-      for (std::size_t i = 0; i < n; ++i) {
-        for (int id : offspring[i])
-          if (ring.empty() || ring.back() != resolve(id)) ring.push_back(resolve(id));
-        if (midpoint[i] >= 0) ring.push_back(resolve(midpoint[i]));
-      }
-      while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
-      std::vector<char> touched(vertices_.size(), 0);
-      bool any = false;
-      for (std::size_t k = 0; k < ring.size() && ring.size() > 4; ++k) {
-        const int x = ring[k], y = ring[(k + 1) % ring.size()];
-        if (x == y || !single[std::size_t(x)] || !single[std::size_t(y)] || touched[std::size_t(x)] ||
-            touched[std::size_t(y)] || (frozen_[x] && frozen_[y]))
-          continue;
-        if ((vertices_[x] - vertices_[y]).norm() >= 0.4 * lNext) continue;
-        vertices_[x] = frozen_[y] ? vertices_[y] : frozen_[x] ? vertices_[x] : P(0.5 * (vertices_[x] + vertices_[y]));
-        frozen_[x] = frozen_[x] || frozen_[y];
-        alias[y] = x;
-        touched[std::size_t(x)] = touched[std::size_t(y)] = 1;
-        any = true;
-      }
-      if (!any) break;
+    while (ring.size() > 1 && ring.front() == ring.back()) ring.pop_back();
+    std::vector<char> touched(vertices_.size(), 0);
+    bool any = false;
+    for (std::size_t k = 0; k < ring.size() && ring.size() > 4; ++k) {
+      const int x = ring[k], y = ring[(k + 1) % ring.size()];
+      if (x == y || !single[std::size_t(x)] || !single[std::size_t(y)] || touched[std::size_t(x)] ||
+          touched[std::size_t(y)] || (frozen_[x] && frozen_[y]))
+        continue;
+      if ((vertices_[x] - vertices_[y]).norm() >= 0.4 * lNext) continue;
+      vertices_[x] = frozen_[y] ? vertices_[y] : frozen_[x] ? vertices_[x] : P(0.5 * (vertices_[x] + vertices_[y]));
+      frozen_[x] = frozen_[x] || frozen_[y];
+      layer.alias[y] = x;
+      touched[std::size_t(x)] = touched[std::size_t(y)] = 1;
+      any = true;
     }
+    if (!any) break;
   }
+}
 
-  // Substage 2: a quadrilateral (v_i, v_i+1, new_i+1, new_i) per border edge,
-  // counter-clockwise; repeated vertices (frozen or merged) make it a triangle.
+// Substage 2: a quadrilateral (v_i, v_i+1, new_i+1, new_i) per border edge,
+// counter-clockwise; repeated vertices (frozen or merged) make it a triangle.
+// Returns the new border.
+std::vector<int> Mesher::joinLayer(const NewLayer& layer) {
+  const std::size_t n = front_.size();
+  const auto& offspring = layer.offspring;
+  const auto& midpoint = layer.midpoint;
+  const auto resolve = [&layer](int id) { return layer.resolve(id); };
   std::vector<int> newFront;
   for (std::size_t i = 0; i < n; ++i) {
     const std::size_t i1 = (i + 1) % n;
@@ -524,10 +568,13 @@ std::string Mesher::addLayer(double l, double lNext) {
     if (midpoint[i] >= 0 && newFront.back() != resolve(midpoint[i])) newFront.push_back(resolve(midpoint[i]));
   }
   while (newFront.size() > 1 && newFront.front() == newFront.back()) newFront.pop_back();
+  return newFront;
+}
 
-  // A quadrilateral bent out of shape where the border bends (a corner near
-  // 180°, or too long for its width) becomes two good triangles if one of its
-  // diagonals gives them; checkNewPolygons() judges the rest.
+// A quadrilateral bent out of shape where the border bends (a corner near
+// 180°, or too long for its width) becomes two good triangles if one of its
+// diagonals gives them; checkNewPolygons() judges the rest.
+void Mesher::splitBentQuadrilaterals(std::size_t firstPolygon) {
   for (std::size_t k = firstPolygon, end = polygons_.size(); k < end; ++k) {
     const std::vector<int> q = polygons_[k];
     if (q.size() != 4 || shapeWithin(polygonShape(corners(vertices_, q)), o_.quality)) continue;
@@ -543,11 +590,6 @@ std::string Mesher::addLayer(double l, double lNext) {
     polygons_[k] = split[0];
     polygons_.push_back(split[1]);
   }
-
-  const std::string problem = checkNewPolygons(firstPolygon);
-  if (!problem.empty()) return fail(problem);
-  front_ = newFront;
-  return {};
 }
 
 void Mesher::rebuildGrid() {
