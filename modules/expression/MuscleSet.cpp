@@ -705,17 +705,16 @@ AttachmentPlacement placeAttachment(const AttachmentDefinition& point, bool mirr
   return p;
 }
 
-std::vector<FittedMuscle> fitMuscleSet(const MuscleSet& set, const std::vector<seg::Landmark>& landmarks,
-                                       const seg::RangeMap& skin, const seg::RangeMap& bone,
-                                       const MuscleFitOptions& options)
+namespace {
+
+/// Refuses a set whose landmarks are not all placed, naming each missing one
+/// with the first muscle that needs it.
+void checkLandmarksPlaced(const MuscleSet& set, const std::vector<seg::Landmark>& landmarks, bool& derived)
 {
-  if (!bone.empty() && bone.frame() != skin.frame())
-    throw std::invalid_argument("The skin and bone range maps are on different cylindrical frames; make them "
-                                "again together in the Range maps module.");
   // Which landmarks the set needs, each with the first muscle that needs it.
   std::vector<std::pair<std::string, std::string>> needed = {{"nasion", "the face's size"},
                                                              {"subnasale", "the face's size"}};
-  bool derived = false;
+  derived = false;
   auto need = [&](const std::string& name, const std::string& by) {
     if (isDerived(name))
       derived = true;
@@ -747,8 +746,75 @@ std::vector<FittedMuscle> fitMuscleSet(const MuscleSet& set, const std::vector<s
                                 "missing: " + missing +
                                 ". Place them in the Range maps module (or run it again to find them).");
 
-  const MuscleAnchors anchors = muscleAnchors(landmarks, skin);
+}
+
+/// The muscle's instances: both sides (the right one mirrored), one side, or
+/// the midline.
+std::vector<std::pair<std::string, bool>> instancesOf(const MuscleDefinition& m)
+{
+  switch (m.side)
+  {
+  case MuscleSide::Both: return {{"left", false}, {"right", true}};
+  case MuscleSide::Left: return {{"left", false}};
+  case MuscleSide::Right: return {{"right", false}};
+  case MuscleSide::Midline: return {{"midline", false}};
+  }
+  return {};
+}
+
+/// One force function @a f of muscle @a m placed on the patient as
+/// @a name (mirrored or not), added to @a fm.
+void placeFunction(const MuscleSet& set, const MuscleDefinition& m, const ForceFunctionDefinition& f,
+                   const std::string& name, bool mirrored, const MuscleAnchors& anchors, const seg::RangeMap& skin,
+                   const seg::RangeMap& bone, const MuscleFitOptions& options, FittedMuscle& fm)
+{
   const double size = anchors.size;
+  auto place = [&](const AttachmentDefinition& p, const char* end) {
+    try
+    {
+      return placeAttachment(p, mirrored, anchors, skin, bone, options);
+    }
+    catch (const std::invalid_argument& e)
+    {
+      std::string where = set.file.empty() ? std::string() : " (" + set.file.string() + ":" +
+                                                                std::to_string(p.line) + ")";
+      throw std::invalid_argument("The " + std::string(end) + " of " + fm.id + " function " + name + where +
+                                  " cannot be placed on this patient: " + e.what() +
+                                  ". Check the landmarks, or move the point in the muscle file.");
+    }
+  };
+  const AttachmentPlacement o = place(f.origin, "origin");
+  const AttachmentPlacement i = place(f.insertion, "insertion");
+  fem::Muscle muscle;
+  muscle.name = fm.id + "." + name;
+  muscle.origin = o.position;
+  muscle.originRadius = f.origin.inBone ? 0.0 : f.origin.radius * size;
+  muscle.insertion = i.position;
+  muscle.insertionRadius = f.insertion.radius * size;
+  // Loads are written for the adult mean face. The body force of
+  // eq. 4.40 grows with the length |p_o − p_i| (× size) and the soft
+  // tissue's displacement under a body force with the square of its
+  // extent, so l / size² gives a scaled face the same strains: the
+  // same expression.
+  muscle.load = f.load * m.loadScale * set.loadScale / (size * size);
+  muscle.falloff = f.falloff * size;
+  fem::validateMuscle(muscle, fm.functions.size());
+  fm.functions.push_back(muscle);
+  fm.placements.emplace_back(o, i);
+}
+
+} // namespace
+
+std::vector<FittedMuscle> fitMuscleSet(const MuscleSet& set, const std::vector<seg::Landmark>& landmarks,
+                                       const seg::RangeMap& skin, const seg::RangeMap& bone,
+                                       const MuscleFitOptions& options)
+{
+  if (!bone.empty() && bone.frame() != skin.frame())
+    throw std::invalid_argument("The skin and bone range maps are on different cylindrical frames; make them "
+                                "again together in the Range maps module.");
+  bool derived = false;
+  checkLandmarksPlaced(set, landmarks, derived);
+  const MuscleAnchors anchors = muscleAnchors(landmarks, skin);
   if (derived && !findLandmark(anchors.anchors, "stomion"))
   {
     try
@@ -764,73 +830,25 @@ std::vector<FittedMuscle> fitMuscleSet(const MuscleSet& set, const std::vector<s
 
   std::vector<FittedMuscle> out;
   for (const auto& m : set.muscles)
-  {
-    struct Instance
-    {
-      std::string side;
-      bool mirrored;
-    };
-    std::vector<Instance> instances;
-    switch (m.side)
-    {
-    case MuscleSide::Both: instances = {{"left", false}, {"right", true}}; break;
-    case MuscleSide::Left: instances = {{"left", false}}; break;
-    case MuscleSide::Right: instances = {{"right", false}}; break;
-    case MuscleSide::Midline: instances = {{"midline", false}}; break;
-    }
-    for (const auto& inst : instances)
+    for (const auto& [side, instanceMirrored] : instancesOf(m))
     {
       FittedMuscle fm;
       fm.definition = m.id;
-      fm.side = inst.side;
-      fm.id = m.side == MuscleSide::Midline ? m.id : m.id + "_" + inst.side;
-      fm.title = m.side == MuscleSide::Midline ? m.title : m.title + " (" + inst.side + ")";
+      fm.side = side;
+      fm.id = m.side == MuscleSide::Midline ? m.id : m.id + "_" + side;
+      fm.title = m.side == MuscleSide::Midline ? m.title : m.title + " (" + side + ")";
       for (const auto& f : m.functions)
       {
         std::vector<std::pair<std::string, bool>> copies;
         if (f.mirror)
-          copies = {{f.name + "_left", inst.mirrored}, {f.name + "_right", !inst.mirrored}};
+          copies = {{f.name + "_left", instanceMirrored}, {f.name + "_right", !instanceMirrored}};
         else
-          copies = {{f.name, inst.mirrored}};
+          copies = {{f.name, instanceMirrored}};
         for (const auto& [name, mirrored] : copies)
-        {
-          auto place = [&](const AttachmentDefinition& p, const char* end) {
-            try
-            {
-              return placeAttachment(p, mirrored, anchors, skin, bone, options);
-            }
-            catch (const std::invalid_argument& e)
-            {
-              std::string where = set.file.empty() ? std::string() : " (" + set.file.string() + ":" +
-                                                                        std::to_string(p.line) + ")";
-              throw std::invalid_argument("The " + std::string(end) + " of " + fm.id + " function " + name + where +
-                                          " cannot be placed on this patient: " + e.what() +
-                                          ". Check the landmarks, or move the point in the muscle file.");
-            }
-          };
-          const AttachmentPlacement o = place(f.origin, "origin");
-          const AttachmentPlacement i = place(f.insertion, "insertion");
-          fem::Muscle muscle;
-          muscle.name = fm.id + "." + name;
-          muscle.origin = o.position;
-          muscle.originRadius = f.origin.inBone ? 0.0 : f.origin.radius * size;
-          muscle.insertion = i.position;
-          muscle.insertionRadius = f.insertion.radius * size;
-          // Loads are written for the adult mean face. The body force of
-          // eq. 4.40 grows with the length |p_o − p_i| (× size) and the soft
-          // tissue's displacement under a body force with the square of its
-          // extent, so l / size² gives a scaled face the same strains: the
-          // same expression.
-          muscle.load = f.load * m.loadScale * set.loadScale / (size * size);
-          muscle.falloff = f.falloff * size;
-          fem::validateMuscle(muscle, fm.functions.size());
-          fm.functions.push_back(muscle);
-          fm.placements.emplace_back(o, i);
-        }
+          placeFunction(set, m, f, name, mirrored, anchors, skin, bone, options, fm);
       }
       out.push_back(std::move(fm));
     }
-  }
   return out;
 }
 
