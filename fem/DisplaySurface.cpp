@@ -51,6 +51,50 @@ VertexKey edgeKey(int from, int to, int step, int steps) {
   return from < to ? VertexKey{from, to, step} : VertexKey{to, from, steps - step};
 }
 
+
+/// The shared name of grid point (i, j) of a face with corner nodes @a c (in
+/// chart order) and @a n steps per edge, if it lies on the face's border.
+std::optional<VertexKey> borderKey(const FaceChart& chart, const std::vector<int>& c, int n, int i, int j) {
+  if (chart.triangle) {
+    if (j == 0) return edgeKey(c[0], c[1], i, n);
+    if (i + j == n) return edgeKey(c[1], c[2], j, n);
+    if (i == 0) return edgeKey(c[0], c[2], j, n);
+  } else {
+    if (j == 0) return edgeKey(c[0], c[1], i, n);
+    if (i == n) return edgeKey(c[1], c[2], j, n);
+    if (j == n) return edgeKey(c[3], c[2], i, n);
+    if (i == 0) return edgeKey(c[0], c[3], j, n);
+  }
+  return std::nullopt;
+}
+
+/// The polygons of face @a f over its grid of vertex indices (row by row, a
+/// fastest, @a n steps per edge) into @a polygons and @a polygonFace.
+void addGridPolygons(const FaceChart& chart, int n, const std::vector<int>& grid, int f,
+                     std::vector<std::vector<int>>& polygons, std::vector<int>& polygonFace) {
+  auto at = [&](int i, int j) { return grid[std::size_t(j * (n + 1) + i)]; };
+  // Counter-clockwise in (a, b): outward when p × q points out (sign > 0).
+  auto addPolygon = [&](std::vector<int> polygon) {
+    if (chart.sign < 0) std::reverse(polygon.begin(), polygon.end());
+    // Drop the repeats a collapsed edge leaves.
+    std::vector<int> distinct;
+    for (std::size_t k = 0; k < polygon.size(); ++k)
+      if (polygon[k] != polygon[(k + 1) % polygon.size()]) distinct.push_back(polygon[k]);
+    if (distinct.size() < 3) return;
+    polygons.push_back(std::move(distinct));
+    polygonFace.push_back(f);
+  };
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < (chart.triangle ? n - j : n); ++i) {
+      if (!chart.triangle) {
+        addPolygon({at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+        continue;
+      }
+      addPolygon({at(i, j), at(i + 1, j), at(i, j + 1)});
+      if (i + j + 1 < n) addPolygon({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+}
+
 }  // namespace
 
 std::vector<ElementFace> boundaryFacesOnNodes(const Mesh& mesh, const std::vector<int>& nodes) {
@@ -98,124 +142,118 @@ std::vector<ElementFace> skinFaces(const ContinuumMesh& continuum) {
   return out;
 }
 
-DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>& faces, int resolution)
-    : resolution_(resolution), meshNodeCount_(mesh.nodeCount()), faces_(faces) {
-  if (resolution < 1)
-    throw std::invalid_argument("the display resolution must be at least 1 step per element edge, not " +
-                                std::to_string(resolution));
-  const int n = resolution;
+/// The constructor's state while it adds the faces: the vertices shared
+/// between faces, the display node of each mesh node, the interpolation
+/// weights as triplets and the stress rows.
+struct DisplaySurface::Construction {
+  Construction(const Mesh& mesh, int resolution, std::vector<BodyPoint>& bodyPoints, std::vector<int>& displayNodes)
+      : mesh(mesh),
+        n(resolution),
+        bodyPoints(bodyPoints),
+        displayNodes(displayNodes),
+        displayIndex(std::size_t(mesh.nodeCount()), -1) {}
+
+  /// A new vertex at grid point (i, j) of a face of @a el (element @a element).
+  int addVertex(const Element& el, int element, const ElementShape& shape, const FaceChart& chart, int i, int j);
+
+  const Mesh& mesh;
+  const int n;
+  std::vector<BodyPoint>& bodyPoints;
+  std::vector<int>& displayNodes;
   std::map<VertexKey, int> shared;
-  std::vector<int> displayIndex(std::size_t(mesh.nodeCount()), -1);
+  std::vector<int> displayIndex;
   std::vector<Eigen::Triplet<double>> triplets;
   // The stress rows: one per (display node, region of the vertices' elements).
   std::map<std::pair<int, int>, int> regionRow;
   std::vector<int> regionRows;  // mesh node of each
   std::vector<Eigen::Triplet<double>> regionTriplets;
   ShapeVector h;
+};
 
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const ElementFace& face = faces[f];
-    if (face.element < 0 || std::size_t(face.element) >= mesh.elements.size())
-      throw std::invalid_argument("display face " + std::to_string(f) + " names element " +
-                                  std::to_string(face.element) + ", but the mesh has elements 0.." +
-                                  std::to_string(int(mesh.elements.size()) - 1));
-    const Element& el = mesh.elements[std::size_t(face.element)];
-    FaceChart chart;
-    try {
-      chart = faceChart(el.kind, face.face);
-    } catch (const std::invalid_argument& e) {
-      throw std::invalid_argument("display face " + std::to_string(f) + " of element " +
-                                  std::to_string(face.element) + ": " + e.what());
+int DisplaySurface::Construction::addVertex(const Element& el, int element, const ElementShape& shape,
+                                            const FaceChart& chart, int i, int j) {
+  const double a = chart.triangle ? double(i) / n : double(2 * i - n) / n;
+  const double b = chart.triangle ? double(j) / n : double(2 * j - n) / n;
+  const Eigen::Vector3d rst = chart.origin + a * chart.p + b * chart.q;
+  const int v = int(bodyPoints.size());
+  bodyPoints.push_back({element, rst});
+  shape.values(rst, h);
+  for (int k = 0; k < kHex20NodeCount; ++k) {
+    const int node = el.nodes[std::size_t(k)];
+    if (node < 0 || h[k] == 0.0) continue;
+    int& d = displayIndex[std::size_t(node)];
+    if (d < 0) {
+      d = int(displayNodes.size());
+      displayNodes.push_back(node);
     }
-    for (int node : el.nodes)
-      if (node >= mesh.nodeCount())
-        throw std::invalid_argument("element " + std::to_string(face.element) + " refers to node " +
-                                    std::to_string(node) + ", but the mesh has " +
-                                    std::to_string(mesh.nodeCount()) + " nodes");
-    const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
-    const std::vector<int> cornerSlots = faceCornerSlots(shape, chart);
-    std::vector<int> c;  // corner nodes in chart order
-    for (int slot : cornerSlots) c.push_back(el.nodes[std::size_t(slot)]);
-
-    // The shared name of grid point (i, j), if it lies on the face's border.
-    auto keyOf = [&](int i, int j) -> std::optional<VertexKey> {
-      if (chart.triangle) {
-        if (j == 0) return edgeKey(c[0], c[1], i, n);
-        if (i + j == n) return edgeKey(c[1], c[2], j, n);
-        if (i == 0) return edgeKey(c[0], c[2], j, n);
-      } else {
-        if (j == 0) return edgeKey(c[0], c[1], i, n);
-        if (i == n) return edgeKey(c[1], c[2], j, n);
-        if (j == n) return edgeKey(c[3], c[2], i, n);
-        if (i == 0) return edgeKey(c[0], c[3], j, n);
-      }
-      return std::nullopt;
-    };
-    auto addVertex = [&](int i, int j) {
-      const double a = chart.triangle ? double(i) / n : double(2 * i - n) / n;
-      const double b = chart.triangle ? double(j) / n : double(2 * j - n) / n;
-      const Eigen::Vector3d rst = chart.origin + a * chart.p + b * chart.q;
-      const int v = int(bodyPoints_.size());
-      bodyPoints_.push_back({face.element, rst});
-      shape.values(rst, h);
-      for (int k = 0; k < kHex20NodeCount; ++k) {
-        const int node = el.nodes[std::size_t(k)];
-        if (node < 0 || h[k] == 0.0) continue;
-        int& d = displayIndex[std::size_t(node)];
-        if (d < 0) {
-          d = int(displayNodes_.size());
-          displayNodes_.push_back(node);
-        }
-        triplets.emplace_back(d, v, h[k]);  // repeated nodes of a wedge add up
-        const auto [row, inserted] = regionRow.emplace(std::make_pair(node, el.region), int(regionRows.size()));
-        if (inserted) regionRows.push_back(node);
-        regionTriplets.emplace_back(row->second, v, h[k]);
-      }
-      return v;
-    };
-
-    // Vertex index of every grid point, row by row (a fastest).
-    std::vector<int> grid(std::size_t((n + 1) * (n + 1)), -1);
-    auto at = [&](int i, int j) -> int& { return grid[std::size_t(j * (n + 1) + i)]; };
-    for (int j = 0; j <= n; ++j)
-      for (int i = 0; i <= (chart.triangle ? n - j : n); ++i) {
-        if (const auto key = keyOf(i, j)) {
-          const auto [it, inserted] = shared.emplace(*key, -1);
-          if (inserted) it->second = addVertex(i, j);
-          at(i, j) = it->second;
-        } else {
-          at(i, j) = addVertex(i, j);
-        }
-      }
-
-    // Counter-clockwise in (a, b): outward when p × q points out (sign > 0).
-    auto addPolygon = [&](std::vector<int> polygon) {
-      if (chart.sign < 0) std::reverse(polygon.begin(), polygon.end());
-      // Drop the repeats a collapsed edge leaves.
-      std::vector<int> distinct;
-      for (std::size_t k = 0; k < polygon.size(); ++k)
-        if (polygon[k] != polygon[(k + 1) % polygon.size()]) distinct.push_back(polygon[k]);
-      if (distinct.size() < 3) return;
-      polygons_.push_back(std::move(distinct));
-      polygonFace_.push_back(int(f));
-    };
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < (chart.triangle ? n - j : n); ++i) {
-        if (!chart.triangle) {
-          addPolygon({at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
-          continue;
-        }
-        addPolygon({at(i, j), at(i + 1, j), at(i, j + 1)});
-        if (i + j + 1 < n) addPolygon({at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)});
-      }
+    triplets.emplace_back(d, v, h[k]);  // repeated nodes of a wedge add up
+    const auto [row, inserted] = regionRow.emplace(std::make_pair(node, el.region), int(regionRows.size()));
+    if (inserted) regionRows.push_back(node);
+    regionTriplets.emplace_back(row->second, v, h[k]);
   }
+  return v;
+}
 
+DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>& faces, int resolution)
+    : resolution_(resolution), meshNodeCount_(mesh.nodeCount()), faces_(faces) {
+  if (resolution < 1)
+    throw std::invalid_argument("the display resolution must be at least 1 step per element edge, not " +
+                                std::to_string(resolution));
+  Construction build(mesh, resolution, bodyPoints_, displayNodes_);
+  for (std::size_t f = 0; f < faces.size(); ++f) addFace(f, build);
+  setWeights(mesh, build);
+  addSupportElements(mesh, build);
+}
+
+void DisplaySurface::addFace(std::size_t f, Construction& build) {
+  const Mesh& mesh = build.mesh;
+  const int n = build.n;
+  const ElementFace& face = faces_[f];
+  if (face.element < 0 || std::size_t(face.element) >= mesh.elements.size())
+    throw std::invalid_argument("display face " + std::to_string(f) + " names element " +
+                                std::to_string(face.element) + ", but the mesh has elements 0.." +
+                                std::to_string(int(mesh.elements.size()) - 1));
+  const Element& el = mesh.elements[std::size_t(face.element)];
+  FaceChart chart;
+  try {
+    chart = faceChart(el.kind, face.face);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument("display face " + std::to_string(f) + " of element " +
+                                std::to_string(face.element) + ": " + e.what());
+  }
+  for (int node : el.nodes)
+    if (node >= mesh.nodeCount())
+      throw std::invalid_argument("element " + std::to_string(face.element) + " refers to node " +
+                                  std::to_string(node) + ", but the mesh has " +
+                                  std::to_string(mesh.nodeCount()) + " nodes");
+  const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
+  const std::vector<int> cornerSlots = faceCornerSlots(shape, chart);
+  std::vector<int> c;  // corner nodes in chart order
+  for (int slot : cornerSlots) c.push_back(el.nodes[std::size_t(slot)]);
+
+  // Vertex index of every grid point, row by row (a fastest).
+  std::vector<int> grid(std::size_t((n + 1) * (n + 1)), -1);
+  auto at = [&](int i, int j) -> int& { return grid[std::size_t(j * (n + 1) + i)]; };
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= (chart.triangle ? n - j : n); ++i) {
+      if (const auto key = borderKey(chart, c, n, i, j)) {
+        const auto [it, inserted] = build.shared.emplace(*key, -1);
+        if (inserted) it->second = build.addVertex(el, face.element, shape, chart, i, j);
+        at(i, j) = it->second;
+      } else {
+        at(i, j) = build.addVertex(el, face.element, shape, chart, i, j);
+      }
+    }
+  addGridPolygons(chart, n, grid, int(f), polygons_, polygonFace_);
+}
+
+void DisplaySurface::setWeights(const Mesh& mesh, const Construction& build) {
   const Eigen::Index vertices = Eigen::Index(bodyPoints_.size());
   const Eigen::Index d = Eigen::Index(displayNodes_.size());
   weights_.resize(d, vertices);
-  weights_.setFromTriplets(triplets.begin(), triplets.end());
-  regionWeights_.resize(Eigen::Index(regionRows.size()), vertices);
-  regionWeights_.setFromTriplets(regionTriplets.begin(), regionTriplets.end());
+  weights_.setFromTriplets(build.triplets.begin(), build.triplets.end());
+  regionWeights_.resize(Eigen::Index(build.regionRows.size()), vertices);
+  regionWeights_.setFromTriplets(build.regionTriplets.begin(), build.regionTriplets.end());
   Eigen::Matrix3Xd nodeX(3, d);
   for (Eigen::Index i = 0; i < d; ++i) nodeX.col(i) = mesh.nodes.col(displayNodes_[std::size_t(i)]);
   positions_ = nodeX * weights_;  // eq. 4.13 at every vertex
@@ -223,11 +261,14 @@ DisplaySurface::DisplaySurface(const Mesh& mesh, const std::vector<ElementFace>&
   displacements_ = Eigen::Matrix3Xd::Zero(3, vertices);
   strains_ = Matrix6Xd::Zero(6, vertices);
   stresses_ = Matrix6Xd::Zero(6, vertices);
+}
 
+void DisplaySurface::addSupportElements(const Mesh& mesh, const Construction& build) {
+  const std::map<std::pair<int, int>, int>& regionRow = build.regionRow;
   // Every element holding a display node contributes to its nodal average,
   // so its Gauss-point derivatives are kept (Jacobians checked once, here).
   hexExtrapolation_ = gaussToNodeExtrapolation(ElementKind::Hex20, 2);
-  displayElementCount_ = Eigen::VectorXi::Zero(Eigen::Index(regionRows.size()));
+  displayElementCount_ = Eigen::VectorXi::Zero(Eigen::Index(build.regionRows.size()));
   for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
     const Element& el = mesh.elements[e];
     bool touches = false;

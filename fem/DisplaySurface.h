@@ -193,6 +193,14 @@ private:
     bool wedge = false;  ///< extrapolated by wedgeExtrapolation_ (else hexExtrapolation_)
   };
 
+  /// The constructor's state while it adds the faces (DisplaySurface.cpp).
+  struct Construction;
+  /// The constructor's steps: the vertices and polygons of face @a f, the
+  /// interpolation weights and positions, the elements around the display nodes.
+  void addFace(std::size_t f, Construction& build);
+  void setWeights(const Mesh& mesh, const Construction& build);
+  void addSupportElements(const Mesh& mesh, const Construction& build);
+
   int resolution_ = 0;
   Eigen::Index meshNodeCount_ = 0;
   std::vector<ElementFace> faces_;
