@@ -51,74 +51,102 @@ cholmod_dense denseViewOf(const double* data, Eigen::Index rows, Eigen::Index co
   return b;
 }
 
-// A fill-reducing ordering of the columns computed on the graph of column
-// groups (a node's three DOFs): nested dissection of the group graph,
-// each group's columns kept together in their own order. Attached groups
-// (SparseCholeskySolver::AttachedGroup) stay out of the graph and go right
-// before the first of their ends. Falls back to AMD on the group graph if
-// CHOLMOD was built without METIS.
-std::vector<int> groupedOrdering(const Eigen::SparseMatrix<double>& a, const std::vector<int>& group,
-                                 const std::vector<SparseCholeskySolver::AttachedGroup>& attachedGroups,
-                                 cholmod_common& common) {
-  // Renumber the groups 0..ng-1 and list each group's columns.
-  const int n = int(a.cols());
-  int ng = 0;
-  std::vector<int> id(std::size_t(*std::max_element(group.begin(), group.end())) + 1, -1);
-  std::vector<int> g(static_cast<std::size_t>(n), 0);
+/// The columns by group: groups renumbered 0..count-1 in order of their
+/// first column (id: original -> renumbered, -1 if absent), the group of each
+/// column, and each group's columns (columns[first[k]] .. columns[first[k+1]-1]).
+struct ColumnGroups {
+  int count = 0;
+  std::vector<int> id, groupOf, first, columns;
+};
+
+ColumnGroups columnGroups(int n, const std::vector<int>& group) {
+  ColumnGroups c;
+  int& ng = c.count;
+  std::vector<int>& id = c.id;
+  std::vector<int>& g = c.groupOf;
+  id.assign(std::size_t(*std::max_element(group.begin(), group.end())) + 1, -1);
+  g.assign(static_cast<std::size_t>(n), 0);
   for (int j = 0; j < n; ++j) {
     int& k = id[std::size_t(group[std::size_t(j)])];
     if (k < 0) k = ng++;
     g[std::size_t(j)] = k;
   }
-  std::vector<int> first(std::size_t(ng) + 1, 0);
+  std::vector<int>& first = c.first;
+  first.assign(std::size_t(ng) + 1, 0);
   for (int j = 0; j < n; ++j) ++first[std::size_t(g[std::size_t(j)]) + 1];
   for (int k = 0; k < ng; ++k) first[std::size_t(k) + 1] += first[std::size_t(k)];
-  std::vector<int> columns(static_cast<std::size_t>(n), 0);
-  {
-    std::vector<int> fill(first.begin(), first.end() - 1);
-    for (int j = 0; j < n; ++j) columns[std::size_t(fill[std::size_t(g[std::size_t(j)])]++)] = j;
-  }
-  // Attached groups (renumbered) and their ends; the others, the primary
-  // groups, are numbered 0..np-1 for the graph.
+  c.columns.assign(static_cast<std::size_t>(n), 0);
+  std::vector<int> fill(first.begin(), first.end() - 1);
+  for (int j = 0; j < n; ++j) c.columns[std::size_t(fill[std::size_t(g[std::size_t(j)])]++)] = j;
+  return c;
+}
+
+/// Attached groups (renumbered) with their ends, and the others, the
+/// primary groups, numbered 0..count-1 for the graph.
+struct PrimaryGroups {
+  std::vector<std::array<int, 2>> ends;  ///< per group: its ends, or -1
+  std::vector<int> primary;              ///< per group: its primary number, or -1
+  std::vector<int> groupOfPrimary;
+  int count = 0;
+  bool isAttached(int k) const { return ends[std::size_t(k)][0] >= 0 || ends[std::size_t(k)][1] >= 0; }
+};
+
+PrimaryGroups primaryGroups(const ColumnGroups& groups,
+                            const std::vector<SparseCholeskySolver::AttachedGroup>& attachedGroups) {
+  const int ng = groups.count;
+  const std::vector<int>& id = groups.id;
   auto renumbered = [&id](int original) {
     return original >= 0 && std::size_t(original) < id.size() ? id[std::size_t(original)] : -1;
   };
-  std::vector<std::array<int, 2>> ends(std::size_t(ng), {-1, -1});
+  PrimaryGroups p;
+  p.ends.assign(std::size_t(ng), {-1, -1});
   for (const auto& at : attachedGroups) {
     const int k = renumbered(at.group);
-    if (k >= 0) ends[std::size_t(k)] = {renumbered(at.first), renumbered(at.second)};
+    if (k >= 0) p.ends[std::size_t(k)] = {renumbered(at.first), renumbered(at.second)};
   }
-  auto isAttached = [&ends](int k) {
-    return ends[std::size_t(k)][0] >= 0 || ends[std::size_t(k)][1] >= 0;
-  };
   {  // ends must not be attached groups themselves
     std::vector<char> wasAttached(std::size_t(ng), 0);
-    for (int k = 0; k < ng; ++k) wasAttached[std::size_t(k)] = isAttached(k);
-    for (auto& pair : ends)
+    for (int k = 0; k < ng; ++k) wasAttached[std::size_t(k)] = p.isAttached(k);
+    for (auto& pair : p.ends)
       for (int& e : pair)
         if (e >= 0 && wasAttached[std::size_t(e)]) e = -1;
   }
-  int np = 0;
-  std::vector<int> primary(std::size_t(ng), -1);
+  int& np = p.count;
+  p.primary.assign(std::size_t(ng), -1);
   for (int k = 0; k < ng; ++k)
-    if (!isAttached(k)) primary[std::size_t(k)] = np++;
-  std::vector<int> groupOfPrimary(std::size_t(np), 0);
+    if (!p.isAttached(k)) p.primary[std::size_t(k)] = np++;
+  p.groupOfPrimary.assign(std::size_t(np), 0);
   for (int k = 0; k < ng; ++k)
-    if (primary[std::size_t(k)] >= 0) groupOfPrimary[std::size_t(primary[std::size_t(k)])] = k;
+    if (p.primary[std::size_t(k)] >= 0) p.groupOfPrimary[std::size_t(p.primary[std::size_t(k)])] = k;
+  return p;
+}
 
+/// The graph of the primary groups, upper triangle with the diagonal, in
+/// compressed columns (sorted, no repeats).
+struct GroupGraph {
+  std::vector<int> outer, inner;
+};
+
+GroupGraph primaryGraph(const Eigen::SparseMatrix<double>& a, const ColumnGroups& groups,
+                        const PrimaryGroups& primaries) {
+  const int np = primaries.count;
+  const std::vector<int>& first = groups.first;
   // Primary pairs (lo < hi) from the upper triangle, once per group column
   // (stamps), counted into the column of the higher one, then each column
   // sorted (a pair can come from both of its groups).
   std::vector<int> stamp(std::size_t(np), -1);
-  std::vector<int> outer(std::size_t(np) + 1, 0);
+  GroupGraph graph;
+  std::vector<int>& outer = graph.outer;
+  std::vector<int>& inner = graph.inner;
+  outer.assign(std::size_t(np) + 1, 0);
   auto eachPair = [&](auto&& visit) {
     std::fill(stamp.begin(), stamp.end(), -1);
     for (int p = 0; p < np; ++p) {
-      const int k = groupOfPrimary[std::size_t(p)];
+      const int k = primaries.groupOfPrimary[std::size_t(p)];
       for (int c = first[std::size_t(k)]; c < first[std::size_t(k) + 1]; ++c)
-        for (Eigen::SparseMatrix<double>::InnerIterator it(a, columns[std::size_t(c)]); it; ++it) {
+        for (Eigen::SparseMatrix<double>::InnerIterator it(a, groups.columns[std::size_t(c)]); it; ++it) {
           if (it.row() > it.col()) continue;
-          const int h = primary[std::size_t(g[std::size_t(it.row())])];
+          const int h = primaries.primary[std::size_t(groups.groupOf[std::size_t(it.row())])];
           if (h < 0 || h == p || stamp[std::size_t(h)] == p) continue;
           stamp[std::size_t(h)] = p;
           visit(std::min(h, p), std::max(h, p));
@@ -127,29 +155,33 @@ std::vector<int> groupedOrdering(const Eigen::SparseMatrix<double>& a, const std
   };
   eachPair([&outer](int, int hi) { ++outer[std::size_t(hi) + 1]; });
   for (int p = 0; p < np; ++p) outer[std::size_t(p) + 1] += outer[std::size_t(p)] + 1;  // + the diagonal
-  std::vector<int> inner(std::size_t(outer.back()));
-  {
-    std::vector<int> fill(outer.begin(), outer.end() - 1);
-    eachPair([&](int lo, int hi) { inner[std::size_t(fill[std::size_t(hi)]++)] = lo; });
-    for (int p = 0; p < np; ++p) inner[std::size_t(fill[std::size_t(p)]++)] = p;
-    // Sort and drop repeats, compacting in place.
-    int write = 0;
-    for (int p = 0; p < np; ++p) {
-      const auto begin = inner.begin() + outer[std::size_t(p)], end = inner.begin() + fill[std::size_t(p)];
-      std::sort(begin, end);
-      const int start = write;
-      for (auto it = begin; it != end; ++it)
-        if (write == start || inner[std::size_t(write - 1)] != *it) inner[std::size_t(write++)] = *it;
-      outer[std::size_t(p)] = start;
-    }
-    outer[std::size_t(np)] = write;
-    inner.resize(std::size_t(write));
+  inner.resize(std::size_t(outer.back()));
+  std::vector<int> fill(outer.begin(), outer.end() - 1);
+  eachPair([&](int lo, int hi) { inner[std::size_t(fill[std::size_t(hi)]++)] = lo; });
+  for (int p = 0; p < np; ++p) inner[std::size_t(fill[std::size_t(p)]++)] = p;
+  // Sort and drop repeats, compacting in place.
+  int write = 0;
+  for (int p = 0; p < np; ++p) {
+    const auto begin = inner.begin() + outer[std::size_t(p)], end = inner.begin() + fill[std::size_t(p)];
+    std::sort(begin, end);
+    const int start = write;
+    for (auto it = begin; it != end; ++it)
+      if (write == start || inner[std::size_t(write - 1)] != *it) inner[std::size_t(write++)] = *it;
+    outer[std::size_t(p)] = start;
   }
+  outer[std::size_t(np)] = write;
+  inner.resize(std::size_t(write));
+  return graph;
+}
+
+/// A fill-reducing permutation of the @a np vertices of @a g: nested
+/// dissection, AMD if CHOLMOD has no METIS.
+std::vector<int> orderGraph(GroupGraph& g, int np, cholmod_common& common) {
   cholmod_sparse graph{};
   graph.nrow = graph.ncol = std::size_t(np);
-  graph.nzmax = inner.size();
-  graph.p = outer.data();
-  graph.i = inner.data();
+  graph.nzmax = g.inner.size();
+  graph.p = g.outer.data();
+  graph.i = g.inner.data();
   graph.stype = 1;
   graph.itype = CHOLMOD_INT;
   graph.xtype = CHOLMOD_PATTERN;
@@ -168,28 +200,54 @@ std::vector<int> groupedOrdering(const Eigen::SparseMatrix<double>& a, const std
     if (!cholmod_amd(&graph, nullptr, 0, primaryPerm.data(), &common))
       throw std::runtime_error("CHOLMOD could not order the matrix (status " + std::to_string(common.status) + ")");
   }
-  // Each attached group before the first of its ends to be eliminated.
+  return primaryPerm;
+}
+
+/// The columns in the order of @a primaryPerm, each group's together, each
+/// attached group before the first of its ends to be eliminated.
+std::vector<int> columnPermutation(int n, const ColumnGroups& groups, const PrimaryGroups& primaries,
+                                   const std::vector<int>& primaryPerm) {
+  const int np = primaries.count;
   std::vector<int> position(std::size_t(np), 0);
   for (int q = 0; q < np; ++q) position[std::size_t(primaryPerm[std::size_t(q)])] = q;
   std::vector<std::vector<int>> before(static_cast<std::size_t>(np) + 1);  // [np]: ends without columns
-  for (int k = 0; k < ng; ++k) {
-    if (!isAttached(k)) continue;
+  for (int k = 0; k < groups.count; ++k) {
+    if (!primaries.isAttached(k)) continue;
     int at = np;
-    for (int e : ends[std::size_t(k)])
-      if (e >= 0) at = std::min(at, position[std::size_t(primary[std::size_t(e)])]);
+    for (int e : primaries.ends[std::size_t(k)])
+      if (e >= 0) at = std::min(at, position[std::size_t(primaries.primary[std::size_t(e)])]);
     before[std::size_t(at)].push_back(k);
   }
   std::vector<int> perm;
   perm.reserve(std::size_t(n));
   auto emit = [&](int k) {
-    for (int c = first[std::size_t(k)]; c < first[std::size_t(k) + 1]; ++c) perm.push_back(columns[std::size_t(c)]);
+    for (int c = groups.first[std::size_t(k)]; c < groups.first[std::size_t(k) + 1]; ++c)
+      perm.push_back(groups.columns[std::size_t(c)]);
   };
   for (int q = 0; q < np; ++q) {
     for (int k : before[std::size_t(q)]) emit(k);
-    emit(groupOfPrimary[std::size_t(primaryPerm[std::size_t(q)])]);
+    emit(primaries.groupOfPrimary[std::size_t(primaryPerm[std::size_t(q)])]);
   }
   for (int k : before[std::size_t(np)]) emit(k);
   return perm;
+}
+
+// A fill-reducing ordering of the columns computed on the graph of column
+// groups (a node's three DOFs): nested dissection of the group graph,
+// each group's columns kept together in their own order. Attached groups
+// (SparseCholeskySolver::AttachedGroup) stay out of the graph and go right
+// before the first of their ends. Falls back to AMD on the group graph if
+// CHOLMOD was built without METIS.
+std::vector<int> groupedOrdering(const Eigen::SparseMatrix<double>& a, const std::vector<int>& group,
+                                 const std::vector<SparseCholeskySolver::AttachedGroup>& attachedGroups,
+                                 cholmod_common& common) {
+  const int n = int(a.cols());
+  // Renumber the groups 0..ng-1 and list each group's columns.
+  const ColumnGroups groups = columnGroups(n, group);
+  const PrimaryGroups primaries = primaryGroups(groups, attachedGroups);
+  GroupGraph graph = primaryGraph(a, groups, primaries);
+  const std::vector<int> primaryPerm = orderGraph(graph, primaries.count, common);
+  return columnPermutation(n, groups, primaries, primaryPerm);
 }
 
 // CHOLMOD's supernodal factorization parallelises its small scatter loops
