@@ -43,7 +43,6 @@ QString numberText(double value, int decimals)
 SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* parent)
   : QWidget(parent), logic_(logic), host_(host)
 {
-  const incision::SimulationOptions defaults;
   auto* outer = new QVBoxLayout(this);
   outer->setContentsMargins(0, 0, 0, 0);
   auto* scroll = new QScrollArea(this);
@@ -54,7 +53,19 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   scroll->setWidget(content);
   auto* layout = new QVBoxLayout(content);
 
-  // 1. The plan.
+  addPlanChooser(content, layout);
+  addMaterials(content, layout);
+  addMeshOptions(content, layout);
+  addRunAndResults(content, layout);
+  setDefaults();
+  connectControls();
+  observeTheScene();
+  updatePlans();
+}
+
+/// 1. The plan.
+void SimulatePanel::addPlanChooser(QWidget* content, QVBoxLayout* layout)
+{
   auto* planBox = new QGroupBox(tr("Plan"), content);
   auto* planLayout = new QVBoxLayout(planBox);
   plan_ = new QComboBox(planBox);
@@ -63,7 +74,11 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   planLayout->addWidget(plan_);
   layout->addWidget(planBox);
 
-  // 2. Materials.
+}
+
+/// 2. Materials: the preset, its source, the table per layer.
+void SimulatePanel::addMaterials(QWidget* content, QVBoxLayout* layout)
+{
   auto* materialBox = new QGroupBox(tr("Tissue materials (linear elastic)"), content);
   auto* materialLayout = new QVBoxLayout(materialBox);
   preset_ = new QComboBox(materialBox);
@@ -92,7 +107,12 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   materialLayout->addWidget(materials_);
   layout->addWidget(materialBox);
 
-  // 3. The mesh.
+}
+
+/// 3. The mesh: layers, region, element size, cut depth, undermining, and
+/// the estimate of the model's size.
+void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
+{
   auto* meshBox = new QGroupBox(tr("Mesh (thesis \u00a74.5)"), content);
   auto* form = new QFormLayout(meshBox);
   layers_ = new QSpinBox(meshBox);
@@ -137,7 +157,11 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   form->addRow(estimate_);
   layout->addWidget(meshBox);
 
-  // 4. Run, 5. results, 6. the mesh.
+}
+
+/// 4. Run, 5. results, 6. the mesh.
+void SimulatePanel::addRunAndResults(QWidget* content, QVBoxLayout* layout)
+{
   run_ = new QPushButton(tr("Run simulation (F5)"), content);
   run_->setObjectName("simulate.run");
   run_->setShortcut(QKeySequence(Qt::Key_F5)); // a button's shortcut acts only while it is shown
@@ -157,12 +181,18 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   layout->addWidget(summary_);
   layout->addStretch(1);
 
+}
+
+/// The estimate's timer and the default options (the first plan's own
+/// values replace them).
+void SimulatePanel::setDefaults()
+{
+  const incision::SimulationOptions defaults;
   estimateTimer_ = new QTimer(this);
   estimateTimer_->setSingleShot(true);
   estimateTimer_->setInterval(300);
   connect(estimateTimer_, &QTimer::timeout, this, &SimulatePanel::estimate);
 
-  // Defaults, then the first plan's own values.
   layers_->setValue(defaults.layerCount);
   cutDepth_->setRange(0, defaults.layerCount);
   regionRadius_->setValue(defaults.regionRadius);
@@ -170,6 +200,10 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   undermining_->setValue(defaults.underminingWidth);
   resizeMaterials(defaults.layerCount);
 
+}
+
+void SimulatePanel::connectControls()
+{
   connect(plan_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this]() {
     if (loading_)
       return;
@@ -192,7 +226,11 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
   connect(run_, &QPushButton::clicked, this, &SimulatePanel::run);
   connect(showMesh_, &QCheckBox::toggled, this, &SimulatePanel::applyShowMesh);
 
-  // Plans come and go with the scene; the combo follows (once per burst of events).
+}
+
+/// Plans come and go with the scene; the combo follows (once per burst of events).
+void SimulatePanel::observeTheScene()
+{
   observer_ = logic_.scene().addObserver([this](SceneEvent, const Node& node) {
     if (node.type() != NodeType::Plan && node.type() != NodeType::RangeMap && node.type() != NodeType::Surface)
       return;
@@ -204,7 +242,6 @@ SimulatePanel::SimulatePanel(SimulateLogic& logic, ModuleHost& host, QWidget* pa
       updatePlans();
     });
   });
-  updatePlans();
 }
 
 SimulatePanel::~SimulatePanel()

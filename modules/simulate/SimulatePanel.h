@@ -21,6 +21,7 @@ class QTableWidget;
 class QTableWidgetItem;
 class QThread;
 class QTimer;
+class QVBoxLayout;
 
 namespace caps {
 
@@ -35,6 +36,16 @@ public:
   ~SimulatePanel() override;
 
 private:
+  /// @name The panel's parts, top to bottom, and their wiring
+  ///@{
+  void addPlanChooser(QWidget* content, QVBoxLayout* layout);
+  void addMaterials(QWidget* content, QVBoxLayout* layout);
+  void addMeshOptions(QWidget* content, QVBoxLayout* layout);
+  void addRunAndResults(QWidget* content, QVBoxLayout* layout);
+  void setDefaults();
+  void connectControls();
+  void observeTheScene();
+  ///@}
   /// The plan combo from the scene's Plan nodes, keeping the choice.
   void updatePlans();
   /// The chosen plan's recorded options into the widgets.
