@@ -89,6 +89,19 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
   : QWidget(parent), logic_(logic), host_(host)
 {
   auto* layout = new QVBoxLayout(this);
+  addBuildControls(layout);
+  addThicknessReview(layout);
+  addLandmarks(layout);
+  layout->addStretch(1);
+  connectControls();
+  observeTheScene();
+  updateFromScene();
+  reloadMaps();
+}
+
+/// Smoothing, the Build button and the maps' status.
+void RangeMapPanel::addBuildControls(QVBoxLayout* layout)
+{
   smooth_ = new QCheckBox(tr("Smooth the maps (3 x 3 box, thesis eq. 4.2)"), this);
   smooth_->setObjectName("rangemap.smooth");
   layout->addWidget(smooth_);
@@ -101,6 +114,10 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
   status_->setFont(QFontDatabase::systemFont(QFontDatabase::FixedFont));
   layout->addWidget(status_);
 
+}
+
+void RangeMapPanel::addThicknessReview(QVBoxLayout* layout)
+{
   // Thickness review (thesis §4.2: the soft tissue between the two maps).
   auto* review = new QGroupBox(tr("Thickness review"), this);
   auto* reviewLayout = new QVBoxLayout(review);
@@ -130,6 +147,11 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
   reviewLayout->addWidget(histogram_);
   layout->addWidget(review);
 
+}
+
+/// The landmark table and its buttons.
+void RangeMapPanel::addLandmarks(QVBoxLayout* layout)
+{
   auto* marks = new QGroupBox(tr("Landmarks"), this);
   auto* marksLayout = new QVBoxLayout(marks);
   auto* nameRow = new QHBoxLayout;
@@ -166,8 +188,10 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
   buttons->addWidget(export_landmarks_);
   marksLayout->addLayout(buttons);
   layout->addWidget(marks);
-  layout->addStretch(1);
+}
 
+void RangeMapPanel::connectControls()
+{
   connect(run_, &QPushButton::clicked, this, &RangeMapPanel::run);
   connect(map_kind_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) { showMap(); });
   connect(paint_, &QCheckBox::toggled, this, &RangeMapPanel::paintThickness);
@@ -197,7 +221,10 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
       showProbe(chart[0], chart[1]);
     });
   });
+}
 
+void RangeMapPanel::observeTheScene()
+{
   observer_ = logic_.scene().addObserver([this](SceneEvent, const Node& node) {
     if (node.type() == NodeType::Volume)
       updateFromScene();
@@ -213,8 +240,6 @@ RangeMapPanel::RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* pa
     else if (node.type() == NodeType::Landmarks)
       updateLandmarks();
   });
-  updateFromScene();
-  reloadMaps();
 }
 
 RangeMapPanel::~RangeMapPanel()

@@ -11,6 +11,7 @@
 
 #include "modules/rangemap/ThicknessReview.h"
 
+class QVBoxLayout;
 class QCheckBox;
 class QComboBox;
 class QLabel;
@@ -34,6 +35,14 @@ public:
   ~RangeMapPanel() override;
 
 private:
+  /// @name The panel's parts, top to bottom, and their wiring
+  ///@{
+  void addBuildControls(QVBoxLayout* layout);
+  void addThicknessReview(QVBoxLayout* layout);
+  void addLandmarks(QVBoxLayout* layout);
+  void connectControls();
+  void observeTheScene();
+  ///@}
   void run();
   void updateFromScene();
   void reloadMaps();
