@@ -124,7 +124,21 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   : QWidget(parent), logic_(logic), host_(host)
 {
   auto* layout = new QVBoxLayout(this);
+  addNewPlanControls(layout);
+  addPlanList(layout);
+  addPlanEditing(layout);
+  addGuidesAndMeasurements(layout);
+  connectControls();
+  observer_ = logic_.scene().addObserver(
+    [this](SceneEvent event, const Node& node) { sceneChanged(int(event), node); });
 
+  fillProcedures();
+  refresh();
+}
+
+/// A new plan: the procedure, its parameters, Place; or a cut drawn point by point.
+void IncisionPanel::addNewPlanControls(QVBoxLayout* layout)
+{
   auto* newPlan = new QLabel(tr("Procedure:"), this);
   layout->addWidget(newPlan);
   procedure_ = new QComboBox(this);
@@ -156,6 +170,11 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   connect(draw_, &QPushButton::clicked, this, &IncisionPanel::armDraw);
   connect(finishDraw_, &QPushButton::clicked, this, &IncisionPanel::finishDraw);
 
+}
+
+/// The scene's plans and Move, Undo, Redo, Delete.
+void IncisionPanel::addPlanList(QVBoxLayout* layout)
+{
   layout->addWidget(new QLabel(tr("Plans in the scene:"), this));
   plans_ = new QListWidget(this);
   plans_->setObjectName("incision.plans");
@@ -177,6 +196,10 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   delete_ = button(tr("Delete"), "incision.delete", tr("Remove the selected plan and its lines"));
   layout->addLayout(buttons);
 
+}
+
+void IncisionPanel::addPlanEditing(QVBoxLayout* layout)
+{
   // Editing the selected plan point by point (the recipe's operations).
   editBox_ = new QGroupBox(tr("Edit the selected plan"), this);
   auto* edit = new QGridLayout(editBox_);
@@ -234,6 +257,12 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   connect(finishRegion_, &QPushButton::clicked, this, &IncisionPanel::finishUndermining);
   connect(clearRegions_, &QPushButton::clicked, this, &IncisionPanel::clearUndermining);
 
+}
+
+/// The tension lines, what the prediction says of the plan, and the
+/// measurements on the skin.
+void IncisionPanel::addGuidesAndMeasurements(QVBoxLayout* layout)
+{
   showTension_ = new QCheckBox(tr("Skin tension lines (guide)"), this);
   showTension_->setObjectName("incision.tensionLines");
   showTension_->setToolTip(tr("Overlay the relaxed skin tension lines of the face (schematic, after Borges 1984),\n"
@@ -258,7 +287,10 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   table_->horizontalHeader()->setSectionResizeMode(1, QHeaderView::ResizeToContents);
   table_->horizontalHeader()->setSectionResizeMode(2, QHeaderView::ResizeToContents);
   layout->addWidget(table_, 1);
+}
 
+void IncisionPanel::connectControls()
+{
   connect(procedure_, QOverload<int>::of(&QComboBox::currentIndexChanged), this, [this] {
     // Another procedure: the form is for a new plan now.
     plans_->blockSignals(true);
@@ -279,12 +311,6 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   auto* redoKey = new QShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z), this);
   redoKey->setContext(Qt::WidgetWithChildrenShortcut);
   connect(redoKey, &QShortcut::activated, this, &IncisionPanel::redo);
-
-  observer_ = logic_.scene().addObserver(
-    [this](SceneEvent event, const Node& node) { sceneChanged(int(event), node); });
-
-  fillProcedures();
-  refresh();
 }
 
 IncisionPanel::~IncisionPanel()

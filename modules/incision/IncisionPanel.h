@@ -19,6 +19,7 @@
 #include "planning/PlanRecipe.h"
 #include "scene/Node.h"
 
+class QVBoxLayout;
 class QCheckBox;
 class QComboBox;
 class QDoubleSpinBox;
@@ -61,6 +62,14 @@ public:
   ~IncisionPanel() override;
 
 private:
+  /// @name The panel's parts, top to bottom, and their wiring
+  ///@{
+  void addNewPlanControls(QVBoxLayout* layout);
+  void addPlanList(QVBoxLayout* layout);
+  void addPlanEditing(QVBoxLayout* layout);
+  void addGuidesAndMeasurements(QVBoxLayout* layout);
+  void connectControls();
+  ///@}
   /// @name Building the form
   ///@{
   void fillProcedures();
