@@ -212,6 +212,22 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
   : QWidget(parent), logic_(logic), host_(host)
 {
   auto* layout = new QVBoxLayout(this);
+  addViewControls(layout);
+  addSummaryAndProfile(layout);
+  addStoryboard(layout);
+  animation_ = new QTimer(this);
+  animation_->setInterval(20);
+
+  connectControls();
+  observeTheScene();
+  refresh();
+  refreshStoryboard();
+}
+
+/// The plan, the deformation slider, pre/post and play, the colouring and the
+/// plan to compare with.
+void ResultsPanel::addViewControls(QVBoxLayout* layout)
+{
   auto* form = new QFormLayout;
   plan_ = new QComboBox(this);
   plan_->setObjectName("results.plan");
@@ -263,6 +279,11 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
   form->addRow(tr("Compare with:"), compareRow);
   layout->addLayout(form);
 
+}
+
+/// The numbers of the plan and the profile along its incision.
+void ResultsPanel::addSummaryAndProfile(QVBoxLayout* layout)
+{
   summary_ = new QLabel(this);
   summary_->setObjectName("results.summary");
   summary_->setWordWrap(true);
@@ -277,6 +298,11 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
   plot_->setObjectName("results.plot");
   layout->addWidget(plot_);
 
+}
+
+/// The snapshots for the report's storyboard.
+void ResultsPanel::addStoryboard(QVBoxLayout* layout)
+{
   auto* storyRow = new QHBoxLayout;
   snapshot_ = new QPushButton(tr("Snapshot (Ctrl+T)"), this);
   snapshot_->setObjectName("results.snapshot");
@@ -300,9 +326,10 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
   layout->addWidget(storyboard_, 1);
   layout->addLayout(storyRow);
 
-  animation_ = new QTimer(this);
-  animation_->setInterval(20);
+}
 
+void ResultsPanel::connectControls()
+{
   connect(plan_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) {
     if (isVisible())
       showPlan(plan_->currentText().toStdString());
@@ -325,7 +352,10 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
   connect(storyboard_, &QListWidget::itemDoubleClicked, this, &ResultsPanel::restoreSnapshotCamera);
   connect(storyboard_, &QListWidget::itemSelectionChanged, this,
           [this]() { deleteSnapshot_->setEnabled(!storyboard_->selectedItems().isEmpty()); });
+}
 
+void ResultsPanel::observeTheScene()
+{
   observer_ = logic_.scene().addObserver([this](SceneEvent event, const Node& node) {
     const NodeId& id = node.id();
     if (event == SceneEvent::NodeAboutToBeRemoved)
@@ -360,8 +390,6 @@ ResultsPanel::ResultsPanel(ResultsLogic& logic, ModuleHost& host, QWidget* paren
     if (node.type() == NodeType::Plan || node.type() == NodeType::Surface)
       scheduleRefresh();
   });
-  refresh();
-  refreshStoryboard();
 }
 
 ResultsPanel::~ResultsPanel()

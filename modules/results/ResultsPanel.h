@@ -16,6 +16,7 @@
 
 #include "modules/results/ResultsLogic.h"
 
+class QVBoxLayout;
 class QComboBox;
 class QLabel;
 class QListWidget;
@@ -44,6 +45,14 @@ protected:
   void hideEvent(QHideEvent* event) override;
 
 private:
+  /// @name The panel's parts, top to bottom, and their wiring
+  ///@{
+  void addViewControls(QVBoxLayout* layout);
+  void addSummaryAndProfile(QVBoxLayout* layout);
+  void addStoryboard(QVBoxLayout* layout);
+  void connectControls();
+  void observeTheScene();
+  ///@}
   void scheduleRefresh();
   void refresh();
   void refreshStoryboard();
