@@ -233,6 +233,19 @@ double huAt(vtkImageData* ct, const Eigen::Vector3d& world)
   return value;
 }
 
+/// The phantom CT in @a scene, segmented at @a skinHu (and the phantom's
+/// bone threshold); returns its volume node.
+caps::VolumeNode* segmentedPhantom(caps::Scene& scene, double skinHu)
+{
+  auto* volume = scene.add<caps::VolumeNode>();
+  volume->setImage(HeadPhantom::instance().images.ct);
+  caps::SegmentLogic::Parameters segmentAt;
+  segmentAt.skinThresholdHu = skinHu;
+  segmentAt.boneThresholdHu = HeadPhantom::boneThreshold;
+  caps::SegmentLogic(scene).segment(*volume, segmentAt);
+  return volume;
+}
+
 } // namespace
 
 // The skin threshold of the range maps is the one the label map was made
@@ -242,13 +255,9 @@ TEST(RangeMapLogic, CrossingsAreSearchedAtTheThresholdsTheLabelMapWasMadeWith)
 {
   const HeadPhantom& phantom = HeadPhantom::instance();
   caps::Scene scene;
-  auto* volume = scene.add<caps::VolumeNode>();
-  volume->setImage(phantom.images.ct);
-  caps::SegmentLogic::Parameters segmentAt;
-  segmentAt.skinThresholdHu = -700.0;
-  segmentAt.boneThresholdHu = HeadPhantom::boneThreshold;
-  const auto made = caps::SegmentLogic(scene).segment(*volume, segmentAt);
-  const auto* labels = scene.nodeAs<caps::LabelMapNode>(made.labelMapId);
+  caps::VolumeNode* volume = segmentedPhantom(scene, -700.0);
+  const auto* labels = caps::SegmentLogic(scene).findLabelMap(*volume);
+  ASSERT_NE(labels, nullptr);
   ASSERT_TRUE(labels->thresholds().has_value());
   EXPECT_EQ(labels->thresholds()->skinHu, -700.0);
   EXPECT_EQ(labels->thresholds()->boneHu, HeadPhantom::boneThreshold);
@@ -289,14 +298,8 @@ TEST(RangeMapLogic, CrossingsAreSearchedAtTheThresholdsTheLabelMapWasMadeWith)
 // never on a skin map of one run with the bone map of another.
 TEST(RangeMapLogic, APlanAfterTheMapsAreRebuiltUsesTheNewSkinAndBoneTogether)
 {
-  const HeadPhantom& phantom = HeadPhantom::instance();
   caps::Scene scene;
-  auto* volume = scene.add<caps::VolumeNode>();
-  volume->setImage(phantom.images.ct);
-  caps::SegmentLogic::Parameters p;
-  p.skinThresholdHu = HeadPhantom::skinThreshold;
-  p.boneThresholdHu = HeadPhantom::boneThreshold;
-  caps::SegmentLogic(scene).segment(*volume, p);
+  caps::VolumeNode* volume = segmentedPhantom(scene, HeadPhantom::skinThreshold);
   caps::RangeMapLogic::Parameters coarse;
   coarse.nTheta = 48;
   coarse.nZ = 24;
