@@ -12,14 +12,6 @@
 namespace caps::incision {
 namespace {
 
-const ProcedureTemplate& procedure(const std::string& id)
-{
-  const ProcedureTemplate* t = test::shippedProcedures().find(id);
-  if (!t)
-    throw std::runtime_error("no procedure " + id);
-  return *t;
-}
-
 /// The plan read from a node after a trip through the scene's JSON, as a
 /// saved bundle keeps it.
 IncisionPlan throughJson(const PlanNode& node)
@@ -63,7 +55,7 @@ TEST(PlanNode, APlanReadBackPredictsTheSameBitForBit)
 {
   const seg::RangeMap skin = test::cylinderSkin(80.0), bone = test::cylinderSkin(70.0);
   const IncisionPlan plan =
-    procedure("z-plasty").place(skin, {0.3, -8.0}, {{"central_length", 12.0}, {"limb_angle", 60.0 * test::degree}});
+    test::shippedProcedure("z-plasty").place(skin, {0.3, -8.0}, {{"central_length", 12.0}, {"limb_angle", 60.0 * test::degree}});
   SimulationOptions options;
   options.elementSize = 2.5;
   options.regionRadius = 15.0;
@@ -80,7 +72,7 @@ TEST(PlanNode, APlanReadBackPredictsTheSameBitForBit)
 TEST(PlanNode, AHandEditedNodeThatDoesNotFitIsRefused)
 {
   const seg::RangeMap skin = test::cylinderSkin(80.0);
-  const IncisionPlan z = procedure("z-plasty").place(skin, {0.0, 0.0});
+  const IncisionPlan z = test::shippedProcedure("z-plasty").place(skin, {0.0, 0.0});
   PlanNode offsets;
   offsets.setName("left cheek");
   IncisionLogic::writePlan(z, offsets);

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
+#include <string>
 
 #include "planning/PlanSimulation.h"
 #include "planning/ProcedureTemplate.h"
@@ -68,6 +70,15 @@ inline const incision::ProcedureLibrary& shippedProcedures()
 {
   static const incision::ProcedureLibrary library = incision::ProcedureLibrary::load(proceduresFolder());
   return library;
+}
+
+/// The shipped procedure @a id (data/procedures/); throws when there is none.
+inline const incision::ProcedureTemplate& shippedProcedure(const std::string& id)
+{
+  const incision::ProcedureTemplate* t = shippedProcedures().find(id);
+  if (!t)
+    throw std::runtime_error("no procedure " + id);
+  return *t;
 }
 
 } // namespace caps::test

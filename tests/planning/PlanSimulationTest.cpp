@@ -22,14 +22,6 @@ using test::degree;
 using Phantom = test::CylinderPhantom;
 const Phantom& phantom() { return test::cylinderPhantom(); }
 
-const ProcedureTemplate& procedure(const std::string& id)
-{
-  const ProcedureTemplate* t = test::shippedProcedures().find(id);
-  if (!t)
-    throw std::runtime_error("no procedure " + id);
-  return *t;
-}
-
 SimulationOptions testOptions() { return test::phantomSimulationOptions(); }
 
 /// §4.5.2: N_l(2N_v + N_e) + N_v + N_e nodes, N_l N_p elements.
@@ -64,7 +56,7 @@ TEST(PlanSimulation, RefineHoleCutsSuturedEdgesIntoEqualPieces)
 {
   // A Z: every segment tied to the others by the sutures, so all get the
   // pieces of the longest side.
-  const IncisionPlan z = procedure("z-plasty").place(phantom().skin, {0.0, 0.0}, {{"central_length", 10.0}});
+  const IncisionPlan z = test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0}, {{"central_length", 10.0}});
   const SkinChart chart = z.chart(phantom().skin);
   const RefinedHole r = refineHole(z.chartPath(chart), z.borderOffsets(), z.sutures(), 2.0);
   ASSERT_EQ(r.piecesPerSegment.size(), 3u);
@@ -83,7 +75,7 @@ TEST(PlanSimulation, RefineHoleCutsSuturedEdgesIntoEqualPieces)
 
 TEST(PlanSimulation, EllipticalExcisionClosesIntoASymmetricLine)
 {
-  const IncisionPlan plan = procedure("elliptical-excision")
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
                               .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   ASSERT_TRUE(plan.isExcision());
   const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
@@ -148,7 +140,7 @@ TEST(PlanSimulation, ShortEllipsesMakeBiggerDogEars)
   {
     const double ratio = i == 0 ? 2.0 : 4.0;
     const double length = ratio * width;
-    const IncisionPlan plan = procedure("elliptical-excision")
+    const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
                                 .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", ratio}, {"axis_angle", 0.0}});
     const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
     printSummary(i == 0 ? "ellipse 2:1" : "ellipse 4:1", p);
@@ -175,7 +167,7 @@ TEST(PlanSimulation, ZPlastyGainGrowsWithTheLimbAngle)
   for (const double angle : {30.0, 45.0, 60.0, 75.0, 90.0})
   {
     const IncisionPlan plan =
-      procedure("z-plasty").place(phantom().skin, {0.0, 0.0},
+      test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0},
                                   {{"central_length", 16.0}, {"limb_angle", angle * degree}, {"axis_angle", 90.0 * degree}});
     const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
     char name[32];
@@ -215,7 +207,7 @@ TEST(PlanSimulation, EveryShippedProcedureClosesIncludingAcrossTheSeam)
 
 TEST(PlanSimulation, LayersFollowTheBoneAndTheStatedFractions)
 {
-  const IncisionPlan plan = procedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
   SimulationOptions o = testOptions();
   o.layerFractions = {0.2, 0.4, 0.4}; // skin, fat, muscle
   const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, o);
@@ -257,7 +249,7 @@ double distanceToSegment(const ChartPoint& c, const ChartPoint& a, const ChartPo
 
 PlanPrediction ellipseClosure(double underminingWidth, double length, double regionRadius)
 {
-  const IncisionPlan plan = procedure("elliptical-excision")
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
                               .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   SimulationOptions o = testOptions();
   o.regionRadius = regionRadius;
@@ -460,7 +452,7 @@ TEST(PlanSimulation, ExcisedVolumeFromTheElementsIsTheAnalyticShell)
   // with the cut through the skin layer only (one layer of three equal
   // ones), from r = 80 to 80 − 10 / 3. The elements are quadratic, the
   // cylinder is not, but along the rays they meet it to 4e-10 here.
-  const IncisionPlan plan = procedure("elliptical-excision")
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
                               .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   const double r0 = plan.chart(phantom().skin).radius();
   for (const int cutLayers : {0, 1})
@@ -490,7 +482,7 @@ TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
   // to the tissue below, so transposing them lengthens the central axis
   // less than the full-thickness cut does; only the cut layer is sutured.
   const IncisionPlan plan =
-    procedure("z-plasty").place(phantom().skin, {0.0, 0.0},
+    test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0},
                                 {{"central_length", 16.0}, {"limb_angle", 60.0 * degree}, {"axis_angle", 90.0 * degree}});
   SimulationOptions o = testOptions();
   const PlanPrediction full = simulatePlan(phantom().skin, phantom().bone, plan, o);
@@ -531,7 +523,7 @@ TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
         if (std::abs(holed.frame().indexToTheta(i)) < 0.1)
           holed.at(i, j) = seg::RangeMap::quietNaN();
   }
-  const IncisionPlan plan = procedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
   {
     // Rows with no skin across the plan's width are where the scan ends: the
     // region stops at the last measured row.

@@ -22,21 +22,13 @@
 namespace caps::incision {
 namespace {
 
-const ProcedureTemplate& procedure(const std::string& id)
-{
-  const ProcedureTemplate* t = test::shippedProcedures().find(id);
-  if (!t)
-    throw std::runtime_error("no procedure " + id);
-  return *t;
-}
-
 /// A 24 mm 3:1 ellipse along the axis direction u, centred at θ = 0, z = 0:
 /// mirror symmetric about both chart axes. Solved once.
 const PlanPrediction& ellipse()
 {
   static const PlanPrediction p = [] {
     const auto& phantom = test::cylinderPhantom();
-    const IncisionPlan plan = procedure("elliptical-excision")
+    const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
                                 .place(phantom.skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
     return simulatePlan(phantom.skin, phantom.bone, plan, test::phantomSimulationOptions());
   }();
