@@ -392,9 +392,6 @@ Mask::Pointer thresholdAboveAir(const CtGrid& ct, double thresholdHu)
   default:
     throw std::invalid_argument("The CT volume has an unsupported voxel type.");
   }
-  if (countOnes(threshold->GetBufferPointer(), ct.count) == 0)
-    throw std::invalid_argument("No voxel of the CT lies above the skin threshold (" +
-                                std::to_string(thresholdHu) + " HU): is it in Hounsfield units?");
   return threshold;
 }
 
@@ -587,6 +584,9 @@ HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters
   reporter.report(0.0, "Thresholding at the skin threshold");
   Mask::Pointer body = thresholdAboveAir(grid, parameters.skinThresholdHu);
   const std::size_t thresholdCount = countOnes(body->GetBufferPointer(), grid.count);
+  if (thresholdCount == 0)
+    throw std::invalid_argument("No voxel of the CT lies above the skin threshold (" +
+                                std::to_string(parameters.skinThresholdHu) + " HU): is it in Hounsfield units?");
 
   // 2. The body apart from the table and the head holder: an opening, the
   // small pieces it cut off put back, the largest component.

@@ -104,10 +104,9 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
                                          const NodeId& labelMapId)
 {
   Scene& s = scene();
-  const std::vector<NodeId> replaced = mapsOfVolume(volume);
+  const std::vector<NodeId> replaced = mapsOfVolume(s, volume);
   for (const auto& id : replaced)
     s.removeNode(id);
-  made_[volume.id()].clear();
 
   const seg::CylindricalFrame& frame = output.skin.frame();
   NodeId skinId;
@@ -125,7 +124,6 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
     if (skinId.empty())
       skinId = added->id();
     static_cast<RangeMapNode*>(added)->setSkinMapId(skinId);
-    made_[volume.id()].push_back(added->id());
     return added->id();
   };
   RangeMapResult result;
@@ -145,15 +143,11 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
   return result;
 }
 
-std::vector<NodeId> RangeMapLogic::mapsOfVolume(const VolumeNode& volume) const
+std::vector<NodeId> RangeMapLogic::mapsOfVolume(const Scene& scene, const VolumeNode& volume)
 {
   std::vector<NodeId> ids;
-  for (const auto& id : made_.count(volume.id()) ? made_.at(volume.id()) : std::vector<NodeId>{})
-    if (scene().nodeAs<RangeMapNode>(id)) // the user may have removed it already
-      ids.push_back(id);
-  for (Node* node : scene().nodesOfType(NodeType::RangeMap))
-    if (static_cast<RangeMapNode*>(node)->sourceVolumeId() == volume.id() &&
-        std::find(ids.begin(), ids.end(), node->id()) == ids.end())
+  for (Node* node : scene.nodesOfType(NodeType::RangeMap))
+    if (static_cast<RangeMapNode*>(node)->sourceVolumeId() == volume.id())
       ids.push_back(node->id());
   return ids;
 }

@@ -100,8 +100,8 @@ public:
 
   /// Adds the four RangeMap nodes for @a volume, made from the label map
   /// @a labelMapId (each records both, and the new skin map's id), and
-  /// removes the maps an earlier run made for the same volume: those of this
-  /// logic and those recording the volume as their source. Plans drawn on a
+  /// removes the maps an earlier run made for the same volume (those
+  /// recording it as their source). Plans drawn on a
   /// removed skin map move to the new one (their cut paths are on the chart).
   RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output,
                             const NodeId& labelMapId = {});
@@ -139,12 +139,9 @@ public:
   static std::string describeAxis(const seg::HeadAxisFit& axis);
 
 private:
-  /// The maps a new run for @a volume replaces: those this logic made for
-  /// it and those recording it as their source.
-  std::vector<NodeId> mapsOfVolume(const VolumeNode& volume) const;
-
-  /// Per volume id, the nodes made for it (to replace them on the next run).
-  std::map<std::string, std::vector<std::string>> made_;
+  /// The maps a new run for @a volume replaces: those recording it as their
+  /// source, whichever logic made them.
+  static std::vector<NodeId> mapsOfVolume(const Scene& scene, const VolumeNode& volume);
 };
 
 } // namespace caps
