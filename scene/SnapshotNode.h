@@ -6,6 +6,7 @@
 #include <array>
 #include <string>
 
+#include "render/Camera.h"
 #include "scene/Node.h"
 
 namespace caps {
@@ -15,13 +16,7 @@ namespace caps {
 class SnapshotNode : public Node {
  public:
   /// A camera as vtkCamera describes it (patient LPS, mm; view angle in degrees as VTK).
-  struct Camera {
-    std::array<double, 3> position{0, -500, 0};
-    std::array<double, 3> focalPoint{0, 0, 0};
-    std::array<double, 3> viewUp{0, 0, 1};
-    double viewAngle = 30.0;
-    bool operator==(const Camera&) const = default;
-  };
+  using Camera = render::Camera;
 
   NodeType type() const override { return NodeType::Snapshot; }
 

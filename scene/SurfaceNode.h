@@ -36,7 +36,7 @@ class SurfaceNode : public Node {
   /// Values mapped to the ends of the colour map; lo >= hi: the array's own range.
   const std::array<double, 2>& scalarRange() const { return scalarRange_; }
   void setScalarRange(const std::array<double, 2>& range);
-  /// A name of ui/ColourMaps.h ("viridis", "cool-warm", "thickness").
+  /// A name of render/ColourMaps.h ("viridis", "cool-warm", "thickness").
   const std::string& colourMap() const { return colourMap_; }
   void setColourMap(std::string name);
   /// Title of the colour bar with its unit ("von Mises stress (kPa)"); empty: the array's name.

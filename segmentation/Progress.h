@@ -19,4 +19,13 @@ public:
   Cancelled() : std::runtime_error("Cancelled by the user.") {}
 };
 
+/// Tells @a progress (when there is one) that the work is at @a fraction
+/// (clamped to [0,1]) doing @a step.
+/// @throws Cancelled when it answers that the user asked to stop.
+inline void reportProgress(const ProgressCallback& progress, double fraction, const std::string& step)
+{
+  if (progress && !progress(fraction < 0.0 ? 0.0 : fraction > 1.0 ? 1.0 : fraction, step))
+    throw Cancelled();
+}
+
 } // namespace caps::seg

@@ -36,7 +36,7 @@
 #include <vtkRenderer.h>
 #include <vtkTextProperty.h>
 
-#include "ui/ColourMaps.h"
+#include "render/ColourMaps.h"
 
 namespace caps::ui {
 
@@ -173,8 +173,8 @@ void ThreeDView::setSurface(const std::string& key, vtkPolyData* surface, const 
         if (!(range[0] < range[1]))
           range = {range[0] - 0.5, range[0] + 0.5};
       }
-      const ColourMap map = colourMapFromName(style.colourMap).value_or(ColourMap::Viridis);
-      auto table = colourMapLookupTable(map, range);
+      const render::ColourMap map = render::colourMapFromName(style.colourMap).value_or(render::ColourMap::Viridis);
+      auto table = render::colourMapLookupTable(map, range);
       if (scalars->GetNumberOfComponents() > 1)
         table->SetVectorModeToMagnitude();
       mapper->SetLookupTable(table);

@@ -37,7 +37,7 @@ struct SurfaceStyle
   /// char arrays are RGB as they are; others go through colourMap over range.
   std::string colourArray;
   std::array<double, 2> range{0.0, 0.0}; ///< lo >= hi: the array's own range
-  std::string colourMap = "viridis";     ///< ui/ColourMaps.h name
+  std::string colourMap = "viridis";     ///< render/ColourMaps.h name
   std::string colourBarTitle;            ///< empty: the array name
   double lineWidth = 1.0;
 };

@@ -240,7 +240,7 @@ vtkSmartPointer<vtkPolyData> movedTo(vtkPolyData* surface, const Eigen::Matrix3X
   return out;
 }
 
-void printAnimation(const report::AnimationResult& result, std::ostream& out, std::ostream& err)
+void printAnimation(const render::AnimationResult& result, std::ostream& out, std::ostream& err)
 {
   out << "Wrote " << result.prePost.frames << " frames to " << result.prePost.folder.string() << "\n";
   if (!result.prePost.video.empty())
@@ -263,14 +263,14 @@ void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionMo
   const vtkSmartPointer<vtkPolyData> atRest = incision::planDisplayPolyData(display, 1.0);
   const seg::CylindricalFrame& frame = input.skin.frame();
   const Eigen::Vector3d toCamera = frame.radialDirection(planTheta), up = frame.direction();
-  report::AnimationOptions options;
+  render::AnimationOptions options;
   options.width = a.width;
   options.height = a.height;
   const fem::Mesh& mesh = prediction.continuum.mesh;
   Eigen::Matrix3Xd x;
   const expression::ExpressionSurface underMuscles(mesh, display.surface, onPlan.responses(), prediction.displacements);
   underMuscles.positions(activations, display.rangeDetail, x);
-  printAnimation(report::writeMorphAnimation(atRest, movedTo(atRest, x), "plan-expression-" + a.expression, toCamera,
+  printAnimation(render::writeMorphAnimation(atRest, movedTo(atRest, x), "plan-expression-" + a.expression, toCamera,
                                              up, a.animate, a.frames, true, options, cli::consoleProgress(err)),
                  out, err);
   if (!pushed || !a.push)
@@ -283,7 +283,7 @@ void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionMo
     underPush.positions(a.push->travelAt(double(along) / (a.frames - 1)), display.rangeDetail, x);
     frames.push_back(movedTo(atRest, x));
   }
-  printAnimation(report::writeSurfaceAnimation(frames, "plan-push", toCamera, up, a.animate, options,
+  printAnimation(render::writeSurfaceAnimation(frames, "plan-push", toCamera, up, a.animate, options,
                                                cli::consoleProgress(err)),
                  out, err);
 }
@@ -391,11 +391,11 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
 
     if (!a.animate.empty())
     {
-      report::AnimationOptions options;
+      render::AnimationOptions options;
       options.width = a.width;
       options.height = a.height;
       const seg::CylindricalFrame& frame = input.skin.frame();
-      const auto result = report::writeMorphAnimation(
+      const auto result = render::writeMorphAnimation(
         rest, full, "expression-" + a.expression, frame.radialDirection(-0.5 * std::numbers::pi), frame.direction(),
         a.animate, a.frames, true, options, cli::consoleProgress(err));
       printAnimation(result, out, err);

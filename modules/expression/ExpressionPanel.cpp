@@ -591,11 +591,11 @@ void ExpressionPanel::exportAnimation()
   const TaskProgress progress = dialog.progress();
   try
   {
-    report::AnimationOptions options;
-    const report::AnimationResult result =
-      onPlan ? report::writeSurfaceAnimation(frames, name, toCamera, model_->frame.direction(), folder.toStdString(),
+    render::AnimationOptions options;
+    const render::AnimationResult result =
+      onPlan ? render::writeSurfaceAnimation(frames, name, toCamera, model_->frame.direction(), folder.toStdString(),
                                              options, progress)
-             : report::writeMorphAnimation(rest, full, name, toCamera, model_->frame.direction(),
+             : render::writeMorphAnimation(rest, full, name, toCamera, model_->frame.direction(),
                                            folder.toStdString(), 24, true, options, progress);
     std::string message = "Wrote " + std::to_string(result.prePost.frames) + " frames to " +
                           result.prePost.folder.string();

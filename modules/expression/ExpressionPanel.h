@@ -83,7 +83,7 @@ private:
   void play();
   void tick();
   void rest();
-  /// The current mix played from rest and back, written as frames and MP4 (report::writeMorphAnimation).
+  /// The current mix played from rest and back, written as frames and MP4 (render::writeMorphAnimation).
   void exportAnimation();
 
   /// @name Plan under expression (§5.4)

@@ -26,7 +26,7 @@
 #include "planning/PlanRecipe.h"
 #include "planning/PlanSimulation.h"
 #include "planning/UnderminingStudy.h"
-#include "modules/incision/StudyPlot.h"
+#include "render/XyPlot.h"
 #include "planning/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/segment/SegmentCommands.h"
@@ -578,8 +578,8 @@ private:
           << "undermining width (mm),released bone nodes,closure force (sum over sutures) (N),"
              "largest suture force (N),suture gap after closure (mm),peak skin von Mises near wound (kPa),"
              "mean skin von Mises near wound (kPa)\n";
-    incision::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
-    incision::PlotSeries stress{
+    render::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
+    render::PlotSeries stress{
       "peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) + " mm of the wound (kPa)",
       {},
       {},
@@ -603,11 +603,11 @@ private:
     std::ostringstream title;
     title << std::fixed << std::setprecision(1) << "Undermining: " << procedure_->title() << " at theta "
           << plan.centre().theta / kDegree << " deg, z " << plan.centre().z << " mm";
-    incision::XyPlot plot;
+    render::XyPlot plot;
     plot.title = title.str();
     plot.xLabel = "undermining width (mm)";
     plot.series = {force, stress};
-    incision::writeXyPlotPng(plot, args_.out / "undermining.png");
+    render::writeXyPlotPng(plot, args_.out / "undermining.png");
     out_ << "wrote " << (args_.out / "undermining.png").string() << "\n";
   }
 

@@ -318,23 +318,23 @@ void RangeMapPanel::showMap()
   case kThicknessNormal:
     if (!review_->thicknessNormal().empty())
     {
-      map_view_->setMap(review_->thicknessNormal(), ui::ColourMap::Thickness, 0.0, thickness_top_,
+      map_view_->setMap(review_->thicknessNormal(), render::ColourMap::Thickness, 0.0, thickness_top_,
                         tr("soft-tissue thickness along the skin normal (mm)"));
       break;
     }
     [[fallthrough]];
   case kThicknessRadial:
-    map_view_->setMap(review_->thickness(), ui::ColourMap::Thickness, 0.0, thickness_top_,
+    map_view_->setMap(review_->thickness(), render::ColourMap::Thickness, 0.0, thickness_top_,
                       tr("soft-tissue thickness, radial (mm)"));
     break;
   case kSkinRadius: {
     const auto [lo, hi] = rangeOf(review_->skin());
-    map_view_->setMap(review_->skin(), ui::ColourMap::Viridis, lo, hi, tr("skin: distance from the head axis (mm)"));
+    map_view_->setMap(review_->skin(), render::ColourMap::Viridis, lo, hi, tr("skin: distance from the head axis (mm)"));
     break;
   }
   case kBoneRadius: {
     const auto [lo, hi] = rangeOf(review_->bone());
-    map_view_->setMap(review_->bone(), ui::ColourMap::Viridis, lo, hi, tr("bone: distance from the head axis (mm)"));
+    map_view_->setMap(review_->bone(), render::ColourMap::Viridis, lo, hi, tr("bone: distance from the head axis (mm)"));
     break;
   }
   }
@@ -379,7 +379,7 @@ void RangeMapPanel::paintThickness(bool on)
   if (on && review_)
   {
     skin->setPolyData(review_->paintThickness(skin->polyData()));
-    skin->setColourMap(ui::colourMapName(ui::ColourMap::Thickness));
+    skin->setColourMap(render::colourMapName(render::ColourMap::Thickness));
     skin->setScalarRange({0.0, thickness_top_});
     skin->setColourBarTitle("Soft-tissue thickness (mm)");
     skin->setOpacity(1.0);

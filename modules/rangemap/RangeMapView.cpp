@@ -14,7 +14,7 @@ constexpr double kPi = std::numbers::pi;
 // Margins around the map: z ticks on the left, directions above, the colour bar below.
 constexpr double kLeft = 44, kRight = 8, kTop = 18, kBar = 58;
 
-QColor qColour(const ui::Rgb& c)
+QColor qColour(const render::Rgb& c)
 {
   return QColor::fromRgbF(c[0], c[1], c[2]);
 }
@@ -41,7 +41,7 @@ RangeMapView::RangeMapView(QWidget* parent) : QWidget(parent)
   setSizePolicy(policy);
 }
 
-void RangeMapView::setMap(const seg::RangeMap& map, ui::ColourMap colourMap, double low, double high,
+void RangeMapView::setMap(const seg::RangeMap& map, render::ColourMap colourMap, double low, double high,
                           const QString& title)
 {
   map_ = map;
@@ -58,7 +58,7 @@ void RangeMapView::setMap(const seg::RangeMap& map, ui::ColourMap colourMap, dou
     for (int j = 0; j < nZ; ++j)
     {
       const float v = map_.at(i, j);
-      const QColor c = std::isfinite(v) ? qColour(ui::colourMapColour(colour_map_, (v - low_) / (high_ - low_)))
+      const QColor c = std::isfinite(v) ? qColour(render::colourMapColour(colour_map_, (v - low_) / (high_ - low_)))
                                         : QColor(158, 158, 158);
       image_.setPixel(x, nZ - 1 - j, c.rgb());
     }
@@ -193,7 +193,7 @@ void RangeMapView::paintEvent(QPaintEvent*)
   const QRectF bar(r.left(), r.bottom() + 8, r.width(), 10);
   for (int x = 0; x < int(bar.width()); ++x)
   {
-    painter.setPen(qColour(ui::colourMapColour(colour_map_, x / std::max(1.0, bar.width() - 1))));
+    painter.setPen(qColour(render::colourMapColour(colour_map_, x / std::max(1.0, bar.width() - 1))));
     painter.drawLine(QPointF(bar.left() + x, bar.top()), QPointF(bar.left() + x, bar.bottom()));
   }
   painter.setPen(palette().color(QPalette::WindowText));
@@ -259,7 +259,7 @@ void ThicknessHistogram::paintEvent(QPaintEvent*)
     const double centre = (double(k) + 0.5) * bin_width_;
     const double top = counts_.size() * bin_width_;
     painter.fillRect(QRectF(plot.left() + k * barWidth, plot.bottom() - h, barWidth - 1, h),
-                     qColour(ui::colourMapColour(ui::ColourMap::Thickness, centre / top)));
+                     qColour(render::colourMapColour(render::ColourMap::Thickness, centre / top)));
   }
   painter.setPen(palette().color(QPalette::WindowText));
   painter.drawLine(plot.bottomLeft(), plot.bottomRight());

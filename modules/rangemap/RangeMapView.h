@@ -14,7 +14,7 @@
 #include <QWidget>
 
 #include "segmentation/RangeMap.h"
-#include "ui/ColourMaps.h"
+#include "render/ColourMaps.h"
 
 namespace caps {
 
@@ -25,7 +25,7 @@ public:
   explicit RangeMapView(QWidget* parent = nullptr);
 
   /// Shows @a map through @a colourMap over [low, high] (mm); the bar is titled @a title.
-  void setMap(const seg::RangeMap& map, ui::ColourMap colourMap, double low, double high, const QString& title);
+  void setMap(const seg::RangeMap& map, render::ColourMap colourMap, double low, double high, const QString& title);
   void clear();
   bool hasMap() const { return !map_.empty(); }
 
@@ -59,7 +59,7 @@ private:
 
   seg::RangeMap map_;
   QImage image_;
-  ui::ColourMap colour_map_ = ui::ColourMap::Viridis;
+  render::ColourMap colour_map_ = render::ColourMap::Viridis;
   double low_ = 0.0, high_ = 1.0;
   QString title_;
   std::optional<std::array<double, 2>> marker_;

@@ -14,7 +14,7 @@
 #include "planning/SkinChart.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapPreview.h"
-#include "modules/report/ReportFigures.h"
+#include "render/Figure.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/ReportDocument.h"
 #include "scene/RangeMapNode.h"
@@ -22,6 +22,9 @@
 #include "scene/SnapshotNode.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
+
+// The figures are render/Figure.h's: their types read here unqualified.
+using namespace caps::render;
 
 namespace caps::report {
 namespace {

@@ -4,7 +4,7 @@
 /// face from the front, obliquely and in profile; the skin before and after
 /// from the same close-up camera; the stress map; the thickness map
 /// unwrapped and painted on the face; the storyboard. Renders are made
-/// offscreen at print resolution (ReportFigures).
+/// offscreen at print resolution (render/Figure.h).
 
 #include <optional>
 #include <string>
@@ -13,7 +13,7 @@
 
 #include "planning/IncisionPlan.h"
 #include "planning/SkinChart.h"
-#include "modules/report/ReportFigures.h"
+#include "render/Figure.h"
 
 #include "segmentation/RangeMap.h"
 
@@ -45,7 +45,7 @@ vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name);
 /// The cut path of @a plan lifted onto the skin every 0.5 mm (§3.3.1: a
 /// solid line), its cut points labelled p0, p1, ... when @a labelled (on a
 /// long cut the ends and a few between, so labels do not overlap).
-LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled = true);
+render::LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled = true);
 
 /// A caption for a view; @a left: the plan is on the patient's left.
 std::string planViewName(PlanView view, bool left);
@@ -59,7 +59,7 @@ public:
   /// The figure of one view of @a plan (only its name and plan are needed,
   /// and its wound stress for Stress), @a printWidthMm wide on paper at this
   /// object's resolution; std::nullopt when the scene lacks the surfaces.
-  std::optional<Figure> planFigure(const PlanFacts& plan, PlanView view, double printWidthMm,
+  std::optional<render::Figure> planFigure(const PlanFacts& plan, PlanView view, double printWidthMm,
                                    double heightPerWidth) const;
 
   /// Front, oblique and profile views of the face with the cut drawn and its

@@ -197,7 +197,7 @@ struct AnimateArgs
   fs::path scene;
   fs::path out;
   std::string plan;
-  report::AnimationOptions options;
+  render::AnimationOptions options;
   bool help = false;
 };
 
@@ -289,7 +289,7 @@ std::optional<std::string> parseAnimate(const std::vector<std::string>& args, An
   return std::nullopt;
 }
 
-void printSequence(std::ostream& out, const report::FrameSequence& sequence)
+void printSequence(std::ostream& out, const render::FrameSequence& sequence)
 {
   out << "wrote " << sequence.folder.string() << "/frame-0000.png ... (" << sequence.frames << " frames, "
       << sequence.width << "x" << sequence.height << ")\n";
@@ -315,7 +315,7 @@ int runAnimate(ModuleLogic&, const std::vector<std::string>& argv, std::ostream&
     Scene scene;
     loadScene(args.scene, scene);
     const TaskProgress progress = cli::consoleProgress(err);
-    const report::AnimationResult result =
+    const render::AnimationResult result =
       report::writePlanAnimation(scene, args.plan, args.out, args.options, progress);
     out << "plan \"" << result.planName << "\"\n";
     printSequence(out, result.prePost);

@@ -16,7 +16,7 @@
 #include <QTextDocument>
 #include <QUrl>
 
-#include "modules/core/GuiForPainting.h"
+#include "render/GuiForPainting.h"
 
 namespace caps::report {
 namespace {
@@ -182,7 +182,7 @@ void ReportDocument::pageBreak() { pageBreakPending_ = !html_.empty(); }
 
 int ReportDocument::render(QPagedPaintDevice& device) const
 {
-  GuiForPainting gui;
+  render::GuiForPainting gui;
   const double dpi = device.logicalDpiX();
   const double mm = dpi / kMmPerInch; // device pixels per millimetre
   const double width = device.width(), height = device.height();
@@ -262,7 +262,7 @@ int ReportDocument::writePdf(const std::filesystem::path& file, PaperSize paper,
   const std::filesystem::path beside = file.string() + ".writing";
   int pages = 0;
   {
-    GuiForPainting gui; // QPdfWriter's fonts
+    render::GuiForPainting gui; // QPdfWriter's fonts
     QPdfWriter writer(QString::fromStdString(beside.string()));
     writer.setResolution(300);
     writer.setPageSize(QPageSize(paper == PaperSize::A4 ? QPageSize::A4 : QPageSize::Letter));

@@ -53,13 +53,13 @@ SnapshotNode& takePlanSnapshot(Scene& scene, const std::string& planName, PlanVi
   // width pixels at 150 dpi (text in points scales with it).
   const double dpi = 150.0;
   const PlanFigures figures(scene, *static_cast<const VolumeNode*>(volumes.front()), dpi);
-  std::optional<Figure> figure = figures.planFigure(plan, view, width / dpi * 25.4, double(height) / width);
+  std::optional<render::Figure> figure = figures.planFigure(plan, view, width / dpi * 25.4, double(height) / width);
   if (!figure)
     throw std::invalid_argument("the scene lacks the surfaces for this view of \"" + planName +
                                 "\" (the segmented skin, or the plan's display surfaces from caps plan)");
   figure->width = width;
   figure->height = height;
-  vtkSmartPointer<vtkImageData> image = renderFigure(*figure);
+  vtkSmartPointer<vtkImageData> image = render::renderFigure(*figure);
   auto* snapshot = scene.add<SnapshotNode>();
   const int number = int(scene.nodesOfType(NodeType::Snapshot).size());
   snapshot->setName("Snapshot " + std::to_string(number));

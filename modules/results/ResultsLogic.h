@@ -51,7 +51,7 @@ struct QuantityStyle
 {
   std::string label;    ///< "von Mises stress", for menus and captions
   std::string array;    ///< point array of planDisplayPolyData()
-  std::string colourMap;///< ui/ColourMaps.h name; empty for RGB
+  std::string colourMap;///< render/ColourMaps.h name; empty for RGB
   std::string barTitle; ///< "von Mises stress (kPa)"
   bool symmetric = false; ///< range symmetric about 0 (signed quantities)
 };

@@ -32,7 +32,7 @@
 #include "app/RunProcess.h"
 #include "modules/report/PlanAnimation.h"
 #include "modules/report/PlanFigures.h"
-#include "modules/report/ReportFigures.h"
+#include "render/Figure.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
 #include "scene/SurfaceNode.h"
@@ -41,6 +41,7 @@
 namespace fs = std::filesystem;
 using caps::test::quoted;
 namespace report = caps::report;
+namespace render = caps::render;
 
 namespace {
 
@@ -64,9 +65,9 @@ caps::Scene& demoScene()
   return *scene;
 }
 
-report::AnimationOptions smallOptions()
+render::AnimationOptions smallOptions()
 {
-  report::AnimationOptions options;
+  render::AnimationOptions options;
   options.width = 320;
   options.height = 240;
   options.prePostFrames = 7;
@@ -78,7 +79,7 @@ report::AnimationOptions smallOptions()
 struct Animated
 {
   fs::path out;
-  report::AnimationResult result;
+  render::AnimationResult result;
   double seconds = 0.0;
 };
 
@@ -158,16 +159,16 @@ vtkPolyData* surfaceNamed(const caps::Scene& scene, const std::string& name)
 }
 
 /// The surface alone, coloured by skin_shade, from @a camera, as writePlanAnimation renders a frame.
-vtkSmartPointer<vtkImageData> renderAlone(vtkPolyData* surface, const report::Camera& camera)
+vtkSmartPointer<vtkImageData> renderAlone(vtkPolyData* surface, const render::Camera& camera)
 {
-  const report::AnimationOptions options = smallOptions();
-  report::Figure figure;
+  const render::AnimationOptions options = smallOptions();
+  render::Figure figure;
   figure.width = options.width;
   figure.height = options.height;
   figure.multiSamples = options.multiSamples;
   figure.camera = camera;
-  figure.surfaces.push_back(report::SurfaceLayer::pointColours(surface, "skin_shade"));
-  return report::renderFigure(figure);
+  figure.surfaces.push_back(render::SurfaceLayer::pointColours(surface, "skin_shade"));
+  return render::renderFigure(figure);
 }
 
 } // namespace
@@ -202,7 +203,7 @@ TEST(PlanAnimation, TheSequencesHaveTheirFrameCountsAndEvenSizes)
   // Odd sizes are made even (yuv420p needs it); a second, shorter run
   // replaces the earlier frames rather than leaving them for ffmpeg to find.
   const fs::path out = caps::test::scratchFolder() / "odd";
-  report::AnimationOptions odd = smallOptions();
+  render::AnimationOptions odd = smallOptions();
   odd.width = 161;
   odd.height = 121;
   odd.prePostFrames = 3;
@@ -235,8 +236,8 @@ TEST(PlanAnimation, PrePostGoesFromTheSkinBeforeToTheSkinAfter)
   for (int k = 0; k < n; ++k)
     frames.push_back(readPng(a.out / "pre-post" / frameName(k)));
 
-  EXPECT_GT(report::pixelVariance(frames[0]), 100.0) << "the first frame is blank";
-  EXPECT_GT(report::occupiedFraction(frames[0]), 0.3) << "the skin should fill the frame";
+  EXPECT_GT(render::pixelVariance(frames[0]), 100.0) << "the first frame is blank";
+  EXPECT_GT(render::occupiedFraction(frames[0]), 0.3) << "the skin should fill the frame";
   const double beforeChange = meanDifference(beforeAlone, afterAlone);
   EXPECT_GT(beforeChange, 2.0) << "the operation should show";
   EXPECT_LT(meanDifference(frames.front(), beforeAlone), 0.05 * beforeChange);
@@ -263,7 +264,7 @@ TEST(PlanAnimation, PrePostGoesFromTheSkinBeforeToTheSkinAfter)
   fewer->GetPoints()->SetNumberOfPoints(after->GetNumberOfPoints() - 1);
   try
   {
-    report::blendSurfaces(before, fewer, 0.5);
+    render::blendSurfaces(before, fewer, 0.5);
     ADD_FAILURE() << "blended surfaces of different point counts";
   }
   catch (const std::invalid_argument& e)
@@ -279,8 +280,8 @@ TEST(PlanAnimation, TheTurntableStartsAtTheFaceAndGoesRoundTheHead)
   const auto front = readPng(a.out / "turntable" / frameName(0));
   const auto back = readPng(a.out / "turntable" / frameName(m / 2));
   const auto quarter = readPng(a.out / "turntable" / frameName(m / 4));
-  EXPECT_GT(report::pixelVariance(front), 100.0) << "the front frame is blank";
-  const double occupied = report::occupiedFraction(front);
+  EXPECT_GT(render::pixelVariance(front), 100.0) << "the front frame is blank";
+  const double occupied = render::occupiedFraction(front);
   EXPECT_GT(occupied, 0.15) << "the head should fill much of the frame";
   EXPECT_LT(occupied, 0.95);
   EXPECT_GT(meanDifference(front, back), 5.0) << "the front and the back look the same";
@@ -295,8 +296,8 @@ TEST(PlanAnimation, TheTurntableStartsAtTheFaceAndGoesRoundTheHead)
   for (int k = 0; k < m; ++k)
   {
     const auto frame = readPng(a.out / "turntable" / frameName(k));
-    EXPECT_GT(report::occupiedFraction(frame), 0.5 * occupied) << k;
-    EXPECT_LT(report::occupiedFraction(frame), 2.0 * occupied) << k;
+    EXPECT_GT(render::occupiedFraction(frame), 0.5 * occupied) << k;
+    EXPECT_LT(render::occupiedFraction(frame), 2.0 * occupied) << k;
   }
 }
 
@@ -340,7 +341,7 @@ TEST(PlanAnimation, TheCommandWritesTheFramesAndSaysHowToMakeTheVideosWithoutFfm
 TEST(PlanAnimation, WithFfmpegTheVideosAreWritten)
 {
   unsetenv("CAPS_FFMPEG");
-  if (!report::findFfmpeg())
+  if (!render::findFfmpeg())
     GTEST_SKIP() << "no ffmpeg on PATH (Debian package ffmpeg): the MP4 export is not tested here";
   const fs::path out = caps::test::scratchFolder() / "animation";
   const auto r = runCaps("animate " + quoted(sceneBundle().string()) + " --out " + quoted(out.string()) +
@@ -438,7 +439,7 @@ TEST(PlanAnimation, TheVideoCommandRunsAsPrintedAndItsFailureIsReported)
 TEST(PlanAnimation, ProgressIsReportedAndCancelStops)
 {
   const fs::path out = caps::test::scratchFolder() / "cancelled";
-  report::AnimationOptions options = smallOptions();
+  render::AnimationOptions options = smallOptions();
   options.width = 64;
   options.height = 48;
   options.prePostFrames = 4;
@@ -465,9 +466,9 @@ TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
   vtkPolyData* after = report::surfaceNamed(scene, "Z-plasty 1 skin after");
   ASSERT_TRUE(before && after);
   const fs::path out = caps::test::scratchFolder();
-  report::AnimationOptions options = smallOptions();
+  render::AnimationOptions options = smallOptions();
   const Eigen::Vector3d toCamera(0.0, -1.0, 0.0), up(0.0, 0.0, 1.0);
-  const auto r = report::writeMorphAnimation(before, after, "there-and-back", toCamera, up,
+  const auto r = render::writeMorphAnimation(before, after, "there-and-back", toCamera, up,
                                              out, 4, true, options);
   EXPECT_EQ(r.prePost.frames, 6);
   EXPECT_EQ(r.framesRendered, 6);
@@ -477,9 +478,9 @@ TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
     EXPECT_EQ(meanDifference(readPng(folder / frameName(k)), readPng(folder / frameName(6 - k))), 0.0) << k;
   EXPECT_GT(meanDifference(readPng(folder / frameName(0)), readPng(folder / frameName(3))), 0.05);
   // The peak is the after surface: the same as a one-way morph's last frame.
-  report::writeMorphAnimation(before, after, "one-way", toCamera, up, out, 4, false, options);
+  render::writeMorphAnimation(before, after, "one-way", toCamera, up, out, 4, false, options);
   EXPECT_EQ(meanDifference(readPng(folder / frameName(3)), readPng(out / "one-way" / frameName(3))), 0.0);
-  EXPECT_THROW(report::writeMorphAnimation(before, after, "a/b", toCamera, up, out, 4, true,
+  EXPECT_THROW(render::writeMorphAnimation(before, after, "a/b", toCamera, up, out, 4, true,
                                            options),
                std::invalid_argument);
 }
@@ -491,22 +492,22 @@ TEST(PlanAnimation, GivenFramesAreRenderedInTheirOrderAsTheMorphRendersThem)
   vtkPolyData* after = report::surfaceNamed(scene, "Z-plasty 1 skin after");
   ASSERT_TRUE(before && after);
   const fs::path out = caps::test::scratchFolder();
-  const report::AnimationOptions options = smallOptions();
+  const render::AnimationOptions options = smallOptions();
   const Eigen::Vector3d toCamera(0.0, -1.0, 0.0), up(0.0, 0.0, 1.0);
-  report::writeMorphAnimation(before, after, "morph", toCamera, up, out, 4, false, options);
+  render::writeMorphAnimation(before, after, "morph", toCamera, up, out, 4, false, options);
   // The morph's own frames given back to front: the same pictures, reversed
   // (the camera framing all four frames is the morph's, which frames the ends).
   std::vector<vtkSmartPointer<vtkPolyData>> frames;
   for (int k = 3; k >= 0; --k)
-    frames.push_back(report::blendSurfaces(before, after, k / 3.0));
-  const auto r = report::writeSurfaceAnimation(frames, "given", toCamera, up, out, options);
+    frames.push_back(render::blendSurfaces(before, after, k / 3.0));
+  const auto r = render::writeSurfaceAnimation(frames, "given", toCamera, up, out, options);
   EXPECT_EQ(r.prePost.frames, 4);
   EXPECT_FALSE(fs::exists(out / "given" / frameName(4)));
   for (int k = 0; k < 4; ++k)
     EXPECT_EQ(meanDifference(readPng(out / "given" / frameName(k)), readPng(out / "morph" / frameName(3 - k))), 0.0)
       << k;
-  EXPECT_THROW(report::writeSurfaceAnimation({frames.front()}, "one", toCamera, up, out, options),
+  EXPECT_THROW(render::writeSurfaceAnimation({frames.front()}, "one", toCamera, up, out, options),
                std::invalid_argument);
-  EXPECT_THROW(report::writeSurfaceAnimation({frames.front(), nullptr}, "hole", toCamera, up, out, options),
+  EXPECT_THROW(render::writeSurfaceAnimation({frames.front(), nullptr}, "hole", toCamera, up, out, options),
                std::invalid_argument);
 }

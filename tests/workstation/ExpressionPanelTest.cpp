@@ -330,7 +330,7 @@ TEST(ExpressionPanel, TheMixIsExportedAsAnAnimation)
   ASSERT_FALSE(rest.isNull());
   EXPECT_NE(rest, peak) << "the smile does not show in the animation";
   EXPECT_EQ(read(frames / "frame-0010.png"), read(frames / "frame-0036.png")) << "out and back differ";
-  if (report::findFfmpeg())
+  if (render::findFfmpeg())
   {
     EXPECT_TRUE(std::filesystem::exists(folder / "expression.mp4"));
   }

@@ -1,4 +1,4 @@
-#include "ui/ColourMaps.h"
+#include "render/ColourMaps.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <vtkLookupTable.h>
 
-namespace caps::ui {
+namespace caps::render {
 namespace {
 
 /// Control points of the colour maps, evenly spaced in [0, 1].
@@ -94,4 +94,4 @@ std::optional<ColourMap> colourMapFromName(const std::string& name)
   return std::nullopt;
 }
 
-} // namespace caps::ui
+} // namespace caps::render

@@ -1,6 +1,8 @@
 #pragma once
-/// @file ReportFigures.h
-/// @brief Declarative offscreen figures for the plan report: surfaces, incision lines, colour bars.
+/// @file Figure.h
+/// @brief Declarative offscreen figures (the plan report, the results and
+/// expression exports): surfaces, incision lines, colour bars; their cameras
+/// and the pixels they render to.
 
 #include <array>
 #include <cstdint>
@@ -12,8 +14,8 @@
 #include <Eigen/Core>
 #include <vtkSmartPointer.h>
 
-#include "scene/SnapshotNode.h"
-#include "ui/ColourMaps.h"
+#include "render/Camera.h"
+#include "render/ColourMaps.h"
 
 class vtkImageData;
 class vtkPolyData;
@@ -23,19 +25,10 @@ namespace caps::seg {
 class CylindricalFrame;
 }
 
-namespace caps::report {
-
-/// A camera as vtkCamera describes it (patient LPS, mm; vertical view angle in degrees).
-using Camera = SnapshotNode::Camera;
+namespace caps::render {
 
 /// An RGB colour, each channel in [0, 1].
 using Rgb = std::array<double, 3>;
-
-/// @name Colour maps (shared with the workstation's views: ui/ColourMaps.h)
-///@{
-using ColourMap = ui::ColourMap;
-using ui::colourMapColour;
-///@}
 
 /// @brief One surface of a figure and how it is coloured.
 ///
@@ -224,4 +217,4 @@ std::optional<PixelBox> boundingBoxOfNonBackground(vtkImageData* image, const Rg
                                                    int tolerance = 8);
 ///@}
 
-} // namespace caps::report
+} // namespace caps::render

@@ -16,7 +16,7 @@
 #include <QString>
 #include <QtGlobal>
 
-namespace caps {
+namespace caps::render {
 
 class GuiForPainting
 {
@@ -71,4 +71,4 @@ private:
   std::unique_ptr<QGuiApplication> application_;
 };
 
-} // namespace caps
+} // namespace caps::render

@@ -11,9 +11,9 @@
 #include <QImage>
 #include <gtest/gtest.h>
 
-#include "modules/incision/StudyPlot.h"
+#include "render/XyPlot.h"
 
-namespace caps::incision {
+namespace caps::render {
 namespace {
 
 namespace fs = std::filesystem;
@@ -62,7 +62,7 @@ XyPlot knownPlot()
   return plot;
 }
 
-TEST(StudyPlot, NiceTicksCoverTheDataWithRoundSteps)
+TEST(XyPlot, NiceTicksCoverTheDataWithRoundSteps)
 {
   const std::vector<double> x = niceTicks(0.0, 40.0, 6);
   ASSERT_GE(x.size(), 3u);
@@ -84,7 +84,7 @@ TEST(StudyPlot, NiceTicksCoverTheDataWithRoundSteps)
   EXPECT_GT(c.back(), 3.0);
 }
 
-TEST(StudyPlot, CurvesAreDrawnWhereTheDataMapTo)
+TEST(XyPlot, CurvesAreDrawnWhereTheDataMapTo)
 {
   const XyPlot plot = knownPlot();
   const fs::path file = artifact("study-plot-known.png");
@@ -157,7 +157,7 @@ TEST(StudyPlot, CurvesAreDrawnWhereTheDataMapTo)
   EXPECT_GT(titleInk, 50) << "no title drawn";
 }
 
-TEST(StudyPlot, OneSeriesAndBadInput)
+TEST(XyPlot, OneSeriesAndBadInput)
 {
   XyPlot one = knownPlot();
   one.series.pop_back();
@@ -197,4 +197,4 @@ TEST(StudyPlot, OneSeriesAndBadInput)
 }
 
 } // namespace
-} // namespace caps::incision
+} // namespace caps::render

@@ -12,7 +12,7 @@
 
 class vtkLookupTable;
 
-namespace caps::ui {
+namespace caps::render {
 
 /// An RGB colour, each channel in [0, 1].
 using Rgb = std::array<double, 3>;
@@ -36,4 +36,4 @@ std::string colourMapName(ColourMap map);
 /// The map of a name colourMapName() gives; std::nullopt for any other.
 std::optional<ColourMap> colourMapFromName(const std::string& name);
 
-} // namespace caps::ui
+} // namespace caps::render

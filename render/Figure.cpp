@@ -1,6 +1,6 @@
 // ReportFigures: offscreen VTK renders of the plan report's figures.
 
-#include "modules/report/ReportFigures.h"
+#include "render/Figure.h"
 
 #include <algorithm>
 #include <cmath>
@@ -39,17 +39,17 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkWindowToImageFilter.h>
 
-#include "modules/report/OffscreenDisplay.h"
+#include "render/OffscreenDisplay.h"
 #include "segmentation/CylindricalFrame.h"
 
-namespace caps::report {
+namespace caps::render {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
 vtkSmartPointer<vtkLookupTable> makeLookupTable(ColourMap map, const std::array<double, 2>& range)
 {
-  return ui::colourMapLookupTable(map, range);
+  return colourMapLookupTable(map, range);
 }
 
 void checkRange(const std::array<double, 2>& range, const std::string& what)
@@ -998,4 +998,4 @@ std::optional<PixelBox> boundingBoxOfNonBackground(vtkImageData* image, const Rg
   return box;
 }
 
-} // namespace caps::report
+} // namespace caps::render

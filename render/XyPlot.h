@@ -1,5 +1,5 @@
 #pragma once
-/// @file StudyPlot.h
+/// @file XyPlot.h
 /// @brief x–y curves drawn to a PNG for the printed results of a parameter
 /// study (thesis §3.3.1: "standard x-y graphs ... of the analysis results
 /// with respect to ... a parameter of the operation"). Rendered with
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace caps::incision {
+namespace caps::render {
 
 /// One curve: points joined in the order given, a marker at each.
 struct PlotSeries
@@ -71,4 +71,4 @@ XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& f
 /// axis's range). A zero-width range is widened around its value first.
 std::vector<double> niceTicks(double lo, double hi, int targetCount = 5);
 
-} // namespace caps::incision
+} // namespace caps::render

@@ -4,7 +4,7 @@
 
 #include <string>
 
-namespace caps::report {
+namespace caps::render {
 
 /// @class OffscreenDisplay
 /// @brief Makes sure this process can open an X display, starting a private Xvfb when it cannot.
@@ -66,4 +66,4 @@ public:
   static void shutdown();
 };
 
-} // namespace caps::report
+} // namespace caps::render

@@ -1,6 +1,6 @@
 // OffscreenDisplay: the X display for offscreen rendering, or a private Xvfb.
 
-#include "modules/report/OffscreenDisplay.h"
+#include "render/OffscreenDisplay.h"
 
 #include <cerrno>
 #include <chrono>
@@ -24,7 +24,7 @@
 
 #include <X11/Xlib.h>
 
-namespace caps::report {
+namespace caps::render {
 namespace {
 
 constexpr const char* kInstallHint = "install the Debian package xvfb, or run under xvfb-run -a";
@@ -393,4 +393,4 @@ void OffscreenDisplay::shutdown()
   s.stopLocked();
 }
 
-} // namespace caps::report
+} // namespace caps::render

@@ -1,6 +1,6 @@
-#include "modules/incision/StudyPlot.h"
+#include "render/XyPlot.h"
 
-#include "modules/core/GuiForPainting.h"
+#include "render/GuiForPainting.h"
 
 #include <algorithm>
 #include <cmath>
@@ -19,7 +19,7 @@
 #include <QPainterPath>
 #include <QPen>
 
-namespace caps::incision {
+namespace caps::render {
 namespace {
 
 QColor colour(std::uint32_t rgb)
@@ -359,7 +359,7 @@ private:
 XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file)
 {
   validate(plot);
-  const caps::GuiForPainting gui;
+  const GuiForPainting gui;
   XyPlotPainter painter(plot);
   const QImage image = painter.draw();
   if (!image.save(QString::fromStdString(file.string()), "PNG"))
@@ -367,4 +367,4 @@ XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& f
   return painter.geometry();
 }
 
-} // namespace caps::incision
+} // namespace caps::render
