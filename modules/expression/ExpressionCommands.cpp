@@ -16,7 +16,7 @@
 #include <vtkPolyData.h>
 
 #include "modules/expression/ExpressionLogic.h"
-#include "modules/expression/PlanUnderExpression.h"
+#include "planning/PlanUnderExpression.h"
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanDisplay.h"
 #include "modules/report/PlanAnimation.h"

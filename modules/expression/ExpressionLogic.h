@@ -26,9 +26,9 @@
 #include <vtkSmartPointer.h>
 
 #include "modules/core/Module.h"
-#include "modules/expression/FaceModel.h"
-#include "modules/expression/MuscleResponses.h"
-#include "modules/expression/MuscleSet.h"
+#include "planning/FaceModel.h"
+#include "planning/MuscleResponses.h"
+#include "planning/MuscleSet.h"
 #include "segmentation/Landmarks.h"
 #include "segmentation/RangeMap.h"
 #include "segmentation/SurfaceScanColourMap.h"

@@ -21,7 +21,7 @@
 
 #include "modules/core/Module.h"
 #include "modules/expression/ExpressionLogic.h"
-#include "modules/expression/PlanUnderExpression.h"
+#include "planning/PlanUnderExpression.h"
 #include "planning/IncisionPlan.h"
 #include "planning/PlanSimulation.h"
 #include "segmentation/RangeMap.h"

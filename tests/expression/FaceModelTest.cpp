@@ -16,8 +16,8 @@
 #include "fem/ContinuumMesher.h"
 #include "fem/DisplaySurface.h"
 #include "fem/StaticAnalysis.h"
-#include "modules/expression/FaceModel.h"
-#include "modules/expression/MuscleResponses.h"
+#include "planning/FaceModel.h"
+#include "planning/MuscleResponses.h"
 #include "planning/PlanSimulation.h"
 
 namespace caps::expression {

@@ -15,9 +15,9 @@
 
 #include "expression/SampleFace.h"
 #include "fem/StaticAnalysis.h"
-#include "modules/expression/FaceModel.h"
-#include "modules/expression/MuscleResponses.h"
-#include "modules/expression/MuscleSet.h"
+#include "planning/FaceModel.h"
+#include "planning/MuscleResponses.h"
+#include "planning/MuscleSet.h"
 #include "planning/SkinTensionLines.h"
 
 using namespace caps;

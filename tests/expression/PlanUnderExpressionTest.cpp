@@ -12,9 +12,9 @@
 #include <numbers>
 
 #include "SampleFace.h"
-#include "modules/expression/FaceModel.h"
-#include "modules/expression/MuscleSet.h"
-#include "modules/expression/PlanUnderExpression.h"
+#include "planning/FaceModel.h"
+#include "planning/MuscleSet.h"
+#include "planning/PlanUnderExpression.h"
 #include "modules/incision/IncisionLogic.h"
 
 namespace caps::expression {

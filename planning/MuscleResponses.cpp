@@ -1,4 +1,4 @@
-#include "modules/expression/MuscleResponses.h"
+#include "planning/MuscleResponses.h"
 
 #include <stdexcept>
 #include <string>

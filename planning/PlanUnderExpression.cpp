@@ -1,4 +1,4 @@
-#include "modules/expression/PlanUnderExpression.h"
+#include "planning/PlanUnderExpression.h"
 
 #include <algorithm>
 #include <cmath>

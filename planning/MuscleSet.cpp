@@ -1,4 +1,4 @@
-#include "modules/expression/MuscleSet.h"
+#include "planning/MuscleSet.h"
 
 #include <algorithm>
 #include <cmath>

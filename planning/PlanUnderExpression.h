@@ -12,7 +12,7 @@
 
 #include "fem/MuscleLoad.h"
 #include "fem/StaticAnalysis.h"
-#include "modules/expression/MuscleResponses.h"
+#include "planning/MuscleResponses.h"
 #include "planning/PlanSimulation.h"
 
 namespace caps::expression {

@@ -1,4 +1,4 @@
-#include "modules/expression/FaceModel.h"
+#include "planning/FaceModel.h"
 
 #include <algorithm>
 #include <cmath>
