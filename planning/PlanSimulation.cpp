@@ -278,7 +278,6 @@ RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<Ch
   return out;
 }
 
-SimulationCancelled::SimulationCancelled() : std::runtime_error("the simulation was cancelled") {}
 
 namespace {
 
@@ -348,8 +347,7 @@ private:
   /// Between steps only: a step, once started, runs to its end.
   void phase(double fraction, const std::string& step) const
   {
-    if (options_.progress && !options_.progress(fraction, step))
-      throw SimulationCancelled();
+    seg::reportProgress(options_.progress, fraction, step);
   }
 
   /// 1. The hole, refined to the element size consistently with the sutures.

@@ -20,6 +20,7 @@
 #include "planning/IncisionPlan.h"
 #include "planning/SkinChart.h"
 #include "planning/SkinMeasurements.h"
+#include "segmentation/Progress.h"
 #include "segmentation/RangeMap.h"
 
 namespace caps::incision {
@@ -93,18 +94,10 @@ struct SimulationOptions : TissueDepthOptions
   /// Called by simulatePlan() between its phases (surface mesh, continuum
   /// mesh, assembly and factorisation, solve, closure forces) with the
   /// fraction of the work done and the phase starting; returning false stops
-  /// it with SimulationCancelled. A phase once started runs to its end (the
+  /// it with seg::Cancelled. A phase once started runs to its end (the
   /// assembly and factorisation are one call of fem::LinearStaticAnalysis).
   /// Empty: not called.
-  std::function<bool(double fraction, const std::string& phase)> progress;
-};
-
-/// Thrown by simulatePlan() and meshPlan() when SimulationOptions::progress
-/// asked them to stop.
-class SimulationCancelled : public std::runtime_error
-{
-public:
-  SimulationCancelled();
+  seg::ProgressCallback progress;
 };
 
 /// The skin surface after the operation, for a display: one entry per

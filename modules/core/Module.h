@@ -24,6 +24,7 @@
 #include "modules/core/BuildStamp.h"
 #include "scene/Node.h"
 #include "scene/SnapshotNode.h"
+#include "segmentation/Progress.h"
 
 class QWidget;
 class vtkImageData;
@@ -77,8 +78,9 @@ struct ModuleAction
 };
 
 /// Progress report of long work: fraction in [0,1] and the current step;
-/// returning false asks the work to stop.
-using TaskProgress = std::function<bool(double fraction, const std::string& step)>;
+/// returning false asks the work to stop (it then throws seg::Cancelled).
+/// The one progress type of the libraries (segmentation/Progress.h).
+using TaskProgress = seg::ProgressCallback;
 
 /// Long work split in two: `work` runs on a worker thread and must not touch
 /// the scene; the function it returns runs afterwards on the GUI thread and

@@ -58,7 +58,7 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   {
     study->prediction_ = incision::simulatePlan(input.skin, input.bone, input.plan, options);
   }
-  catch (const incision::SimulationCancelled&)
+  catch (const seg::Cancelled&)
   {
     return nullptr;
   }

@@ -21,8 +21,7 @@ namespace {
 
 void report(const TaskProgress& progress, double fraction, const std::string& step)
 {
-  if (progress && !progress(fraction, step))
-    throw seg::Cancelled();
+  seg::reportProgress(progress, fraction, step);
 }
 
 // The part [from, to] of the progress bar.

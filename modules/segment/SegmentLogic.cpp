@@ -21,8 +21,7 @@ namespace {
 // Reports progress and throws seg::Cancelled when the user asked to stop.
 void report(const TaskProgress& progress, double fraction, const std::string& step)
 {
-  if (progress && !progress(fraction, step))
-    throw seg::Cancelled();
+  seg::reportProgress(progress, fraction, step);
 }
 
 // An unsigned char image with the geometry (origin, spacing, direction) of @a like.

@@ -36,8 +36,7 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 /// Reports a phase; stops the run when the user cancelled.
 void phase(const TaskProgress& progress, double fraction, const std::string& step)
 {
-  if (progress && !progress(fraction, step))
-    throw incision::SimulationCancelled();
+  seg::reportProgress(progress, fraction, step);
 }
 
 } // namespace

@@ -96,7 +96,7 @@ inline constexpr double kWoundRadius = 10.0;
 /// @brief Runs a prediction: the skin's shade from the CT, simulatePlan(),
 /// buildPlanDisplay() with that shade, woundSkinStress() and the model
 /// drawing, reporting each phase through @a progress (fractions in [0, 1]).
-/// @throws incision::SimulationCancelled when @a progress returned false
+/// @throws seg::Cancelled when @a progress returned false
 /// (between phases), and whatever simulatePlan() throws.
 PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress);
 

@@ -259,7 +259,7 @@ TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
   // Stopped before the assembly: the distinct exception, nothing solved.
   int calls = 0;
   options.progress = [&](double, const std::string&) { return ++calls < 3; };
-  EXPECT_THROW(incision::simulatePlan(skin, bone, plan, options), incision::SimulationCancelled);
+  EXPECT_THROW(incision::simulatePlan(skin, bone, plan, options), seg::Cancelled);
   EXPECT_EQ(calls, 3);
 }
 
