@@ -38,7 +38,7 @@
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanDisplay.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/LandmarkPlacement.h"

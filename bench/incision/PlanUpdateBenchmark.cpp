@@ -30,7 +30,7 @@
 #include "planning/PlanDisplay.h"
 #include "planning/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/SkinShade.h"

@@ -20,7 +20,7 @@
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanDisplay.h"
 #include "modules/report/PlanAnimation.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/ExpressionNode.h"
 #include "scene/PlanNode.h"
 #include "scene/Scene.h"

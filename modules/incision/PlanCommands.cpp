@@ -29,7 +29,7 @@
 #include "render/XyPlot.h"
 #include "planning/WoundStress.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"

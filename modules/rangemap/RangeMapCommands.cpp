@@ -9,7 +9,7 @@
 
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapPreview.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/NrrdIO.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"

@@ -17,7 +17,7 @@
 
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapPreview.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/NrrdIO.h"
 #include "segmentation/Calibration.h"
 #include "segmentation/RangeMapImage.h"

@@ -11,7 +11,7 @@
 #include "modules/report/PlanAnimation.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/Storyboard.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
 #include "scene/SnapshotNode.h"

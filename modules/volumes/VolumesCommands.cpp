@@ -4,6 +4,7 @@
 #include <iostream>
 #include <optional>
 
+#include "modules/volumes/CommandLine.h"
 #include "modules/volumes/VolumesLogic.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/WindowLevel.h"
@@ -67,10 +68,8 @@ std::optional<std::string> parse(const std::vector<std::string>& args, bool with
       auto v = value();
       if (!v)
         return "--series needs a number or a series UID";
-      if (!v->empty() && v->find_first_not_of("0123456789") == std::string::npos)
-        parsed.read.seriesIndex = std::atoi(v->c_str()) - 1;
-      else
-        parsed.read.seriesUid = *v;
+      if (auto problem = cli::parseSeries(*v, parsed.read))
+        return problem;
     }
     else if (withOutput && a == "--out")
     {

@@ -20,7 +20,7 @@
 #include "TestPaths.h"
 #include "modules/expression/ExpressionLogic.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "report/DemoScene.h"
 #include "scene/ExpressionNode.h"
 #include "scene/LandmarksNode.h"

@@ -19,7 +19,7 @@
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanSimulation.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
 

@@ -40,7 +40,7 @@
 
 #include "render/Figure.h"
 #include "modules/rangemap/RangeMapLogic.h"
-#include "modules/segment/SegmentCommands.h"
+#include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/CylindricalFrame.h"
