@@ -635,33 +635,19 @@ private:
 int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
             std::ostream& err)
 {
-  PlanArgs args;
-  if (auto problem = parse(argv, args))
-  {
-    err << "caps plan: " << *problem << "\n" << kPlanUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kPlanUsage;
-    return 0;
-  }
-  try
-  {
-    PlanRun(static_cast<IncisionLogic&>(moduleLogic), std::move(args), out, err).run();
-    return 0;
-  }
-  catch (const fem::ElementError& e)
-  {
-    err << "caps plan: the tissue under the plan is too uneven for its mesh (" << e.what()
-        << "). Try a smaller --element-size, or move the plan where the skin and bone are smoother.\n";
-    return 1;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps plan: " << e.what() << "\n";
-    return 1;
-  }
+  return cli::runCommand<PlanArgs>("plan", kPlanUsage, argv, out, err, parse, [&](PlanArgs& args) {
+    try
+    {
+      PlanRun(static_cast<IncisionLogic&>(moduleLogic), std::move(args), out, err).run();
+      return 0;
+    }
+    catch (const fem::ElementError& e)
+    {
+      err << "caps plan: the tissue under the plan is too uneven for its mesh (" << e.what()
+          << "). Try a smaller --element-size, or move the plan where the skin and bone are smoother.\n";
+      return 1;
+    }
+  });
 }
 
 } // namespace

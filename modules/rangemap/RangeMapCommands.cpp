@@ -178,20 +178,8 @@ void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& userLandmark
 int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
                 std::ostream& err)
 {
-  RangeMapArgs args;
-  if (auto problem = parse(argv, args))
-  {
-    err << "caps rangemap: " << *problem << "\n" << kRangeMapUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kRangeMapUsage;
-    return 0;
-  }
   auto& logic = static_cast<RangeMapLogic&>(moduleLogic);
-  try
-  {
+  return cli::runCommand<RangeMapArgs>("rangemap", kRangeMapUsage, argv, out, err, parse, [&](RangeMapArgs& args) {
     if (!args.landmarks.empty())
       seg::readLandmarkCsv(args.landmarks); // a bad file stops us before the long part
     cli::makeOutputFolder(args.out);
@@ -254,12 +242,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
     }
     writeLandmarkTable(maps, args.landmarks, args.out / "landmarks.csv", out, err);
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps rangemap: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 } // namespace

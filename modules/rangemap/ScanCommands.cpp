@@ -235,19 +235,7 @@ void printCalibration(std::ostream& out, const std::vector<seg::LandmarkDistance
 
 int runScan(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
-  ScanArgs args;
-  if (auto problem = parse(argv, args))
-  {
-    err << "caps scan: " << *problem << "\n" << kScanUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kScanUsage;
-    return 0;
-  }
-  try
-  {
+  return cli::runCommand<ScanArgs>("scan", kScanUsage, argv, out, err, parse, [&](ScanArgs& args) {
     // Distances first: a bad file stops us before any work.
     std::vector<seg::LandmarkDistance> distances;
     if (!args.distances.empty())
@@ -297,12 +285,7 @@ int runScan(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& ou
     writeRangeMapPreview(values, f.zMin(), f.zMax(), style, args.out / "range-preview.png");
     out << "wrote " << (args.out / "range-preview.png").string() << "\n";
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps scan: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 } // namespace

@@ -131,19 +131,7 @@ std::optional<std::string> parse(const std::vector<std::string>& args, ReportArg
 
 int runReport(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
-  ReportArgs args;
-  if (auto problem = parse(argv, args))
-  {
-    err << "caps report: " << *problem << "\n" << kReportUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kReportUsage;
-    return 0;
-  }
-  try
-  {
+  return cli::runCommand<ReportArgs>("report", kReportUsage, argv, out, err, parse, [&](ReportArgs& args) {
     Scene scene;
     loadScene(args.scene, scene);
     const TaskProgress progress = cli::consoleProgress(err);
@@ -156,12 +144,7 @@ int runReport(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& 
     const int pages = doc.writePdf(args.pdf, args.options.paper, metadata);
     out << "wrote " << args.pdf.string() << " (" << pages << " pages)\n";
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps report: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 const char* kAnimateUsage =
@@ -299,19 +282,7 @@ void printSequence(std::ostream& out, const render::FrameSequence& sequence)
 
 int runAnimate(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
-  AnimateArgs args;
-  if (auto problem = parseAnimate(argv, args))
-  {
-    err << "caps animate: " << *problem << "\n" << kAnimateUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kAnimateUsage;
-    return 0;
-  }
-  try
-  {
+  return cli::runCommand<AnimateArgs>("animate", kAnimateUsage, argv, out, err, parseAnimate, [&](AnimateArgs& args) {
     Scene scene;
     loadScene(args.scene, scene);
     const TaskProgress progress = cli::consoleProgress(err);
@@ -328,12 +299,7 @@ int runAnimate(ModuleLogic&, const std::vector<std::string>& argv, std::ostream&
     if (!result.videoMessage.empty())
       out << result.videoMessage << "\n";
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps animate: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 const char* kSnapshotUsage =

@@ -99,20 +99,8 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, SegmentAr
 int runSegment(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
                std::ostream& err)
 {
-  SegmentArgs args;
-  if (auto problem = parse(argv, args))
-  {
-    err << "caps segment: " << *problem << "\n" << kSegmentUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kSegmentUsage;
-    return 0;
-  }
   auto& logic = static_cast<SegmentLogic&>(moduleLogic);
-  try
-  {
+  return cli::runCommand<SegmentArgs>("segment", kSegmentUsage, argv, out, err, parse, [&](SegmentArgs& args) {
     cli::makeOutputFolder(args.out);
     const auto start = std::chrono::steady_clock::now();
     const TaskProgress progress = cli::consoleProgress(err);
@@ -177,12 +165,7 @@ int runSegment(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, s
     for (const auto& file : written)
       out << "wrote " << (args.out / file).string() << "\n";
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps segment: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 } // namespace

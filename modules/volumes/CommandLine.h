@@ -8,8 +8,9 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
-#include <iosfwd>
+#include <exception>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,42 @@ std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
 /// Creates the output folder of a command.
 /// @throws std::runtime_error naming it when it cannot be made.
 void makeOutputFolder(const std::filesystem::path& folder);
+
+/// Parses a command's arguments into its Args; an error text, or nothing.
+template <class Args>
+using CommandParser = std::function<std::optional<std::string>(const std::vector<std::string>& argv, Args& args)>;
+
+/// Runs command `caps NAME` as every command runs: @a parse reads @a argv
+/// (its error text goes to @a err with the usage: exit status 2); with
+/// --help (Args::help) the usage goes to @a out (0); otherwise @a run, whose
+/// exit status is the command's, and whose exception is printed as
+/// "caps NAME: what" (1).
+template <class Args>
+int runCommand(const std::string& name, const std::string& usage, const std::vector<std::string>& argv,
+               std::ostream& out, std::ostream& err, const CommandParser<Args>& parse,
+               const std::function<int(Args& args)>& run)
+{
+  Args args;
+  if (auto problem = parse(argv, args))
+  {
+    err << "caps " << name << ": " << *problem << "\n" << usage;
+    return 2;
+  }
+  if (args.help)
+  {
+    out << usage;
+    return 0;
+  }
+  try
+  {
+    return run(args);
+  }
+  catch (const std::exception& e)
+  {
+    err << "caps " << name << ": " << e.what() << "\n";
+    return 1;
+  }
+}
 
 /// Parses `--series N|UID` into @a options (N counts from 1); an error text on failure.
 std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOptions& options);

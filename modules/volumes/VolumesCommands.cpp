@@ -126,59 +126,26 @@ VolumeNode* loadFor(VolumesLogic& logic, const CommonArgs& args, std::ostream& e
 int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out,
             std::ostream& err)
 {
-  CommonArgs args;
-  if (auto problem = parse(argv, false, args))
-  {
-    err << "caps info: " << *problem << "\n" << kInfoUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kInfoUsage;
-    return 0;
-  }
-  // info describes one series: with several and none named, list them.
-  args.read.requireSingleSeries = true;
-  try
-  {
+  const auto parseInfo = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, false, args); };
+  return cli::runCommand<CommonArgs>("info", kInfoUsage, argv, out, err, parseInfo, [&](CommonArgs& args) {
+    // info describes one series: with several and none named, list them.
+    args.read.requireSingleSeries = true;
     VolumeNode* volume = loadFor(static_cast<VolumesLogic&>(logic), args, err);
     out << VolumesLogic::describe(*volume);
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps info: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 int runSlices(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out,
               std::ostream& err)
 {
-  CommonArgs args;
-  if (auto problem = parse(argv, true, args))
-  {
-    err << "caps slices: " << *problem << "\n" << kSlicesUsage;
-    return 2;
-  }
-  if (args.help)
-  {
-    out << kSlicesUsage;
-    return 0;
-  }
-  try
-  {
+  const auto parseSlices = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, true, args); };
+  return cli::runCommand<CommonArgs>("slices", kSlicesUsage, argv, out, err, parseSlices, [&](CommonArgs& args) {
     VolumeNode* volume = loadFor(static_cast<VolumesLogic&>(logic), args, err);
-    for (const auto& file :
-         VolumesLogic::writeMiddleSlices(*volume, args.out, args.window, args.level))
+    for (const auto& file : VolumesLogic::writeMiddleSlices(*volume, args.out, args.window, args.level))
       out << "wrote " << file.string() << "\n";
     return 0;
-  }
-  catch (const std::exception& e)
-  {
-    err << "caps slices: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
 
 } // namespace
