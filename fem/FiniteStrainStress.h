@@ -1,6 +1,6 @@
 #pragma once
 /// @file FiniteStrainStress.h
-/// @brief Stress output of the large-deformation path (issue 19): Cauchy and
+/// @brief Stress output of the large-deformation path: Cauchy and
 /// second Piola-Kirchhoff stress at the integration points and at the nodes,
 /// with det F and the principal stretches.
 

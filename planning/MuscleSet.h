@@ -1,6 +1,6 @@
 #pragma once
 /// @file MuscleSet.h
-/// @brief Facial muscles as text files in data/muscles/ (issue 8, item 1):
+/// @brief Facial muscles as text files in data/muscles/:
 /// each muscle a set of force functions (thesis §4.6.2, Table 4.7,
 /// eq. 4.40–4.42) whose origins and insertions are placed relative to facial
 /// landmarks, so one set fits any patient.

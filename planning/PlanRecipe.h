@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanRecipe.h
-/// @brief A plan as the list of operations that made it (issue 5 item 8):
+/// @brief A plan as the list of operations that made it:
 /// the procedure placed, its parameters, the points moved and offset, with
 /// the content hash of the CT it was made on and the software version, so
 /// rerunning it on the same CT gives the same prediction bit for bit.
@@ -79,7 +79,7 @@ struct UndermineRegion
   UnderminedRegion region;
 };
 
-/// Draws a cut by hand (issue 6: points clicked one by one on the skin),
+/// Draws a cut by hand (points clicked one by one on the skin),
 /// (θn, zn) in scalpel order, at least 2. It starts the plan afresh like
 /// PlaceProcedure, with no procedure: the chart is centred on the middle of
 /// the points, and the two lips of the cut are sewn back together edge to

@@ -1,7 +1,7 @@
 #pragma once
 /// @file WoundStress.h
-/// @brief The largest stress in the skin near the closed wound (issue 9
-/// item 3; thesis §4.7, eq. 4.47–4.48: stress recovered from the solution;
+/// @brief The largest stress in the skin near the closed wound
+/// (thesis §4.7, eq. 4.47–4.48: stress recovered from the solution;
 /// §3.2.4: the tension of a closure is what undermining relieves).
 
 #include <Eigen/Core>

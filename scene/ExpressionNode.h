@@ -7,7 +7,7 @@
 
 namespace caps {
 
-/// @brief A named facial expression (issue 8 item 4, thesis §5.3, Fig.
+/// @brief A named facial expression (thesis §5.3, Fig.
 /// 5.15–5.18): how strongly each muscle of a muscle set contracts.
 ///
 /// Activations are per fitted muscle id ("zygomaticus_major_left"), 0 at

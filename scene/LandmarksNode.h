@@ -10,7 +10,7 @@ namespace caps {
 
 /// @brief Named points on the patient (nasion, pogonion, the corner of the
 /// mouth...) placed by the surgeon while reviewing the tissue thickness;
-/// the muscle sets of issue 8 are placed relative to them. Small fields only.
+/// the muscle sets (planning/MuscleSet.h) are placed relative to them. Small fields only.
 class LandmarksNode : public Node {
  public:
   struct Landmark {

@@ -50,7 +50,7 @@ class PlanNode : public Node {
   const std::vector<Eigen::Vector2d>& borderOffsets() const { return borderOffsets_; }
   void setBorderOffsets(std::vector<Eigen::Vector2d> offsets);
 
-  /// @name How the plan was made (issue 5 item 8)
+  /// @name How the plan was made
   /// The operations that made it, as plan.json writes them (the Incision
   /// module's PlanRecipe reads and checks them; the scene keeps them as
   /// given), the SHA-256 of the CT they were applied to and the CAPS

@@ -1,6 +1,6 @@
 #pragma once
 /// @file HeadAxis.h
-/// @brief Fitting the cylinder axis to the head from the body mask (issue 3, item 3).
+/// @brief Fitting the cylinder axis to the head from the body mask.
 
 #include <vector>
 
@@ -72,7 +72,7 @@ struct HeadAxisFit
 /// has fewer than two usable slices.
 HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options = {});
 
-/// The axis the user sets (issue 3 item 3: "can be set by the user"), through
+/// The axis the user sets (when the fitted one is not wanted), through
 /// @a point along @a direction (LPS mm; flipped to point superior), with the z
 /// range covering the whole body mask like fitHeadAxis and its grid
 /// (options.nTheta × options.nZ). The result has userDefined set and no centroids.

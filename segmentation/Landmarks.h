@@ -1,6 +1,6 @@
 #pragma once
 /// @file Landmarks.h
-/// @brief Facial soft-tissue landmarks on the cylindrical frame, thickness at them, CSV (issue 3, item 5).
+/// @brief Facial soft-tissue landmarks on the cylindrical frame, thickness at them, CSV.
 
 #include <filesystem>
 #include <string>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file RangeMapBuilder.h
-/// @brief Skin and bone range maps from a CT and its body and bone masks (issue 3, item 4).
+/// @brief Skin and bone range maps from a CT and its body and bone masks.
 
 #include <cstddef>
 

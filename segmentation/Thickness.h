@@ -1,6 +1,6 @@
 #pragma once
 /// @file Thickness.h
-/// @brief Soft-tissue thickness from the skin and bone range maps (issue 3, item 5).
+/// @brief Soft-tissue thickness from the skin and bone range maps.
 
 #include <cstddef>
 

@@ -1,5 +1,5 @@
 // "A slider moved" → "the expression face updated" on the sample CT's whole
-// face (issue 8 target: under 16 ms), against solving the same combined
+// face (target: under 16 ms), against solving the same combined
 // muscle load with the finite element model (factor kept) in the same run:
 // the superposition of §3.1.2 is a weighted sum of the unit responses and a
 // rewrite of the surface's points, no finite element work.

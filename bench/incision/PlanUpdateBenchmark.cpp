@@ -1,5 +1,5 @@
 // "A plan point moved" → "new displayed deformed surface" for the default
-// Z-plasty on the sample CT (issue 5 target: under 300 ms on 2 cores), split
+// Z-plasty on the sample CT (target: under 300 ms on 2 cores), split
 // by phase (mesh, assemble, factor, solve, surface update), against CalculiX
 // solving the same finite element model (same nodes, elements, materials,
 // fixed nodes and suture equations) in the same run when `ccx` is on the path.

@@ -1,5 +1,5 @@
 // From a loaded 512 x 512 x 200 CT to the skin and bone range maps and the
-// thickness maps (issue 3 target: under 2 s on 2 cores), against the time
+// thickness maps (target: under 2 s on 2 cores), against the time
 // VTK's flying edges takes to extract the skin isosurface of the same volume,
 // measured in the same run. The CT is the top 200 slices of the embedded
 // sample (512 x 512 x 295); the masks are a plain threshold + largest

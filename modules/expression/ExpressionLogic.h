@@ -1,6 +1,6 @@
 #pragma once
 /// @file ExpressionLogic.h
-/// @brief Expressions as named activation sets (issue 8 item 4, thesis §5.3,
+/// @brief Expressions as named activation sets (thesis §5.3,
 /// Fig. 5.14–5.18) and the face model that shows them in real time by
 /// superposition (§3.1.2). No widgets: the panel and the tests drive it.
 ///

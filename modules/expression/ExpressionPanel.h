@@ -1,10 +1,10 @@
 #pragma once
 /// @file ExpressionPanel.h
-/// @brief The Expression module's panel (issue 8 item 4): builds the face
+/// @brief The Expression module's panel: builds the face
 /// model, then a slider per expression and per muscle moves the skin in
 /// real time by superposition (thesis §3.1.2, §5.3, Fig. 5.14–5.18);
 /// expressions are saved in the scene, recalled and played. A predicted
-/// plan is studied in the face (item 5, §5.4): its skin after the operation
+/// plan is studied in the face (§5.4): its skin after the operation
 /// follows the sliders and a fingertip, its contour bumps compared with rest.
 
 #include <memory>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanStudy.h
-/// @brief A predicted plan studied in the whole face (issue 8 item 5, thesis
+/// @brief A predicted plan studied in the whole face (thesis
 /// §5.4): its post-operative skin follows the muscles' activations at
 /// display rate, its contour bumps around the incision are compared at rest
 /// and loaded, and a fingertip pushes its skin along a path. No widgets: the

@@ -82,7 +82,7 @@ public:
   {
     NodeId plan, mesh, solution, skinBefore, skinAfter;
   };
-  /// Puts a predicted plan into the scene (issue 5 item 6): a Plan node
+  /// Puts a predicted plan into the scene: a Plan node
   /// (plan and recipe, drawn on @a skinMapId), its FeMesh node, the Solution
   /// node with the displacements, and the display surfaces before and after
   /// the operation (Surface nodes, §4.7). @a name names them ("Z-plasty 1").

@@ -1,6 +1,6 @@
 #pragma once
 /// @file IncisionPanel.h
-/// @brief The incision editor (issue 6 item 4): a procedure placed by a
+/// @brief The incision editor: a procedure placed by a
 /// click on the 3D skin, drawn on it, measured on it, and edited with undo.
 
 #include <array>

@@ -1,5 +1,5 @@
 // `caps plan`: a procedure placed on a patient's skin and simulated end to
-// end (issue 5 item 7): CT → skin and bone range maps → plan → measurements
+// end: CT → skin and bone range maps → plan → measurements
 // on the skin → mesh skin to bone → sutures closed → predicted skin.
 
 #include "modules/incision/PlanCommands.h"

@@ -56,7 +56,7 @@ struct SkinAndBoneMaps
 
 /// @class RangeMapLogic
 /// @brief Cylindrical range maps of the skin and bone and the soft-tissue
-/// thickness (issue 3, items 3–5), as scene nodes with roles "skin", "bone",
+/// thickness, as scene nodes with roles "skin", "bone",
 /// "thickness" and "thickness-normal".
 ///
 /// run() = the label map of the volume (the Segment module's, made first if

@@ -1,7 +1,7 @@
 #pragma once
 /// @file RangeMapPanel.h
 /// @brief The RangeMap module's panel: builds the range and thickness maps,
-/// then the thickness review (issue 6 item 3): the unwrapped map with a
+/// then the thickness review: the unwrapped map with a
 /// probe, the thickness painted on the 3D skin, its histogram, and
 /// landmarks with their thickness, exportable as CSV.
 

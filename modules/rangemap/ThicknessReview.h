@@ -1,7 +1,7 @@
 #pragma once
 /// @file ThicknessReview.h
 /// @brief What the surgeon reads off the range maps while reviewing the soft
-/// tissue (issue 6 item 3, thesis §4.2): the values at a point of the
+/// tissue (thesis §4.2): the values at a point of the
 /// unwrapped (θ, z) chart, the thickness painted on the skin surface, its
 /// histogram over the face, and landmarks with their thickness. No widgets.
 

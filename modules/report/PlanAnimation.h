@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanAnimation.h
-/// @brief A plan's animations (issue 7 item 3; thesis §3.3.3 documentation):
+/// @brief A plan's animations (thesis §3.3.3 documentation):
 /// the skin morphing from before the operation to the predicted result, and
 /// a turntable around the head with the incision drawn, found in the scene
 /// and written by render/Animation.h.

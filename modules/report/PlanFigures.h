@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanFigures.h
-/// @brief The report's figures (issue 7 items 1 and 4): the incision on the
+/// @brief The report's figures: the incision on the
 /// face from the front, obliquely and in profile; the skin before and after
 /// from the same close-up camera; the stress map; the thickness map
 /// unwrapped and painted on the face; the storyboard. Renders are made

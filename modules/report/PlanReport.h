@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanReport.h
-/// @brief The plan report (issue 7; thesis §2.1 why a plan is documented,
+/// @brief The plan report (thesis §2.1 why a plan is documented,
 /// §3.3.3 documentation and storyboards, §5.6 assumptions made explicit):
 /// what it says about the patient and about each plan of a scene, computed
 /// by the plan logic, and the document built from it.

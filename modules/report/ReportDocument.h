@@ -2,8 +2,8 @@
 /// @file ReportDocument.h
 /// @brief A printed document built from headings, paragraphs, tables and
 /// figures, laid out by Qt's rich-text engine onto pages of a PDF file or a
-/// printer, with the patient line and the page number on every page (issue 7;
-/// thesis §2.1: a plan is documented for the team, the patient and the record).
+/// printer, with the patient line and the page number on every page
+/// (thesis §2.1: a plan is documented for the team, the patient and the record).
 
 #include <filesystem>
 #include <string>

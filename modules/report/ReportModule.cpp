@@ -1,4 +1,4 @@
-// The Report module plugin: the plan report (issue 7), `caps report`.
+// The Report module plugin: the plan report, `caps report`.
 
 #include <QApplication>
 #include <QFileDialog>

@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanComparison.h
-/// @brief Two predicted plans side by side (issue 6 item 6: e.g. a Z-plasty
+/// @brief Two predicted plans side by side (e.g. a Z-plasty
 /// at 45° against one at 60°): one 3D view each, one camera for both, the
 /// same quantity over the same colour range, so a colour means the same
 /// value on the left and on the right.

@@ -1,6 +1,6 @@
 #pragma once
 /// @file ResultsLogic.h
-/// @brief Logic of the Results module (issue 6 item 6): how the surgeon
+/// @brief Logic of the Results module: how the surgeon
 /// looks at a predicted plan (thesis §4.7 display of the result, §3.3.3
 /// documentation). The skin between before and after the operation, its
 /// colouring by stress, displacement or strain, the numbers of the closure

@@ -1,6 +1,6 @@
 #pragma once
 /// @file ResultsPanel.h
-/// @brief The Results module's panel (issue 6 item 6): a predicted plan
+/// @brief The Results module's panel: a predicted plan
 /// shown between before and after the operation (slider, pre/post, play),
 /// coloured by stress, displacement or strain, its numbers, the stress and
 /// displacement along the incision, and snapshots for the storyboard

@@ -50,7 +50,7 @@ struct SegmentationResult
 };
 
 /// @class SegmentLogic
-/// @brief Skin and bone of a head CT (issue 3, item 2), as scene nodes.
+/// @brief Skin and bone of a head CT, as scene nodes.
 ///
 /// segment() = compute() (no scene: the GUI runs it on a worker thread) +
 /// addToScene() (replaces an earlier segmentation of the same volume). The

@@ -1,6 +1,6 @@
 #pragma once
 /// @file PlanSimulationRun.h
-/// @brief The headless side of the Simulate panel (issue 6 item 5): a plan
+/// @brief The headless side of the Simulate panel: a plan
 /// of the scene with its options and materials → the prediction nodes
 /// `caps plan` makes (thesis §4.5–4.7), a model drawn by the engineering
 /// conventions (§3.3.1), and a summary. No widgets: the panel only gathers
@@ -90,7 +90,7 @@ struct PlanRunResult
   vtkSmartPointer<vtkPolyData> modelLines;
 };
 
-/// The band around the wound in which the peak skin stress is reported (mm; issue 9).
+/// The band around the wound in which the peak skin stress is reported (mm).
 inline constexpr double kWoundRadius = 10.0;
 
 /// @brief Runs a prediction: the skin's shade from the CT, simulatePlan(),

@@ -1,6 +1,6 @@
 #pragma once
 /// @file SimulatePanel.h
-/// @brief The Simulate module's panel (issue 6 item 5): a planned incision
+/// @brief The Simulate module's panel: a planned incision
 /// turned into a prediction. Choose a plan, the tissue materials and the
 /// mesh; see the model's size before running; Run (F5) in the background
 /// with Cancel; read the closure force and the skin stress near the wound;

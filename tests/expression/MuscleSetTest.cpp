@@ -1,4 +1,4 @@
-// Muscle sets (issue 8, item 1; thesis §4.6.2, §5.3): the file format and
+// Muscle sets (thesis §4.6.2, §5.3): the file format and
 // its error messages, the fit of the default set on an analytic cylinder
 // face (exact mirror images, exact scaling with the face, exact depths) and
 // on the sample CT's face (every muscle there, attachments in the soft

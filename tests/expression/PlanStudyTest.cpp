@@ -1,4 +1,4 @@
-// The plan study of the Expressions panel (issue 8 item 5, thesis §5.4) on
+// The plan study of the Expressions panel (thesis §5.4) on
 // the sample CT: the demo's Z-plasty on the left cheek inside the whole-face
 // model. Its real-time skin is checked against the display surface given
 // the model's displacement directly (under the muscles and under a

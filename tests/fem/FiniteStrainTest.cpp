@@ -1,4 +1,4 @@
-// The finite-strain path (issue 19): hyperelastic materials, the Total
+// The finite-strain path: hyperelastic materials, the Total
 // Lagrangian element and the Newton solver, each checked against something
 // independent: finite differences of the energy and of the forces, closed
 // forms from the strain energy, exact rigid motions, the linear solver.

@@ -1,6 +1,6 @@
 // A plan in the scene: everything an IncisionPlan is goes into a PlanNode,
 // through the scene's JSON, and back; the plan read back predicts the same
-// displacements bit for bit (issue 5 item 8, on a phantom).
+// displacements bit for bit (on a phantom).
 
 #include <gtest/gtest.h>
 

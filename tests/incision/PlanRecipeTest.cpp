@@ -1,4 +1,4 @@
-// Reproducible plans (issue 5 item 8): a plan as the operations that made it,
+// Reproducible plans: a plan as the operations that made it,
 // applied again to the same skin, gives the same plan and the same
 // prediction bit for bit; every bad input of the issue is refused by the
 // operation that brings it, with the plan kept as it was; plan files that are

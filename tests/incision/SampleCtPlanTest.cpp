@@ -71,7 +71,7 @@ std::unique_ptr<Scene> SampleCtPlan::scene_;
 std::unique_ptr<IncisionLogic> SampleCtPlan::logic_;
 std::unique_ptr<RangeMapOutput> SampleCtPlan::maps_;
 
-// Issue 5: the Z-plasty's predicted gain for 30–90° on the sample, next to
+// The Z-plasty's predicted gain for 30–90° on the sample, next to
 // the Fig. 2.2 table: positive and ordered by angle. On the left cheek, where
 // `caps demo` puts its Z.
 TEST_F(SampleCtPlan, ZPlastyGainOnTheCheekIsPositiveAndOrderedByAngle)

@@ -439,7 +439,7 @@ std::vector<double> vtuPointArray(const fs::path& file, const char* name)
 
 } // namespace
 
-// Issue 5 item 8: a plan saved as the operations that made it, replayed on
+// A plan saved as the operations that made it, replayed on
 // the same CT, predicts the same displacements bit for bit; on a CT that
 // differs by one voxel it is refused.
 TEST(ModuleCommands, PlanReplaysToTheSamePredictionBitForBit)

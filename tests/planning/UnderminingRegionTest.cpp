@@ -1,4 +1,4 @@
-// Undermined regions the surgeon draws on the skin (issue 9 item 2; thesis
+// Undermined regions the surgeon draws on the skin (thesis
 // §3.2.2, §3.2.4 item 2) on the cylinder phantom (skin r = 80 mm, bone
 // r = 70 mm): a region releases exactly the bone nodes of the surface
 // vertices inside it, counted here with a winding number (the library uses

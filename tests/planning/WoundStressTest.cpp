@@ -1,4 +1,4 @@
-// The largest skin stress near the wound (issue 9 item 3) on the cylinder
+// The largest skin stress near the wound on the cylinder
 // phantom (skin r = 80 mm over bone r = 70 mm), checked against a second
 // recovery of the stress and against the symmetry of an ellipse closure.
 

@@ -1,4 +1,4 @@
-// Animation export (issue 7 item 3) on the sample CT's demo scene: the pre →
+// Animation export on the sample CT's demo scene: the pre →
 // post frames start at a render of the skin before and end at one of the
 // skin after from the same camera, and move away from the start step by
 // step; the turntable starts at the face and is at the back half way round;
@@ -456,7 +456,7 @@ TEST(PlanAnimation, ProgressIsReportedAndCancelStops)
   EXPECT_FALSE(fs::exists(out / "pre-post" / frameName(2)));
 }
 
-// A morph there and back (an expression played and released, issue 8): the
+// A morph there and back (an expression played and released): the
 // frames go out to the peak and return through the same shapes, so frame k
 // and frame 2(n−1)−k are the same picture; the peak is the second surface.
 TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)

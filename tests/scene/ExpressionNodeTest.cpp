@@ -1,4 +1,4 @@
-// ExpressionNode (issue 8 item 4): a named set of muscle activations saved
+// ExpressionNode: a named set of muscle activations saved
 // in the scene bundle, undoable edits, and clear errors for bad fields.
 
 #include <gtest/gtest.h>
