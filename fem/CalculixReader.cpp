@@ -187,91 +187,110 @@ private:
       if (material_.empty()) fail(line_, "*EXPANSION outside a *MATERIAL");
       return;
     }
-    if (keyword == "*STEP") {
-      if (++steps_ > 1) fail(line_, "a second *STEP: only one static step is supported");
-      if (params.count("NLGEOM")) {
-        const std::string v = params.at("NLGEOM");
-        if (v != "" && v != "YES" && v != "NO") fail(line_, "*STEP, NLGEOM=" + v + ": expected YES or NO");
-        nlgeom_ = v != "NO";
-      }
-      return;
-    }
+    if (keyword == "*STEP")
+      return readStep(params);
     if (keyword == "*STATIC") return readStatic(params, data);
     if (keyword == "*HYPERELASTIC") return readHyperelastic(params, data);
     if (keyword == "*NODE") return readNodes(params, data);
     if (keyword == "*ELEMENT") return readElements(params, data);
     if (keyword == "*NSET" || keyword == "*ELSET") return readSet(keyword, params, data);
-    if (keyword == "*MATERIAL") {
-      material_ = required(params, "NAME", keyword);
-      if (materialIndex_.count(material_)) fail(line_, "material " + material_ + " is defined twice");
-      materialIndex_[material_] = int(names_.size());
-      names_.push_back(material_);
-      materials_[int(names_.size()) - 1] = {};
-      return;
-    }
-    if (keyword == "*ELASTIC" || keyword == "*DENSITY") {
-      if (material_.empty()) fail(line_, keyword + " outside a *MATERIAL");
-      if (keyword == "*ELASTIC" && hyperelastic_.count(materialIndex_[material_]))
-        fail(line_, "material " + material_ + " has both *ELASTIC and *HYPERELASTIC");
-      if (keyword == "*ELASTIC" && params.count("TYPE") && params.at("TYPE") != "ISO" && params.at("TYPE") != "ISOTROPIC")
-        fail(line_, "*ELASTIC, TYPE=" + params.at("TYPE") + " is not supported (isotropic only)");
-      if (data.size() != 1) fail(line_, keyword + " needs exactly one data line (temperature tables are not supported)");
-      const auto f = split(data[0].text);
-      LinearElasticMaterial& m = materials_[materialIndex_[material_]];
-      if (keyword == "*ELASTIC") {
-        elastic_.insert(materialIndex_[material_]);
-        if (f.size() < 2) fail(data[0].number, "*ELASTIC needs E, nu");
-        m.youngsModulus = number(f[0], data[0].number);
-        m.poissonRatio = number(f[1], data[0].number);
-      } else {
-        m.density = number(f[0], data[0].number);
-      }
-      return;
-    }
-    if (keyword == "*SOLID SECTION") {
-      const std::string elset = required(params, "ELSET", keyword);
-      const std::string material = required(params, "MATERIAL", keyword);
-      auto m = materialIndex_.find(material);
-      if (m == materialIndex_.end()) fail(line_, "*SOLID SECTION names material " + material + ", which is not defined");
-      if (params.count("ORIENTATION") && !orientations_.count(params.at("ORIENTATION")))
-        fail(line_, "*SOLID SECTION names orientation " + params.at("ORIENTATION") + ", which is not defined");
-      for (long e : elementSet(elset, line_)) sections_[e] = m->second;
-      return;
-    }
+    if (keyword == "*MATERIAL")
+      return readMaterial(params, keyword);
+    if (keyword == "*ELASTIC" || keyword == "*DENSITY")
+      return readMaterialConstant(keyword, params, data);
+    if (keyword == "*SOLID SECTION")
+      return readSolidSection(params, keyword);
     if (keyword == "*BOUNDARY") return readBoundary(params, data);
-    if (keyword == "*CLOAD") {
-      for (const Line& l : data) {
-        const auto f = split(l.text);
-        if (f.size() < 3) fail(l.number, "*CLOAD needs node, DOF, magnitude");
-        const long dof = integer(f[1], l.number);
-        if (dof < 1 || dof > 3) fail(l.number, "*CLOAD on DOF " + f[1] + ": solids have DOFs 1..3");
-        Eigen::Vector3d force = Eigen::Vector3d::Zero();
-        force[dof - 1] = number(f[2], l.number);
-        for (long n : nodesOf(f[0], l.number)) forces_.push_back({nodeIndex(n, l.number), force});
-      }
-      return;
-    }
-    if (keyword == "*DLOAD") {
-      for (const Line& l : data) {
-        const auto f = split(l.text);
-        if (f.size() < 2) fail(l.number, "*DLOAD needs an element (set) and a load type");
-        const std::string type = upper(f[1]);
-        if (type.size() > 1 && type[0] == 'P' && type.find_first_not_of("0123456789", 1) == std::string::npos) {
-          readFacePressure(f, type, l.number);
-          continue;
-        }
-        if (type != "GRAV")
-          fail(l.number, "*DLOAD type " + type + " is not supported (GRAV and uniform face pressure P1..P6 are)");
-        if (f.size() < 6) fail(l.number, "*DLOAD GRAV needs magnitude, nx, ny, nz");
-        const Eigen::Vector3d g = number(f[2], l.number) * Eigen::Vector3d(number(f[3], l.number), number(f[4], l.number),
-                                                                         number(f[5], l.number));
-        for (long e : elementsOf(f[0], l.number)) gravity_.emplace(e, Eigen::Vector3d::Zero()).first->second += g;
-        gravityLine_ = l.number;
-      }
-      return;
-    }
+    if (keyword == "*CLOAD")
+      return readConcentratedLoads(data);
+    if (keyword == "*DLOAD")
+      return readDistributedLoads(data);
     if (keyword == "*EQUATION") return readEquations(data);
     fail(line_, "unsupported keyword " + keyword);
+  }
+
+  /// *STEP[, NLGEOM]: the one static step, large deformation or not.
+  void readStep(const std::map<std::string, std::string>& params) {
+    if (++steps_ > 1) fail(line_, "a second *STEP: only one static step is supported");
+    if (params.count("NLGEOM")) {
+      const std::string v = params.at("NLGEOM");
+      if (v != "" && v != "YES" && v != "NO") fail(line_, "*STEP, NLGEOM=" + v + ": expected YES or NO");
+      nlgeom_ = v != "NO";
+    }
+  }
+
+  /// *MATERIAL, NAME=: the material the next *ELASTIC or *DENSITY describe.
+  void readMaterial(const std::map<std::string, std::string>& params, const std::string& keyword) {
+    material_ = required(params, "NAME", keyword);
+    if (materialIndex_.count(material_)) fail(line_, "material " + material_ + " is defined twice");
+    materialIndex_[material_] = int(names_.size());
+    names_.push_back(material_);
+    materials_[int(names_.size()) - 1] = {};
+  }
+
+  /// *ELASTIC (isotropic E, nu) or *DENSITY of the current material.
+  void readMaterialConstant(const std::string& keyword, const std::map<std::string, std::string>& params,
+                            std::span<const Line> data) {
+    if (material_.empty()) fail(line_, keyword + " outside a *MATERIAL");
+    if (keyword == "*ELASTIC" && hyperelastic_.count(materialIndex_[material_]))
+      fail(line_, "material " + material_ + " has both *ELASTIC and *HYPERELASTIC");
+    if (keyword == "*ELASTIC" && params.count("TYPE") && params.at("TYPE") != "ISO" && params.at("TYPE") != "ISOTROPIC")
+      fail(line_, "*ELASTIC, TYPE=" + params.at("TYPE") + " is not supported (isotropic only)");
+    if (data.size() != 1) fail(line_, keyword + " needs exactly one data line (temperature tables are not supported)");
+    const auto f = split(data[0].text);
+    LinearElasticMaterial& m = materials_[materialIndex_[material_]];
+    if (keyword == "*ELASTIC") {
+      elastic_.insert(materialIndex_[material_]);
+      if (f.size() < 2) fail(data[0].number, "*ELASTIC needs E, nu");
+      m.youngsModulus = number(f[0], data[0].number);
+      m.poissonRatio = number(f[1], data[0].number);
+    } else {
+      m.density = number(f[0], data[0].number);
+    }
+  }
+
+  /// *SOLID SECTION, ELSET=, MATERIAL=[, ORIENTATION=]: the elements' material.
+  void readSolidSection(const std::map<std::string, std::string>& params, const std::string& keyword) {
+    const std::string elset = required(params, "ELSET", keyword);
+    const std::string material = required(params, "MATERIAL", keyword);
+    auto m = materialIndex_.find(material);
+    if (m == materialIndex_.end()) fail(line_, "*SOLID SECTION names material " + material + ", which is not defined");
+    if (params.count("ORIENTATION") && !orientations_.count(params.at("ORIENTATION")))
+      fail(line_, "*SOLID SECTION names orientation " + params.at("ORIENTATION") + ", which is not defined");
+    for (long e : elementSet(elset, line_)) sections_[e] = m->second;
+  }
+
+  /// *CLOAD lines: node (or set), DOF, magnitude.
+  void readConcentratedLoads(std::span<const Line> data) {
+    for (const Line& l : data) {
+      const auto f = split(l.text);
+      if (f.size() < 3) fail(l.number, "*CLOAD needs node, DOF, magnitude");
+      const long dof = integer(f[1], l.number);
+      if (dof < 1 || dof > 3) fail(l.number, "*CLOAD on DOF " + f[1] + ": solids have DOFs 1..3");
+      Eigen::Vector3d force = Eigen::Vector3d::Zero();
+      force[dof - 1] = number(f[2], l.number);
+      for (long n : nodesOf(f[0], l.number)) forces_.push_back({nodeIndex(n, l.number), force});
+    }
+  }
+
+  /// *DLOAD lines: gravity (GRAV) or a uniform pressure on an element face (P1..P6).
+  void readDistributedLoads(std::span<const Line> data) {
+    for (const Line& l : data) {
+      const auto f = split(l.text);
+      if (f.size() < 2) fail(l.number, "*DLOAD needs an element (set) and a load type");
+      const std::string type = upper(f[1]);
+      if (type.size() > 1 && type[0] == 'P' && type.find_first_not_of("0123456789", 1) == std::string::npos) {
+        readFacePressure(f, type, l.number);
+        continue;
+      }
+      if (type != "GRAV")
+        fail(l.number, "*DLOAD type " + type + " is not supported (GRAV and uniform face pressure P1..P6 are)");
+      if (f.size() < 6) fail(l.number, "*DLOAD GRAV needs magnitude, nx, ny, nz");
+      const Eigen::Vector3d g = number(f[2], l.number) * Eigen::Vector3d(number(f[3], l.number), number(f[4], l.number),
+                                                                       number(f[5], l.number));
+      for (long e : elementsOf(f[0], l.number)) gravity_.emplace(e, Eigen::Vector3d::Zero()).first->second += g;
+      gravityLine_ = l.number;
+    }
   }
 
   /// *STATIC[, DIRECT] with the optional line: initial increment, step
@@ -520,6 +539,15 @@ private:
 
   CalculixModel finish() {
     CalculixModel m;
+    finishMesh(m);
+    finishMaterials(m);
+    finishConstraints(m);
+    finishLoads(m);
+    return m;
+  }
+
+  /// The mesh: nodes, elements and the material each element's section gives.
+  void finishMesh(CalculixModel& m) {
     m.mesh.nodes.resize(3, Eigen::Index(coords_.size()));
     for (std::size_t i = 0; i < coords_.size(); ++i) m.mesh.nodes.col(Eigen::Index(i)) = coords_[i];
     m.nodeIds = nodeIds_;
@@ -533,6 +561,11 @@ private:
       elements_[e].region = s->second;
     }
     m.mesh.elements = elements_;
+  }
+
+  /// The materials, checked; a hyperelastic one with its small-strain limit
+  /// as the linear material, and the step it makes nonlinear.
+  void finishMaterials(CalculixModel& m) {
     // Hyperelastic materials: the table, and their small-strain limit as
     // the linear material (same density).
     for (auto& [region, h] : hyperelastic_) {
@@ -556,6 +589,11 @@ private:
       const std::string context = "material " + names_[std::size_t(region)];
       material.validate(context.c_str());
     }
+  }
+
+  /// Prescribed displacements, sutures (ties recognised among the
+  /// equations) and the other equations.
+  void finishConstraints(CalculixModel& m) {
     for (const Boundary& b : boundary_) m.constraints.prescribe(b.node, b.dof, b.value);
     // Auxiliary nodes: prescribed to (1, 0, 0).
     std::map<std::pair<int, int>, double> prescribed;
@@ -606,6 +644,10 @@ private:
         if (t.coefficient != 0.0) c.terms.push_back(t);
       m.constraints.equation(std::move(c));
     }
+  }
+
+  /// Nodal forces, face pressures and the one gravity of the model.
+  void finishLoads(CalculixModel& m) {
     m.load.nodalForces = forces_;
     for (const auto& [face, p] : pressures_) m.load.facePressures.push_back({face.first, face.second, p});
     // Gravity: one acceleration for every element with a density.
@@ -620,7 +662,6 @@ private:
                                "): only one acceleration for the whole model is supported");
       have = true;
     }
-    return m;
   }
 
   std::string source_;

@@ -151,6 +151,49 @@ bool hasExited(pid_t pid)
   return r == pid || r < 0;
 }
 
+/// The display number Xvfb writes on @a fd ("N\n" once it accepts
+/// connections; EOF means it died), waited for up to kStartTimeout; empty,
+/// with why in @a failure, when there is none.
+std::string readDisplayNumber(int fd, std::string& failure)
+{
+  std::string number;
+  const auto deadline = std::chrono::steady_clock::now() + kStartTimeout;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      failure = "it did not report a display within " + std::to_string(kStartTimeout.count()) + " s";
+      break;
+    }
+    pollfd p{fd, POLLIN, 0};
+    const int ready = ::poll(&p, 1, int(left.count()));
+    if (ready < 0 && errno == EINTR)
+      continue;
+    if (ready < 0) {
+      failure = std::string("poll failed: ") + std::strerror(errno);
+      break;
+    }
+    if (ready == 0)
+      continue;
+    char buffer[64];
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR)
+      continue;
+    if (n <= 0) {
+      failure = "it exited before accepting connections";
+      break;
+    }
+    number.append(buffer, std::size_t(n));
+    if (number.find('\n') != std::string::npos)
+      break;
+  }
+  if (failure.empty()) {
+    number = number.substr(0, number.find('\n'));
+    if (number.empty() || number.find_first_not_of("0123456789") != std::string::npos)
+      failure = "it reported an unexpected display \"" + number + "\"";
+  }
+  return number;
+}
+
 struct State
 {
   std::mutex mutex;
@@ -233,43 +276,8 @@ struct State
     }
     writeEnd.reset();
 
-    // Xvfb writes "N\n" once it accepts connections; EOF means it died.
-    std::string number;
     std::string failure;
-    const auto deadline = std::chrono::steady_clock::now() + kStartTimeout;
-    for (;;) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) {
-        failure = "it did not report a display within " + std::to_string(kStartTimeout.count()) + " s";
-        break;
-      }
-      pollfd p{readEnd.get(), POLLIN, 0};
-      const int ready = ::poll(&p, 1, int(left.count()));
-      if (ready < 0 && errno == EINTR)
-        continue;
-      if (ready < 0) {
-        failure = std::string("poll failed: ") + std::strerror(errno);
-        break;
-      }
-      if (ready == 0)
-        continue;
-      char buffer[64];
-      const ssize_t n = ::read(readEnd.get(), buffer, sizeof buffer);
-      if (n < 0 && errno == EINTR)
-        continue;
-      if (n <= 0) {
-        failure = "it exited before accepting connections";
-        break;
-      }
-      number.append(buffer, std::size_t(n));
-      if (number.find('\n') != std::string::npos)
-        break;
-    }
-    if (failure.empty()) {
-      number = number.substr(0, number.find('\n'));
-      if (number.empty() || number.find_first_not_of("0123456789") != std::string::npos)
-        failure = "it reported an unexpected display \"" + number + "\"";
-    }
+    const std::string number = readDisplayNumber(readEnd.get(), failure);
     if (!failure.empty()) {
       stopProcess(child);
       const std::string output = readLog(log.get());
