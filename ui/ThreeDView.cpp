@@ -429,6 +429,22 @@ bool ThreeDView::event(QEvent* event)
       event->accept();
       return true;
     }
+    if (type == QEvent::MouseButtonPress)
+      moved_since_press_ = false;
+    else if (type == QEvent::MouseMove && mouse->buttons() != Qt::NoButton)
+      moved_since_press_ = true;
+    if (type == QEvent::MouseButtonRelease && !moved_since_press_)
+    {
+      // A click leaves the camera as it was: the interactor style's closing
+      // render would draw the same picture again (most of a second with
+      // software OpenGL). Rendering is back on before mouseReleaseEvent
+      // reports the click, so whatever the click changes is drawn.
+      vtkRenderWindowInteractor* interactor = renderWindow()->GetInteractor();
+      interactor->EnableRenderOff();
+      const bool handled = QVTKOpenGLNativeWidget::event(event);
+      interactor->EnableRenderOn();
+      return handled;
+    }
   }
   return QVTKOpenGLNativeWidget::event(event);
 }
@@ -481,6 +497,7 @@ void ThreeDView::mouseMoveEvent(QMouseEvent* event)
 
 void ThreeDView::mouseReleaseEvent(QMouseEvent* event)
 {
+  renderWindow()->GetInteractor()->EnableRenderOn();
   if (dragging_ >= 0)
   {
     const int handle = dragging_;

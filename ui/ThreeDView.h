@@ -131,6 +131,7 @@ private:
   std::map<std::string, SurfaceStyle> styles_;
   QPoint press_position_;
   bool press_valid_ = false;
+  bool moved_since_press_ = false; ///< a button was down while the mouse moved (the camera turned)
   bool render_pending_ = false;
   vtkSmartPointer<vtkImageData> image_;
   vtkSmartPointer<vtkImageProperty> image_property_;
