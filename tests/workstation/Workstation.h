@@ -128,8 +128,8 @@ public:
   /// Where world point @a p (LPS mm) is in the 3D view, in widget pixels.
   QPoint threeDViewPointOf(const std::array<double, 3>& p)
   {
+    // The camera and the view's size make the projection: no redraw needed.
     vtkRenderer* renderer = threeDView().renderer();
-    threeDView().renderWindow()->Render();
     renderer->SetWorldPoint(p[0], p[1], p[2], 1.0);
     renderer->WorldToDisplay();
     double display[3];
