@@ -44,6 +44,9 @@ ThreeDView::ThreeDView(QWidget* parent) : QVTKOpenGLNativeWidget(parent)
 {
   auto window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
   setRenderWindow(window);
+  // Whatever starts a render (a resize, an explicit Render()) draws what a
+  // pending request asked for: that request is then done.
+  render_observer_ = window->AddObserver(vtkCommand::StartEvent, this, &ThreeDView::renderStarted);
   renderer_ = vtkSmartPointer<vtkRenderer>::New();
   renderer_->SetBackground(0.10, 0.11, 0.14);
   renderer_->SetBackground2(0.25, 0.27, 0.32);
@@ -79,7 +82,10 @@ ThreeDView::ThreeDView(QWidget* parent) : QVTKOpenGLNativeWidget(parent)
   setMinimumSize(160, 160);
 }
 
-ThreeDView::~ThreeDView() = default;
+ThreeDView::~ThreeDView()
+{
+  renderWindow()->RemoveObserver(render_observer_);
+}
 
 vtkRenderer* ThreeDView::renderer() const
 {
@@ -212,9 +218,14 @@ void ThreeDView::requestRender()
     return;
   render_pending_ = true;
   QTimer::singleShot(0, this, [this]() {
-    render_pending_ = false;
-    renderWindow()->Render();
+    if (render_pending_)
+      renderWindow()->Render(); // clears render_pending_
   });
+}
+
+void ThreeDView::renderStarted()
+{
+  render_pending_ = false;
 }
 
 void ThreeDView::setMarker(const std::array<double, 3>& position)
