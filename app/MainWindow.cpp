@@ -723,7 +723,7 @@ ViewCapture MainWindow::captureThreeDView()
 {
   ViewCapture capture;
   vtkRenderWindow* window = view3d_->renderWindow();
-  window->Render();
+  // The grabber renders the view itself before it reads it (ShouldRerender).
   auto grabber = vtkSmartPointer<vtkWindowToImageFilter>::New();
   grabber->SetInput(window);
   grabber->SetInputBufferTypeToRGB();

@@ -44,6 +44,9 @@ ThreeDView::ThreeDView(QWidget* parent) : QVTKOpenGLNativeWidget(parent)
 {
   auto window = vtkSmartPointer<vtkGenericOpenGLRenderWindow>::New();
   setRenderWindow(window);
+  // Whatever starts a render (a resize, an explicit Render()) draws what a
+  // pending request asked for: that request is then done.
+  render_observer_ = window->AddObserver(vtkCommand::StartEvent, this, &ThreeDView::renderStarted);
   renderer_ = vtkSmartPointer<vtkRenderer>::New();
   renderer_->SetBackground(0.10, 0.11, 0.14);
   renderer_->SetBackground2(0.25, 0.27, 0.32);
@@ -79,7 +82,10 @@ ThreeDView::ThreeDView(QWidget* parent) : QVTKOpenGLNativeWidget(parent)
   setMinimumSize(160, 160);
 }
 
-ThreeDView::~ThreeDView() = default;
+ThreeDView::~ThreeDView()
+{
+  renderWindow()->RemoveObserver(render_observer_);
+}
 
 vtkRenderer* ThreeDView::renderer() const
 {
@@ -212,9 +218,14 @@ void ThreeDView::requestRender()
     return;
   render_pending_ = true;
   QTimer::singleShot(0, this, [this]() {
-    render_pending_ = false;
-    renderWindow()->Render();
+    if (render_pending_)
+      renderWindow()->Render(); // clears render_pending_
   });
+}
+
+void ThreeDView::renderStarted()
+{
+  render_pending_ = false;
 }
 
 void ThreeDView::setMarker(const std::array<double, 3>& position)
@@ -429,6 +440,22 @@ bool ThreeDView::event(QEvent* event)
       event->accept();
       return true;
     }
+    if (type == QEvent::MouseButtonPress)
+      moved_since_press_ = false;
+    else if (type == QEvent::MouseMove && mouse->buttons() != Qt::NoButton)
+      moved_since_press_ = true;
+    if (type == QEvent::MouseButtonRelease && !moved_since_press_)
+    {
+      // A click leaves the camera as it was: the interactor style's closing
+      // render would draw the same picture again (most of a second with
+      // software OpenGL). Rendering is back on before mouseReleaseEvent
+      // reports the click, so whatever the click changes is drawn.
+      vtkRenderWindowInteractor* interactor = renderWindow()->GetInteractor();
+      interactor->EnableRenderOff();
+      const bool handled = QVTKOpenGLNativeWidget::event(event);
+      interactor->EnableRenderOn();
+      return handled;
+    }
   }
   return QVTKOpenGLNativeWidget::event(event);
 }
@@ -481,6 +508,7 @@ void ThreeDView::mouseMoveEvent(QMouseEvent* event)
 
 void ThreeDView::mouseReleaseEvent(QMouseEvent* event)
 {
+  renderWindow()->GetInteractor()->EnableRenderOn();
   if (dragging_ >= 0)
   {
     const int handle = dragging_;

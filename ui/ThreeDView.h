@@ -113,6 +113,8 @@ protected:
 
 private:
   void updateColourBar();
+  /// Any render of the window (observer of its StartEvent).
+  void renderStarted();
   /// The handle within a few pixels of @a at (the nearest), or -1.
   int handleNear(const QPoint& at) const;
   void updateHandles();
@@ -131,7 +133,9 @@ private:
   std::map<std::string, SurfaceStyle> styles_;
   QPoint press_position_;
   bool press_valid_ = false;
-  bool render_pending_ = false;
+  bool moved_since_press_ = false; ///< a button was down while the mouse moved (the camera turned)
+  bool render_pending_ = false; ///< a render was asked for and none has started since
+  unsigned long render_observer_ = 0;
   vtkSmartPointer<vtkImageData> image_;
   vtkSmartPointer<vtkImageProperty> image_property_;
   std::array<vtkSmartPointer<vtkImageSliceMapper>, 3> mappers_;

@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <vtkCamera.h>
+#include <vtkCommand.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 
@@ -61,10 +62,12 @@ public:
     window_->setUnattended(true);
     window_->resize(1500, 950);
     window_->show();
+    render_observer_ = threeDView().renderWindow()->AddObserver(vtkCommand::StartEvent, this, &Workstation::rendering);
     settle(200);
   }
   ~Workstation()
   {
+    threeDView().renderWindow()->RemoveObserver(render_observer_);
     window_.reset();
     session_.reset();
   }
@@ -128,8 +131,8 @@ public:
   /// Where world point @a p (LPS mm) is in the 3D view, in widget pixels.
   QPoint threeDViewPointOf(const std::array<double, 3>& p)
   {
+    // The camera and the view's size make the projection: no redraw needed.
     vtkRenderer* renderer = threeDView().renderer();
-    threeDView().renderWindow()->Render();
     renderer->SetWorldPoint(p[0], p[1], p[2], 1.0);
     renderer->WorldToDisplay();
     double display[3];
@@ -169,7 +172,11 @@ public:
   std::filesystem::path screenshot(const std::string& name)
   {
     settle(300);
-    threeDView().renderWindow()->Render();
+    // What the workstation changes asks the view for a render of its own
+    // (done by now); only a camera a test turned directly is not drawn yet.
+    vtkCamera* camera = threeDView().renderer()->GetActiveCamera();
+    if (camera != rendered_camera_ || camera->GetMTime() > rendered_camera_time_)
+      threeDView().renderWindow()->Render();
     const std::filesystem::path file = workstationArtifacts() / (name + ".png");
     EXPECT_TRUE(window_->grab().save(QString::fromStdString(file.string()))) << file;
     return file;
@@ -185,6 +192,16 @@ public:
   }
 
 private:
+  /// The 3D view starts a render: the camera it draws with.
+  void rendering()
+  {
+    rendered_camera_ = threeDView().renderer()->GetActiveCamera();
+    rendered_camera_time_ = rendered_camera_->GetMTime();
+  }
+
+  unsigned long render_observer_ = 0;
+  vtkCamera* rendered_camera_ = nullptr;
+  vtkMTimeType rendered_camera_time_ = 0;
   ModuleManager modules_;
   std::unique_ptr<Session> session_;
   std::unique_ptr<MainWindow> window_;
