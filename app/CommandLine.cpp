@@ -17,20 +17,19 @@ namespace fs = std::filesystem;
 namespace caps {
 namespace {
 
-const char* kDemoUsage =
-  "usage: caps demo [--out DIR]\n"
-  "\n"
-  "Runs the CAPS pipeline on the embedded sample head CT and writes its results\n"
-  "into DIR (default out/demo): info.txt (what was read), axial.png, coronal.png,\n"
-  "sagittal.png (middle slices, soft-tissue window); the skin and bone\n"
-  "label map (labels.nrrd, as `caps segment`; its surfaces are in the scene); the\n"
-  "range and thickness maps (skin-range, bone-range, thickness, thickness-normal\n"
-  ".nrrd, and the thickness review pictures skin-range.png, thickness.png,\n"
-  "thickness-normal.png, as `caps rangemap`); a Z-plasty on the left cheek and an\n"
-  "elliptical excision on the forehead, predicted (z-plasty/ and elliptical-excision/,\n"
-  "as `caps plan`); sample.caps (the scene, which `caps` opens and ParaView or\n"
-  "3D Slicer can read file by file); and plan-report.pdf, the printed plan of both\n"
-  "(as `caps report`).\n";
+const char* kDemoUsage = "usage: caps demo [--out DIR]\n"
+                         "\n"
+                         "Runs the CAPS pipeline on the embedded sample head CT and writes its results\n"
+                         "into DIR (default out/demo): info.txt (what was read), axial.png, coronal.png,\n"
+                         "sagittal.png (middle slices, soft-tissue window); the skin and bone\n"
+                         "label map (labels.nrrd, as `caps segment`; its surfaces are in the scene); the\n"
+                         "range and thickness maps (skin-range, bone-range, thickness, thickness-normal\n"
+                         ".nrrd, and the thickness review pictures skin-range.png, thickness.png,\n"
+                         "thickness-normal.png, as `caps rangemap`); a Z-plasty on the left cheek and an\n"
+                         "elliptical excision on the forehead, predicted (z-plasty/ and elliptical-excision/,\n"
+                         "as `caps plan`); sample.caps (the scene, which `caps` opens and ParaView or\n"
+                         "3D Slicer can read file by file); and plan-report.pdf, the printed plan of both\n"
+                         "(as `caps report`).\n";
 
 // Seconds since @a start, for the demo's step times.
 double secondsSince(std::chrono::steady_clock::time_point start)
@@ -39,14 +38,13 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 }
 
 // Runs a module command on the session's logic.
-int runModuleCommand(Session& session, const std::string& name,
-                     const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
+int runModuleCommand(Session& session, const std::string& name, const std::vector<std::string>& args, std::ostream& out,
+                     std::ostream& err)
 {
   auto [module, command] = session.modules().findCommand(name);
   if (!command)
   {
-    err << "caps: the command '" << name
-        << "' is not available: its module did not load (see caps --list-modules).\n";
+    err << "caps: the command '" << name << "' is not available: its module did not load (see caps --list-modules).\n";
     return 1;
   }
   return command->run(session.logic(*module), args, out, err);
@@ -81,8 +79,7 @@ std::string usage(const ModuleManager& modules)
   return out.str();
 }
 
-int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::ostream& out,
-            std::ostream& err)
+int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::ostream& out, std::ostream& err)
 {
   fs::path folder = "out/demo";
   for (size_t i = 0; i < args.size(); ++i)
@@ -121,8 +118,7 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
 
   auto start = std::chrono::steady_clock::now();
   auto stepDone = [&](const char* step) {
-    out << std::fixed << std::setprecision(1) << "[" << step << ": " << secondsSince(start)
-        << " s]\n\n";
+    out << std::fixed << std::setprecision(1) << "[" << step << ": " << secondsSince(start) << " s]\n\n";
     out.unsetf(std::ios::floatfield);
     start = std::chrono::steady_clock::now();
   };
@@ -136,33 +132,30 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
   stepDone("read");
 
   // 2. The middle slices as pictures.
-  if (int code = runModuleCommand(
-        session, "slices", {sample.string(), "--out", folder.string()}, out, err))
+  if (int code = runModuleCommand(session, "slices", {sample.string(), "--out", folder.string()}, out, err))
     return code;
   stepDone("slices");
 
   // 3. Skin and bone (the CT read in step 1 is reused: same session).
-  if (int code = runModuleCommand(
-        session, "segment", {sample.string(), "--out", folder.string(), "--surfaces", "none"}, out,
-        err))
+  if (int code = runModuleCommand(session, "segment", {sample.string(), "--out", folder.string(), "--surfaces", "none"},
+                                  out, err))
     return code;
   stepDone("segment");
 
   // 4. Range maps and the thickness review pictures (on step 3's label map).
-  if (int code = runModuleCommand(
-        session, "rangemap", {sample.string(), "--out", folder.string()}, out, err))
+  if (int code = runModuleCommand(session, "rangemap", {sample.string(), "--out", folder.string()}, out, err))
     return code;
   stepDone("rangemap");
 
   // 5. Two plans on the sample's face, predicted (as `caps plan`, on step 4's
   // range maps): a Z-plasty on the left cheek and an elliptical excision on
   // the forehead.
-  const std::pair<const char*, std::vector<std::string>> plans[] = {
-    {"z-plasty", {"--at", "-40,-47"}}, {"elliptical-excision", {"--at", "-90,25"}}};
+  const std::pair<const char*, std::vector<std::string>> plans[] = {{"z-plasty", {"--at", "-40,-47"}},
+                                                                    {"elliptical-excision", {"--at", "-90,25"}}};
   for (const auto& [procedure, where] : plans)
   {
-    std::vector<std::string> planArgs{sample.string(), "--procedure", procedure,
-                                      "--out", (folder / procedure).string()};
+    std::vector<std::string> planArgs{sample.string(), "--procedure", procedure, "--out",
+                                      (folder / procedure).string()};
     planArgs.insert(planArgs.end(), where.begin(), where.end());
     if (int code = runModuleCommand(session, "plan", planArgs, out, err))
       return code;
@@ -187,19 +180,19 @@ int runDemo(const std::vector<std::string>& args, ModuleManager& modules, std::o
   // button takes them, then the plan report of the saved scene, as a
   // surgeon would print it.
   for (const char* view : {"before", "after"})
-    if (int code = runModuleCommand(session, "snapshot",
-                                    {bundle.string(), "--plan", "Z-plasty 1", "--view", view}, out, err))
+    if (int code =
+          runModuleCommand(session, "snapshot", {bundle.string(), "--plan", "Z-plasty 1", "--view", view}, out, err))
       return code;
-  if (int code = runModuleCommand(session, "report",
-                                  {bundle.string(), "--pdf", (folder / "plan-report.pdf").string()}, out, err))
+  if (int code = runModuleCommand(session, "report", {bundle.string(), "--pdf", (folder / "plan-report.pdf").string()},
+                                  out, err))
     return code;
   stepDone("report");
   out << "Demo finished: results in " << folder.string() << "\n";
   return 0;
 }
 
-std::optional<int> runCommandLine(const std::vector<std::string>& args, ModuleManager& modules,
-                                  std::ostream& out, std::ostream& err)
+std::optional<int> runCommandLine(const std::vector<std::string>& args, ModuleManager& modules, std::ostream& out,
+                                  std::ostream& err)
 {
   if (args.empty())
     return std::nullopt;

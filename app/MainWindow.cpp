@@ -55,8 +55,7 @@ constexpr int kMaxRecent = 8;
 bool isSceneBundle(const fs::path& path)
 {
   std::error_code ec;
-  return fs::is_directory(path, ec) &&
-         (path.extension() == ".caps" || fs::exists(path / "scene.json", ec));
+  return fs::is_directory(path, ec) && (path.extension() == ".caps" || fs::exists(path / "scene.json", ec));
 }
 
 } // namespace
@@ -109,34 +108,31 @@ void MainWindow::buildViews()
 
   for (ui::SliceView* view : slice_views_)
   {
-    connect(view, &ui::SliceView::clicked, this,
-            [this](double x, double y, double z) { moveCursor({x, y, z}); });
+    connect(view, &ui::SliceView::clicked, this, [this](double x, double y, double z) { moveCursor({x, y, z}); });
     connect(view, &ui::SliceView::hovered, this, &MainWindow::showCursorInfo);
     connect(view, &ui::SliceView::windowLevelChanged, this, &MainWindow::applyWindowLevel);
-    connect(view, &ui::SliceView::sliceChanged, this, [this, view](int) {
-      view3d_->setCursorPosition(view->cursorPosition());
-    });
+    connect(view, &ui::SliceView::sliceChanged, this,
+            [this, view](int) { view3d_->setCursorPosition(view->cursorPosition()); });
   }
 
-  connect(view3d_, &ui::ThreeDView::surfaceClicked, this,
-          [this](const QString& key, double x, double y, double z) {
-            if (!pick_handler_)
-              return;
-            // One click, one pick: the handler may arm the next one itself.
-            auto handler = std::move(pick_handler_);
-            pick_handler_ = nullptr;
-            view3d_->setHandlesGrabbable(true);
-            view3d_->unsetCursor();
-            statusBar()->clearMessage();
-            try
-            {
-              handler(SurfacePick{{x, y, z}, key.toStdString()});
-            }
-            catch (const std::exception& e)
-            {
-              showError("Pick", e.what());
-            }
-          });
+  connect(view3d_, &ui::ThreeDView::surfaceClicked, this, [this](const QString& key, double x, double y, double z) {
+    if (!pick_handler_)
+      return;
+    // One click, one pick: the handler may arm the next one itself.
+    auto handler = std::move(pick_handler_);
+    pick_handler_ = nullptr;
+    view3d_->setHandlesGrabbable(true);
+    view3d_->unsetCursor();
+    statusBar()->clearMessage();
+    try
+    {
+      handler(SurfacePick{{x, y, z}, key.toStdString()});
+    }
+    catch (const std::exception& e)
+    {
+      showError("Pick", e.what());
+    }
+  });
 
   connect(view3d_, &ui::ThreeDView::handleDropped, this,
           [this](int index, const QString& key, double x, double y, double z) {
@@ -213,9 +209,8 @@ void MainWindow::buildModulePanels()
   auto rank = [](const std::string& name) {
     return std::find(workOrder.begin(), workOrder.end(), name) - workOrder.begin();
   };
-  std::stable_sort(ordered.begin(), ordered.end(), [&](const auto* a, const auto* b) {
-    return rank(a->module->name()) < rank(b->module->name());
-  });
+  std::stable_sort(ordered.begin(), ordered.end(),
+                   [&](const auto* a, const auto* b) { return rank(a->module->name()) < rank(b->module->name()); });
   for (const auto* loaded : ordered)
   {
     const Module& module = *loaded->module;
@@ -232,13 +227,11 @@ void MainWindow::buildModulePanels()
     scroll->setHorizontalScrollBarPolicy(Qt::ScrollBarAlwaysOff);
     scroll->setWidget(panel);
     panels_->addWidget(scroll);
-    module_selector_->addItem(QString::fromStdString(module.title()),
-                              QString::fromStdString(module.name()));
+    module_selector_->addItem(QString::fromStdString(module.title()), QString::fromStdString(module.name()));
   }
   if (session_.modules().modules().empty())
   {
-    panels_->addWidget(new QLabel(tr("No module loaded: run caps --list-modules to see why."),
-                                  panels_));
+    panels_->addWidget(new QLabel(tr("No module loaded: run caps --list-modules to see why."), panels_));
   }
   connect(module_selector_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int index) {
     // A pick or a marker belongs to the panel that asked for it.
@@ -263,22 +256,25 @@ void MainWindow::buildMenus()
       openPath(folder.toStdString());
   });
   file->addAction(tr("Open &image file..."), this, [this]() {
-    const QString name = QFileDialog::getOpenFileName(
-      this, tr("Open a CT image"), QString(),
-      tr("CT images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd *.dcm);;All files (*)"));
+    const QString name =
+      QFileDialog::getOpenFileName(this, tr("Open a CT image"), QString(),
+                                   tr("CT images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd *.dcm);;All files (*)"));
     if (!name.isEmpty())
       openPath(name.toStdString());
   });
   file->addSeparator();
-  file->addAction(tr("&Open scene..."), this, [this]() {
-    const QString folder =
-      QFileDialog::getExistingDirectory(this, tr("Open a scene bundle (NAME.caps)"));
-    if (!folder.isEmpty())
-      openPath(folder.toStdString());
-  }, QKeySequence::Open);
-  file->addAction(tr("&Save scene"), this, [this]() { saveScene(false); }, QKeySequence::Save);
-  file->addAction(tr("Save scene &as..."), this, [this]() { saveScene(true); },
-                  QKeySequence::SaveAs);
+  file->addAction(
+    tr("&Open scene..."), this,
+    [this]() {
+      const QString folder = QFileDialog::getExistingDirectory(this, tr("Open a scene bundle (NAME.caps)"));
+      if (!folder.isEmpty())
+        openPath(folder.toStdString());
+    },
+    QKeySequence::Open);
+  file->addAction(
+    tr("&Save scene"), this, [this]() { saveScene(false); }, QKeySequence::Save);
+  file->addAction(
+    tr("Save scene &as..."), this, [this]() { saveScene(true); }, QKeySequence::SaveAs);
   recent_menu_ = file->addMenu(tr("&Recent"));
   updateRecentMenu();
   // What the modules add to the File menu (the report's export and print).
@@ -313,36 +309,37 @@ void MainWindow::buildMenus()
   slices_in_3d_ = view->addAction(tr("&Slices in the 3D view"));
   slices_in_3d_->setCheckable(true);
   slices_in_3d_->setChecked(true);
-  connect(slices_in_3d_, &QAction::toggled, this,
-          [this](bool on) { view3d_->setSlicesVisible(on); });
+  connect(slices_in_3d_, &QAction::toggled, this, [this](bool on) { view3d_->setSlicesVisible(on); });
   overlay_action_ = view->addAction(tr("Segmentation &overlay on the slices"));
   overlay_action_->setCheckable(true);
   overlay_action_->setChecked(true);
   overlay_action_->setShortcut(QKeySequence(tr("Ctrl+L")));
   connect(overlay_action_, &QAction::toggled, this, [this](bool) { updateOverlay(); });
-  view->addAction(tr("&Reset 3D view"), this, [this]() {
-    view3d_->resetCamera();
-    view3d_->renderWindow()->Render();
-  }, QKeySequence(tr("Ctrl+R")));
+  view->addAction(
+    tr("&Reset 3D view"), this,
+    [this]() {
+      view3d_->resetCamera();
+      view3d_->renderWindow()->Render();
+    },
+    QKeySequence(tr("Ctrl+R")));
 
   // The modules in the order of the work, Ctrl+1 for the first.
   QMenu* modules = menuBar()->addMenu(tr("&Modules"));
   for (int i = 0; i < module_selector_->count(); ++i)
   {
-    QAction* entry = modules->addAction(module_selector_->itemText(i), this,
-                                        [this, i]() { module_selector_->setCurrentIndex(i); });
+    QAction* entry =
+      modules->addAction(module_selector_->itemText(i), this, [this, i]() { module_selector_->setCurrentIndex(i); });
     if (i < 9)
       entry->setShortcut(QKeySequence(QString("Ctrl+%1").arg(i + 1)));
   }
 
   QMenu* help = menuBar()->addMenu(tr("&Help"));
   help->addAction(tr("&About CAPS"), this, [this]() {
-    QMessageBox::about(
-      this, tr("About CAPS"),
-      tr("<b>CAPS %1</b> - Computer-Aided Plastic Surgery.<br>Plans facial plastic surgery on "
-         "a head CT, after S. Pieper's 1991 MIT thesis.<br><br>Sample data: Head and neck CT "
-         "from the Weasis demo archive (N. Roduit), CC BY 4.0.")
-        .arg(CAPS_VERSION));
+    QMessageBox::about(this, tr("About CAPS"),
+                       tr("<b>CAPS %1</b> - Computer-Aided Plastic Surgery.<br>Plans facial plastic surgery on "
+                          "a head CT, after S. Pieper's 1991 MIT thesis.<br><br>Sample data: Head and neck CT "
+                          "from the Weasis demo archive (N. Roduit), CC BY 4.0.")
+                         .arg(CAPS_VERSION));
   });
 }
 
@@ -471,11 +468,14 @@ void MainWindow::runTask(const std::string& title, TaskWork work)
   cancel_->show();
 
   TaskProgress progress = [this](double fraction, const std::string& step) {
-    QMetaObject::invokeMethod(this, [this, fraction, step]() {
-      progress_->setValue(static_cast<int>(fraction * 1000));
-      if (!cancel_requested_)
-        progress_label_->setText(QString::fromStdString(step));
-    }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+      this,
+      [this, fraction, step]() {
+        progress_->setValue(static_cast<int>(fraction * 1000));
+        if (!cancel_requested_)
+          progress_label_->setText(QString::fromStdString(step));
+      },
+      Qt::QueuedConnection);
     return !cancel_requested_.load();
   };
   task_thread_ = QThread::create([this, title, work, progress]() {
@@ -490,16 +490,16 @@ void MainWindow::runTask(const std::string& title, TaskWork work)
       error = e.what();
     }
     const bool cancelled = cancel_requested_.load();
-    QMetaObject::invokeMethod(this, [this, title, finish, error, cancelled]() {
-      taskFinished(title, finish, error, cancelled);
-    }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+      this, [this, title, finish, error, cancelled]() { taskFinished(title, finish, error, cancelled); },
+      Qt::QueuedConnection);
   });
   connect(task_thread_, &QThread::finished, task_thread_, &QObject::deleteLater);
   task_thread_->start();
 }
 
-void MainWindow::taskFinished(const std::string& title, std::function<void()> finish,
-                              const std::string& error, bool cancelled)
+void MainWindow::taskFinished(const std::string& title, std::function<void()> finish, const std::string& error,
+                              bool cancelled)
 {
   task_thread_->wait();
   task_thread_ = nullptr;
@@ -573,9 +573,8 @@ void MainWindow::openPath(const fs::path& path)
       addRecent(path);
       return;
     }
-  showError("Cannot open", path.string() +
-                             " is neither a DICOM folder, a CT image file (NIfTI, NRRD, "
-                             "MetaImage) nor a CAPS scene (NAME.caps).");
+  showError("Cannot open", path.string() + " is neither a DICOM folder, a CT image file (NIfTI, NRRD, "
+                                           "MetaImage) nor a CAPS scene (NAME.caps).");
 }
 
 void MainWindow::openScene(const fs::path& bundle)
@@ -602,8 +601,8 @@ void MainWindow::saveScene(bool askForName)
   // finish first.
   if (task_thread_)
   {
-    showError("Not saved yet", "Wait for '" + progress_label_->text().toStdString() +
-                                 "' to finish, or cancel it, then save again.");
+    showError("Not saved yet",
+              "Wait for '" + progress_label_->text().toStdString() + "' to finish, or cancel it, then save again.");
     return;
   }
   fs::path target = scene_path_;
@@ -624,8 +623,8 @@ bool MainWindow::saveSceneTo(const fs::path& bundle)
 {
   if (task_thread_)
   {
-    showError("Not saved yet", "Wait for '" + progress_label_->text().toStdString() +
-                                 "' to finish, or cancel it, then save again.");
+    showError("Not saved yet",
+              "Wait for '" + progress_label_->text().toStdString() + "' to finish, or cancel it, then save again.");
     return false;
   }
   QApplication::setOverrideCursor(Qt::WaitCursor);
@@ -646,8 +645,7 @@ bool MainWindow::saveSceneTo(const fs::path& bundle)
   }
   catch (const std::exception& e)
   {
-    showError("The scene was not saved", std::string(e.what()) +
-                                           "\nThe previous copy on disk, if any, is unchanged.");
+    showError("The scene was not saved", std::string(e.what()) + "\nThe previous copy on disk, if any, is unchanged.");
   }
   progress_label_->hide();
   progress_->hide();

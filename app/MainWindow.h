@@ -97,8 +97,7 @@ private:
   void applyWindowLevel(double window, double level);
   void moveCursor(const std::array<double, 3>& position);
   void showCursorInfo(double x, double y, double z, bool inside);
-  void taskFinished(const std::string& title, std::function<void()> finish,
-                    const std::string& error, bool cancelled);
+  void taskFinished(const std::string& title, std::function<void()> finish, const std::string& error, bool cancelled);
   void openScene(const std::filesystem::path& bundle);
   void saveScene(bool askForName);
   void addRecent(const std::filesystem::path& path);

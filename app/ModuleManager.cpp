@@ -21,15 +21,13 @@ std::string buildStampMismatch(void* handle)
   using StampFn = const char* (*)();
   auto stamp = reinterpret_cast<StampFn>(dlsym(handle, "caps_module_build_stamp"));
   const std::string ours = buildStamp();
-  const std::string rebuild =
-    ": rebuild it with this caps (cmake --build on the build folder) or remove it from the "
-    "module folder";
+  const std::string rebuild = ": rebuild it with this caps (cmake --build on the build folder) or remove it from the "
+                              "module folder";
   if (!stamp)
     return "carries no build stamp (built before caps " + ours + ")" + rebuild;
   const std::string theirs = stamp() ? stamp() : "";
   if (theirs != ours)
-    return "was built from other sources (build " + theirs + ", this caps is " + ours + ")" +
-           rebuild;
+    return "was built from other sources (build " + theirs + ", this caps is " + ours + ")" + rebuild;
   return {};
 }
 
@@ -100,9 +98,8 @@ void ModuleManager::loadFolder(const fs::path& folder)
     }
     if (version() != kModuleApiVersion)
     {
-      failed_.push_back({file, "was built for module API " + std::to_string(version()) +
-                                 ", this caps uses " + std::to_string(kModuleApiVersion) +
-                                 ": rebuild the module"});
+      failed_.push_back({file, "was built for module API " + std::to_string(version()) + ", this caps uses " +
+                                 std::to_string(kModuleApiVersion) + ": rebuild the module"});
       dlclose(handle);
       continue;
     }
@@ -131,10 +128,8 @@ void ModuleManager::loadFolder(const fs::path& folder)
     }
     if (const Module* other = find(module->name()))
     {
-      auto it = std::find_if(loaded_.begin(), loaded_.end(),
-                             [&](const Loaded& l) { return l.module.get() == other; });
-      failed_.push_back({file, "repeats module '" + module->name() + "' already loaded from " +
-                                 it->file.string()});
+      auto it = std::find_if(loaded_.begin(), loaded_.end(), [&](const Loaded& l) { return l.module.get() == other; });
+      failed_.push_back({file, "repeats module '" + module->name() + "' already loaded from " + it->file.string()});
       module.reset();
       dlclose(handle);
       continue;
@@ -160,8 +155,7 @@ const Module* ModuleManager::find(const std::string& name) const
   return nullptr;
 }
 
-std::pair<const Module*, const ModuleCommand*> ModuleManager::findCommand(
-  const std::string& name) const
+std::pair<const Module*, const ModuleCommand*> ModuleManager::findCommand(const std::string& name) const
 {
   for (const auto& [module, command] : commands_)
     if (command.name == name)
@@ -178,8 +172,7 @@ std::string ModuleManager::report() const
   out << "Loaded modules (" << loaded_.size() << "):\n";
   for (const auto& l : loaded_)
   {
-    out << "  " << l.module->name() << "  \"" << l.module->title() << "\"  from "
-        << l.file.string() << "\n";
+    out << "  " << l.module->name() << "  \"" << l.module->title() << "\"  from " << l.file.string() << "\n";
     std::string commands;
     for (const auto& [module, command] : commands_)
       if (module == l.module.get())

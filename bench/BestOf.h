@@ -9,9 +9,11 @@
 namespace caps::bench {
 
 /// Seconds of the fastest of @a repeats runs of @a work.
-inline double secondsOf(const std::function<void()>& work, int repeats) {
+inline double secondsOf(const std::function<void()>& work, int repeats)
+{
   double best = 1e300;
-  for (int i = 0; i < repeats; ++i) {
+  for (int i = 0; i < repeats; ++i)
+  {
     const auto start = std::chrono::steady_clock::now();
     work();
     const std::chrono::duration<double> elapsed = std::chrono::steady_clock::now() - start;
@@ -20,4 +22,4 @@ inline double secondsOf(const std::function<void()>& work, int repeats) {
   return best;
 }
 
-}  // namespace caps::bench
+} // namespace caps::bench

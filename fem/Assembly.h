@@ -12,7 +12,8 @@ namespace caps::fem {
 
 /// How the finite-strain elements treat the volume (NonlinearStaticAnalysis;
 /// the linear assembly ignores it).
-enum class VolumetricFormulation {
+enum class VolumetricFormulation
+{
   /// The plain Total Lagrangian displacement element (assembleElementFiniteStrain):
   /// locks when nearly incompressible (nu -> 0.5).
   Displacement,
@@ -22,8 +23,9 @@ enum class VolumetricFormulation {
   MixedPressure,
 };
 
-struct AssemblyOptions {
-  int threads = 2;                 ///< worker threads over elements (>= 1)
+struct AssemblyOptions
+{
+  int threads = 2; ///< worker threads over elements (>= 1)
   /// 3 (Table 4.6, default) or 2. Native wedges take wedgeRule() of the same
   /// level: 3 -> 18 points (full), 2 -> 9 points (lower, CalculiX C3D15).
   int gaussPointsPerDirection = 3;
@@ -76,7 +78,6 @@ void assembleElements(const Mesh& mesh, int threads, const ElementKernel& kernel
  *        volume. Returns a vector of size 3N (N).
  */
 Eigen::VectorXd assembleGravityLoad(const Mesh& mesh, const MaterialTable& materials,
-                                    const Eigen::Vector3d& acceleration,
-                                    const AssemblyOptions& options = {});
+                                    const Eigen::Vector3d& acceleration, const AssemblyOptions& options = {});
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -29,4 +29,4 @@ std::string betterBlasCoreType();
 /// thing in main(), before any thread starts.
 void useBestBlasKernels(char** argv);
 
-}  // namespace caps::fem
+} // namespace caps::fem

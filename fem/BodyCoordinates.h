@@ -17,7 +17,8 @@ namespace caps::fem {
  *        native 15-node wedge). It names the same material point however the
  *        body deforms.
  */
-struct BodyPoint {
+struct BodyPoint
+{
   int element = -1;
   Eigen::Vector3d rst = Eigen::Vector3d::Zero();
 };
@@ -59,7 +60,8 @@ Eigen::Vector3d displacedWorldPoint(const Mesh& mesh, const Eigen::VectorXd& u, 
  * least squares where the Jacobian is singular (a collapsed edge). Native
  * 15-node wedges (ElementKind::Wedge15) work too.
  */
-class BodyCoordinateLocator {
+class BodyCoordinateLocator
+{
 public:
   /// Throws std::invalid_argument for an element referring to a node that
   /// does not exist (or lacking a corner), or a non-finite node coordinate.
@@ -76,10 +78,11 @@ public:
   static constexpr double kNaturalTolerance = 1e-9;
 
 private:
-  struct Candidate {
+  struct Candidate
+  {
     BodyPoint point;
-    double outside = 0.0;   ///< distance outside the natural domain (<= 0 inside)
-    double residual = 0.0;  ///< |x(r, s, t) - world|, mm
+    double outside = 0.0;  ///< distance outside the natural domain (<= 0 inside)
+    double residual = 0.0; ///< |x(r, s, t) - world|, mm
     bool converged = false;
   };
   Candidate newton(std::size_t element, const Eigen::Vector3d& world) const;
@@ -88,12 +91,12 @@ private:
   std::vector<ElementKind> kinds_;
   std::vector<ElementShape> shapes_;
   std::vector<ElementCoordinates> coordinates_;
-  std::vector<Eigen::Matrix3Xd> starts_;  ///< world points of the Newton starts
+  std::vector<Eigen::Matrix3Xd> starts_; ///< world points of the Newton starts
   std::vector<Eigen::Vector3d> boxMin_, boxMax_;
-  std::vector<double> size_;  ///< bounding box diagonal, mm (tolerance scale)
+  std::vector<double> size_; ///< bounding box diagonal, mm (tolerance scale)
   Eigen::Vector3d gridMin_ = Eigen::Vector3d::Zero(), cell_ = Eigen::Vector3d::Ones();
   Eigen::Vector3i cells_ = Eigen::Vector3i::Ones();
-  std::vector<std::vector<int>> bins_;  ///< elements whose box meets each cell
+  std::vector<std::vector<int>> bins_; ///< elements whose box meets each cell
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

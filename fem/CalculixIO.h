@@ -14,7 +14,8 @@ namespace caps::fem {
 
 /// What calculixInput() writes beyond the model: the rule of elements that
 /// leave it to the analysis, and the large-deformation step.
-struct CalculixExportOptions {
+struct CalculixExportOptions
+{
   /// Points per direction of the analysis to reproduce, for elements whose
   /// integrationPoints is 0 (AssemblyOptions::gaussPointsPerDirection): 2
   /// writes their 20-node bricks as C3D20R.
@@ -89,4 +90,4 @@ Eigen::Matrix3Xd readFrdDisplacements(const std::string& path, Eigen::Index node
 /// The same from the *NODE PRINT table of a ccx .dat file (7 significant digits).
 Eigen::Matrix3Xd readDatDisplacements(const std::string& path, Eigen::Index nodeCount);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -14,10 +14,12 @@
 namespace caps::fem {
 
 /// A deck that cannot be read: names the file, the line and the culprit.
-class InputDeckError : public std::runtime_error {
+class InputDeckError : public std::runtime_error
+{
 public:
   InputDeckError(const std::string& source, int line, const std::string& what)
-      : std::runtime_error(source + ":" + std::to_string(line) + ": " + what), line_(line) {}
+    : std::runtime_error(source + ":" + std::to_string(line) + ": " + what), line_(line)
+  {}
   int line() const { return line_; }
 
 private:
@@ -27,33 +29,36 @@ private:
 /// The deck's step: *STEP (NLGEOM or not) and the increment line of *STATIC
 /// (initial increment, step period, minimum and maximum increment), as
 /// fractions of the step period when the period is 1.
-struct StaticStep {
-  bool nlgeom = false;              ///< *STEP, NLGEOM: large deformation
+struct StaticStep
+{
+  bool nlgeom = false; ///< *STEP, NLGEOM: large deformation
   double initialIncrement = 1.0;
   double period = 1.0;
   double minimumIncrement = 1e-5;
   double maximumIncrement = 1.0;
-  bool direct = false;              ///< *STATIC, DIRECT: fixed increments, no cut-back
+  bool direct = false; ///< *STATIC, DIRECT: fixed increments, no cut-back
 };
 
 /// A model read from a CalculiX/Abaqus input deck.
-struct CalculixModel {
+struct CalculixModel
+{
   Mesh mesh;
   /// Region id = index of the material in the deck (0, 1, ...). A material
   /// given by *HYPERELASTIC is here as its small-strain limit
   /// (HyperelasticMaterial::smallStrainLimit()) and in @a hyperelastic.
   MaterialTable materials;
-  HyperelasticTable hyperelastic;  ///< regions whose material is *HYPERELASTIC
+  HyperelasticTable hyperelastic; ///< regions whose material is *HYPERELASTIC
   StaticStep step;
   Constraints constraints;
   LoadCase load;
-  std::vector<long> nodeIds;     ///< deck number of each CAPS node
-  std::vector<long> elementIds;  ///< deck number of each CAPS element
-  std::vector<std::string> materialNames;  ///< by region id
+  std::vector<long> nodeIds;              ///< deck number of each CAPS node
+  std::vector<long> elementIds;           ///< deck number of each CAPS element
+  std::vector<std::string> materialNames; ///< by region id
 };
 
 /// How parseCalculixInput() builds elements.
-struct CalculixReadOptions {
+struct CalculixReadOptions
+{
   /// C3D15 as native 15-node wedges (ElementKind::Wedge15, the default: the
   /// element ccx itself uses, and far stiffer-free in bending than the
   /// degenerate 20-node wedge of Fig. 3.2, which false selects).
@@ -104,4 +109,4 @@ CalculixModel parseCalculixInput(const std::string& text, const std::string& sou
 /// Reads @a path; throws std::runtime_error if unreadable, InputDeckError if bad.
 CalculixModel readCalculixInput(const std::string& path, const CalculixReadOptions& options = {});
 
-}  // namespace caps::fem
+} // namespace caps::fem

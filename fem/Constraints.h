@@ -14,22 +14,25 @@
 namespace caps::fem {
 
 /// A suture (thesis §4.6, eq. 4.43): node @a node ends where node @a target ends.
-struct Suture {
+struct Suture
+{
   int node = -1;
   int target = -1;
 };
 
 /// One prescribed DOF: u(node, direction) = value (mm). Fixed is value 0.
-struct PrescribedDof {
+struct PrescribedDof
+{
   int node = -1;
-  int direction = 0;  ///< 0 x, 1 y, 2 z
+  int direction = 0; ///< 0 x, 1 y, 2 z
   double value = 0.0;
 };
 
 /// One term c u(node, direction) of a linear multi-point constraint.
-struct ConstraintTerm {
+struct ConstraintTerm
+{
   int node = -1;
-  int direction = 0;  ///< 0 x, 1 y, 2 z
+  int direction = 0; ///< 0 x, 1 y, 2 z
   double coefficient = 0.0;
 };
 
@@ -39,9 +42,10 @@ struct ConstraintTerm {
  *        term's DOF is the dependent one: it is eliminated, as in CalculiX.
  *        Sliding on a plane (u . n = 0) and general ties are such equations.
  */
-struct LinearConstraint {
+struct LinearConstraint
+{
   std::vector<ConstraintTerm> terms;
-  double value = 0.0;  ///< mm (scaled with the load in a large-deformation step)
+  double value = 0.0; ///< mm (scaled with the load in a large-deformation step)
 };
 
 /**
@@ -51,18 +55,19 @@ struct LinearConstraint {
  * Only records them; resolveConstraints() turns them into the master-slave
  * map U = T Ubar + g.
  */
-struct Constraints {
+struct Constraints
+{
   std::vector<PrescribedDof> prescribed;
   std::vector<Suture> sutures;
   std::vector<LinearConstraint> equations;
 
   void fix(int node, int direction) { prescribed.push_back({node, direction, 0.0}); }
-  void fixNode(int node) {
-    for (int d = 0; d < 3; ++d) fix(node, d);
+  void fixNode(int node)
+  {
+    for (int d = 0; d < 3; ++d)
+      fix(node, d);
   }
-  void prescribe(int node, int direction, double value) {
-    prescribed.push_back({node, direction, value});
-  }
+  void prescribe(int node, int direction, double value) { prescribed.push_back({node, direction, value}); }
   void suture(int node, int target) { sutures.push_back({node, target}); }
   void equation(LinearConstraint c) { equations.push_back(std::move(c)); }
 };
@@ -83,10 +88,11 @@ struct Constraints {
  * Ubar_{i_k} + g_d, listed in @ref general. Without equations @ref general
  * is empty and every operation takes the plain copying path it always had.
  */
-struct ConstraintMap {
-  std::vector<int> reduced;     ///< per full DOF: reduced index, or -1 (prescribed, or a general row)
-  Eigen::VectorXd offset;       ///< g, size 3N
-  std::vector<int> masterOf;    ///< per reduced DOF: the full DOF it stands for
+struct ConstraintMap
+{
+  std::vector<int> reduced;  ///< per full DOF: reduced index, or -1 (prescribed, or a general row)
+  Eigen::VectorXd offset;    ///< g, size 3N
+  std::vector<int> masterOf; ///< per reduced DOF: the full DOF it stands for
   /// Full DOFs with a general row of T (dependent DOFs of equations and the
   /// DOFs sutured onto them), ascending.
   std::vector<int> general;
@@ -139,11 +145,13 @@ private:
  * nodes()[k] (the number alone: "node {N0} x") and "{E<k>}" for
  * equations()[k] (the whole phrase: "equation 3" by default).
  */
-class ConstraintError : public std::invalid_argument {
+class ConstraintError : public std::invalid_argument
+{
 public:
   /// How to name a node (index into the mesh) and an equation (index into
   /// Constraints::equations); an empty function keeps the default.
-  struct Naming {
+  struct Naming
+  {
     std::function<std::string(int)> node;
     std::function<std::string(int)> equation;
   };
@@ -188,4 +196,4 @@ private:
  */
 ConstraintMap resolveConstraints(const Mesh& mesh, const Constraints& constraints);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -26,7 +26,8 @@ namespace caps::fem {
  * All three are called with chart points (mm) of surface vertices and of
  * surface edge midpoints.
  */
-struct TissueGeometry {
+struct TissueGeometry
+{
   /// Skin point in the patient frame (LPS, mm).
   std::function<Eigen::Vector3d(const ChartPoint&)> skinPoint;
   /// Soft-tissue depth (mm) from the skin to the bone along inwardDirection;
@@ -39,13 +40,15 @@ struct TissueGeometry {
 };
 
 /// What holds the outer rim of the meshed region.
-enum class RimCondition {
-  Free,     ///< as in the thesis (§4.5): only the bone layer is fixed
-  Clamped,  ///< every node of the rim's columns is fixed (tissue beyond the mesh held in place)
+enum class RimCondition
+{
+  Free,    ///< as in the thesis (§4.5): only the bone layer is fixed
+  Clamped, ///< every node of the rim's columns is fixed (tissue beyond the mesh held in place)
 };
 
 /// Options of meshContinuum().
-struct ContinuumMeshOptions {
+struct ContinuumMeshOptions
+{
   /// Number of element layers N_l from the skin to the bone (>= 1).
   int layerCount = 1;
   /// Thickness of each layer as a fraction of the local depth, skin first
@@ -93,7 +96,8 @@ struct ContinuumMeshOptions {
  * owns N_l + 1 nodes, one per layer boundary. So there are
  * N_l (2 N_v + N_e) + N_v + N_e nodes and N_l N_p elements (§4.5.2).
  */
-struct ContinuumMesh {
+struct ContinuumMesh
+{
   Mesh mesh;
 
   /// Suture constraints (§4.4.5): node ends where target ends. Node pairs of
@@ -200,8 +204,7 @@ double meshVolume(const Mesh& mesh);
  * flagged for any positive width). Throws std::invalid_argument for a
  * negative or non-finite width or a suture vertex out of range.
  */
-std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures,
-                                  double width);
+std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures, double width);
 
 /**
  * @brief The depth the mesher uses for a raw depth @a rawDepth (mm) from
@@ -212,4 +215,4 @@ std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<
  */
 double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options, const char* where = "a point");
 
-}  // namespace caps::fem
+} // namespace caps::fem

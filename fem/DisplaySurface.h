@@ -23,7 +23,8 @@ using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 /// One face of one element, numbered as FacePressure numbers them (the
 /// CalculiX faces: 1..6 of a hexahedron, 1..5 of a native wedge; thesis
 /// Table 4.8 numbers the hexahedron's faces 1, 0, 4, 5, 2, 3 from 0).
-struct ElementFace {
+struct ElementFace
+{
   int element = -1;
   int face = 0;
 };
@@ -42,7 +43,8 @@ std::vector<ElementFace> boundaryFacesOnNodes(const Mesh& mesh, const std::vecto
 std::vector<ElementFace> skinFaces(const ContinuumMesh& continuum);
 
 /// How display positions are mapped (the thesis's mapping modes, §4.7).
-struct DisplayMapping {
+struct DisplayMapping
+{
   /// Scale of the displacement added to the undeformed position: 0 shows
   /// the pre-operative (undeformed) shape, 1 the post-operative (deformed)
   /// one, values between animate the transition.
@@ -95,7 +97,8 @@ struct DisplayMapping {
  * @warning The surface refers to mesh nodes by index: a solution must come
  * from the same mesh (same node count).
  */
-class DisplaySurface {
+class DisplaySurface
+{
 public:
   DisplaySurface() = default;
 
@@ -184,13 +187,15 @@ private:
   /// What setSolution() needs of one element around the display nodes: its
   /// world shape derivatives at the Gauss points and the extrapolation to
   /// its nodes (recoverNodalStresses' scheme), precalculated.
-  struct SupportElement {
+  struct SupportElement
+  {
     int region = 0;
-    std::array<int, kHex20NodeCount> nodes{};        ///< mesh node per slot (-1 absent)
-    std::array<int, kHex20NodeCount> displaySlot{};  ///< row of regionWeights_ per slot (its node, this region), -1 if none
-    std::array<int, kHex20NodeCount> slotWeight{};   ///< slots sharing this slot's node (>= 1)
-    std::vector<Eigen::Matrix<double, kHex20NodeCount, 3>> gradients;  ///< dh/dx per Gauss point
-    bool wedge = false;  ///< extrapolated by wedgeExtrapolation_ (else hexExtrapolation_)
+    std::array<int, kHex20NodeCount> nodes{}; ///< mesh node per slot (-1 absent)
+    std::array<int, kHex20NodeCount>
+      displaySlot{}; ///< row of regionWeights_ per slot (its node, this region), -1 if none
+    std::array<int, kHex20NodeCount> slotWeight{};                    ///< slots sharing this slot's node (>= 1)
+    std::vector<Eigen::Matrix<double, kHex20NodeCount, 3>> gradients; ///< dh/dx per Gauss point
+    bool wedge = false; ///< extrapolated by wedgeExtrapolation_ (else hexExtrapolation_)
   };
 
   /// The constructor's state while it adds the faces (DisplaySurface.cpp).
@@ -216,8 +221,8 @@ private:
   Matrix6Xd strains_, stresses_;
   bool hasSolution_ = false;
   std::vector<SupportElement> support_;
-  Eigen::VectorXi displayElementCount_;  ///< elements averaged in each row of regionWeights_
+  Eigen::VectorXi displayElementCount_; ///< elements averaged in each row of regionWeights_
   Eigen::MatrixXd hexExtrapolation_, wedgeExtrapolation_;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

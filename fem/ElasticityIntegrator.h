@@ -30,8 +30,8 @@ void strainDisplacementMatrix(const PointGeometry& geometry, StrainDisplacement&
  * (integrationRule()).
  */
 void assembleElementStiffness(const ElementShape& shape, const ElementCoordinates& x,
-                              const LinearElasticMaterial& material, const IntegrationRule& rule,
-                              int elementIndex, ElementMatrix& ke);
+                              const LinearElasticMaterial& material, const IntegrationRule& rule, int elementIndex,
+                              ElementMatrix& ke);
 
 /**
  * @brief Consistent nodal loads of a uniform body force per unit volume
@@ -39,11 +39,11 @@ void assembleElementStiffness(const ElementShape& shape, const ElementCoordinate
  *        For gravity pass density * acceleration.
  */
 void assembleElementBodyForce(const ElementShape& shape, const ElementCoordinates& x,
-                              const Eigen::Vector3d& forcePerVolume, const IntegrationRule& rule,
-                              int elementIndex, ElementVector& re);
+                              const Eigen::Vector3d& forcePerVolume, const IntegrationRule& rule, int elementIndex,
+                              ElementVector& re);
 
 /// Volume of the element (mm^3) by the same rule.
 double elementVolume(const ElementShape& shape, const ElementCoordinates& x, const IntegrationRule& rule,
                      int elementIndex);
 
-}  // namespace caps::fem
+} // namespace caps::fem

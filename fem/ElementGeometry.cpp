@@ -8,15 +8,16 @@
 namespace caps::fem {
 
 void evaluateGeometry(const ElementShape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
-                      int elementIndex, PointGeometry& out, bool check) {
+                      int elementIndex, PointGeometry& out, bool check)
+{
   shape.evaluate(rst, out.h, out.dhNatural);
   out.jacobian.noalias() = out.dhNatural.transpose() * x;
   out.world.noalias() = x.transpose() * out.h;
   out.detJ = out.jacobian.determinant();
-  const double scale =
-      out.jacobian.row(0).norm() * out.jacobian.row(1).norm() * out.jacobian.row(2).norm();
+  const double scale = out.jacobian.row(0).norm() * out.jacobian.row(1).norm() * out.jacobian.row(2).norm();
   const bool finite = std::isfinite(out.detJ);
-  if (check && (!finite || out.detJ <= 0.0 || out.detJ < kMinScaledJacobian * scale)) {
+  if (check && (!finite || out.detJ <= 0.0 || out.detJ < kMinScaledJacobian * scale))
+  {
     std::ostringstream m;
     m.precision(4);
     m << "element " << elementIndex << " is ";
@@ -27,16 +28,19 @@ void evaluateGeometry(const ElementShape& shape, const ElementCoordinates& x, co
     else
       m << "collapsed or badly distorted (det J = " << out.detJ << " mm^3, scaled Jacobian "
         << (scale > 0.0 ? out.detJ / scale : 0.0) << ")";
-    m << " at natural point (r, s, t) = (" << rst[0] << ", " << rst[1] << ", " << rst[2]
-      << "), world (" << out.world[0] << ", " << out.world[1] << ", " << out.world[2]
-      << ") mm; check its node order (" << shape.numberingName() << ") and positions";
+    m << " at natural point (r, s, t) = (" << rst[0] << ", " << rst[1] << ", " << rst[2] << "), world (" << out.world[0]
+      << ", " << out.world[1] << ", " << out.world[2] << ") mm; check its node order (" << shape.numberingName()
+      << ") and positions";
     throw ElementError(elementIndex, m.str());
   }
-  if (finite && out.detJ != 0.0) {
+  if (finite && out.detJ != 0.0)
+  {
     out.dhWorld.noalias() = out.dhNatural * out.jacobian.inverse().transpose();
-  } else {
+  }
+  else
+  {
     out.dhWorld.setZero();
   }
 }
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -14,7 +14,8 @@ namespace caps::fem {
 using ElementCoordinates = Eigen::Matrix<double, kHex20NodeCount, 3>;
 
 /// An element that cannot be analysed (inverted, collapsed, distorted).
-class ElementError : public std::runtime_error {
+class ElementError : public std::runtime_error
+{
 public:
   ElementError(int element, const std::string& what) : std::runtime_error(what), element_(element) {}
   int element() const { return element_; }
@@ -30,13 +31,14 @@ private:
  * J(i, j) = d x_j / d r_i (Bathe's convention), so the world derivatives are
  * dh/dx = dh/dr * J^{-T}.
  */
-struct PointGeometry {
+struct PointGeometry
+{
   ShapeVector h;
   ShapeDerivatives dhNatural;
   ShapeDerivatives dhWorld;
   Eigen::Matrix3d jacobian;
   double detJ = 0.0;
-  Eigen::Vector3d world;  ///< x(r, s, t)
+  Eigen::Vector3d world; ///< x(r, s, t)
 };
 
 /// Smallest accepted scaled Jacobian det J / (|J_r| |J_s| |J_t|); below it
@@ -57,4 +59,4 @@ inline constexpr double kMinScaledJacobian = 1e-6;
 void evaluateGeometry(const ElementShape& shape, const ElementCoordinates& x, const Eigen::Vector3d& rst,
                       int elementIndex, PointGeometry& out, bool check = true);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -54,7 +54,11 @@ Eigen::Vector3d batheNaturalCoordinates(int batheNode);
  * native 15-node serendipity wedge (pentahedron) in the wedge numbering
  * below, slots 15..19 unused (-1).
  */
-enum class ElementKind : std::uint8_t { Hex20 = 0, Wedge15 = 1 };
+enum class ElementKind : std::uint8_t
+{
+  Hex20 = 0,
+  Wedge15 = 1
+};
 
 /**
  * @brief Node numbering of the native 15-node wedge, laid out like Bathe's
@@ -91,4 +95,4 @@ int c3d15ToWedge15(int c3d15Node);
 /// {0, 1/2, 1}, t in {-1, 0, 1}. Throws std::out_of_range outside 0..14.
 Eigen::Vector3d wedge15NaturalCoordinates(int wedgeNode);
 
-}  // namespace caps::fem
+} // namespace caps::fem

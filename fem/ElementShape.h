@@ -19,9 +19,10 @@ namespace caps::fem {
  * absent and unused slots 0), so geometry, integrators and stress recovery
  * run unchanged on either kind. A Hex20Shape converts implicitly.
  */
-class ElementShape {
+class ElementShape
+{
 public:
-  ElementShape(const Hex20Shape& hex) : kind_(ElementKind::Hex20), hex_(hex) {}  // NOLINT: implicit on purpose
+  ElementShape(const Hex20Shape& hex) : kind_(ElementKind::Hex20), hex_(hex) {} // NOLINT: implicit on purpose
 
   /// The native 15-node wedge.
   static ElementShape wedge15();
@@ -48,4 +49,4 @@ private:
   Wedge15Shape wedge_;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -34,10 +34,11 @@ namespace caps::fem {
  * Positive pressure pushes into the element (compression), as in CalculiX:
  * the traction is -p n with n the outward normal.
  */
-struct FacePressure {
-  int element = -1;       ///< index into Mesh::elements
-  int face = 0;           ///< 1..6 for a hexahedron, 1..5 for a native wedge
-  double pressure = 0.0;  ///< MPa = N/mm^2, positive into the element
+struct FacePressure
+{
+  int element = -1;      ///< index into Mesh::elements
+  int face = 0;          ///< 1..6 for a hexahedron, 1..5 for a native wedge
+  double pressure = 0.0; ///< MPa = N/mm^2, positive into the element
 };
 
 /// Number of faces of an element of @a kind: 6 (Hex20) or 5 (Wedge15).
@@ -52,7 +53,8 @@ std::vector<int> faceNodes(ElementKind kind, int face);
 /// with a, b in [-1, 1], or for a triangle a, b >= 0, a + b <= 1. sign = +1
 /// if p × q points out of the reference element, so stepping a then b (Table
 /// 4.8's scan directions) winds polygons outwards.
-struct FaceChart {
+struct FaceChart
+{
   Eigen::Vector3d origin, p, q;
   bool triangle = false;
   double sign = 1.0;
@@ -81,8 +83,8 @@ FaceChart faceChart(ElementKind kind, int face);
  * @a re (60) is overwritten; rows of nodes off the face and absent nodes are 0.
  * Throws std::invalid_argument for a face outside 1..faceCount().
  */
-void assembleElementFacePressure(const ElementShape& shape, const ElementCoordinates& x, int face,
-                                 double pressure, const LineRule& rule, ElementVector& re);
+void assembleElementFacePressure(const ElementShape& shape, const ElementCoordinates& x, int face, double pressure,
+                                 const LineRule& rule, ElementVector& re);
 
 /// Area (mm^2) of face @a face of one element, by the same rule (not exact
 /// on curved faces: |n| is not polynomial).
@@ -105,4 +107,4 @@ void validateFacePressures(const Mesh& mesh, const std::vector<FacePressure>& lo
 Eigen::VectorXd assembleFacePressureLoad(const Mesh& mesh, const std::vector<FacePressure>& loads,
                                          int pointsPerDirection = 3);
 
-}  // namespace caps::fem
+} // namespace caps::fem

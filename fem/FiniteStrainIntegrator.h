@@ -18,10 +18,12 @@ using ElementDisplacements = Eigen::Matrix<double, kHex20NodeCount, 3>;
 
 /// An element turned inside out by a trial displacement: det F <= 0 at an
 /// integration point. Newton cuts the step back when it meets one.
-class InvertedElementError : public ElementError {
+class InvertedElementError : public ElementError
+{
 public:
   InvertedElementError(int element, double detF, const Eigen::Vector3d& natural, const std::string& what)
-      : ElementError(element, what), detF_(detF), natural_(natural) {}
+    : ElementError(element, what), detF_(detF), natural_(natural)
+  {}
   double detF() const { return detF_; }
   const Eigen::Vector3d& natural() const { return natural_; }
 
@@ -31,23 +33,25 @@ private:
 };
 
 /// Kinematics at one integration point of the Total Lagrangian formulation.
-struct FiniteStrainPoint {
-  Eigen::Matrix3d deformationGradient;  ///< F = I + du/dX
-  double detF = 1.0;                    ///< J
-  Vector6d secondPiolaKirchhoff;        ///< S (MPa)
-  Vector6d cauchy;                      ///< sigma = F S F^T / J (MPa)
-  Vector6d greenLagrange;               ///< E = (C - I) / 2, engineering shears
-  Eigen::Vector3d principalStretches;   ///< sqrt of the eigenvalues of C, largest first
-  Eigen::Vector3d natural;              ///< (r, s, t) of the point in its element
-  Eigen::Vector3d world;                ///< X (undeformed position, mm)
+struct FiniteStrainPoint
+{
+  Eigen::Matrix3d deformationGradient; ///< F = I + du/dX
+  double detF = 1.0;                   ///< J
+  Vector6d secondPiolaKirchhoff;       ///< S (MPa)
+  Vector6d cauchy;                     ///< sigma = F S F^T / J (MPa)
+  Vector6d greenLagrange;              ///< E = (C - I) / 2, engineering shears
+  Eigen::Vector3d principalStretches;  ///< sqrt of the eigenvalues of C, largest first
+  Eigen::Vector3d natural;             ///< (r, s, t) of the point in its element
+  Eigen::Vector3d world;               ///< X (undeformed position, mm)
 };
 
 /// What one element's evaluation saw, for the checks every prediction carries.
-struct FiniteStrainElementCheck {
+struct FiniteStrainElementCheck
+{
   double minDetF = 1.0;
-  double maxStretch = 1.0;  ///< largest principal stretch
-  double minStretch = 1.0;  ///< smallest principal stretch
-  double energy = 0.0;      ///< strain energy (mJ = N mm)
+  double maxStretch = 1.0; ///< largest principal stretch
+  double minStretch = 1.0; ///< smallest principal stretch
+  double energy = 0.0;     ///< strain energy (mJ = N mm)
 };
 
 /// B_L at one point: row (ij) of the Green-Lagrange strain's variation per
@@ -70,9 +74,10 @@ void addToCheck(FiniteStrainElementCheck& check, const Eigen::Matrix3d& c, doubl
 /// What a Total Lagrangian element needs of its reference geometry at the
 /// points of its rule. It is the same at every evaluation, so a model that
 /// is evaluated many times (Newton) computes it once.
-struct ReferencePoints {
-  std::vector<ShapeDerivatives> gradients;  ///< dH/dX at each point
-  std::vector<double> weights;              ///< w_g det J at each point
+struct ReferencePoints
+{
+  std::vector<ShapeDerivatives> gradients; ///< dH/dX at each point
+  std::vector<double> weights;             ///< w_g det J at each point
 };
 
 /// The reference geometry of element @a elementIndex at the points of
@@ -101,10 +106,9 @@ std::size_t referencePointsBytes(std::size_t points);
  * reference Jacobian is bad. @a check gets the smallest det F, the stretches
  * and the energy.
  */
-void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
-                                 const ElementDisplacements& u, const HyperelasticMaterial& material,
-                                 const IntegrationRule& rule, int elementIndex, ElementVector& fint,
-                                 ElementMatrix* kt, FiniteStrainElementCheck& check);
+void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x, const ElementDisplacements& u,
+                                 const HyperelasticMaterial& material, const IntegrationRule& rule, int elementIndex,
+                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check);
 
 /// The same on reference geometry computed before (referencePoints() of the
 /// same shape, coordinates and rule); @a shape and @a x name the point in
@@ -120,4 +124,4 @@ FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const Ele
                                             const ElementDisplacements& u, const HyperelasticMaterial& material,
                                             const Eigen::Vector3d& rst, int elementIndex);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -42,13 +42,14 @@ std::vector<FiniteStrainPoint> recoverFiniteStrainAtGaussPoints(const Mesh& mesh
  * one deformation. Stresses in MPa, Voigt xx, yy, zz, xy, yz, zx; sigma is
  * per deformed area, S per reference area mapped back by F^-1.
  */
-struct FiniteStrainNodalField {
+struct FiniteStrainNodalField
+{
   RegionNodeLayout layout;
   /// @name One column per (region, node) pair (R)
   ///@{
   NodalStressMatrix regionCauchy;
   NodalStressMatrix regionSecondPiolaKirchhoff;
-  Eigen::Matrix<double, 9, Eigen::Dynamic> regionDeformationGradient;  ///< F, column-major 3 x 3 in each column
+  Eigen::Matrix<double, 9, Eigen::Dynamic> regionDeformationGradient; ///< F, column-major 3 x 3 in each column
   ///@}
   /// @name One column per node (N): its representative region's value, zero in no element
   ///@{
@@ -85,4 +86,4 @@ struct FiniteStrainNodalField {
 FiniteStrainNodalField recoverFiniteStrainNodalField(const Mesh& mesh, const HyperelasticTable& materials,
                                                      const Eigen::VectorXd& u, int pointsPerDirection = 2);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -24,7 +24,8 @@ using ShapeDerivatives = Eigen::Matrix<double, kHex20NodeCount, 3>;
  * functions keep the partition of unity and the Kronecker property on the
  * present nodes. A wedge is the same element with repeated node numbers.
  */
-class Hex20Shape {
+class Hex20Shape
+{
 public:
   /// Bit k of @a midsideMask (k = 0..11) tells whether Bathe node 8 + k exists.
   explicit Hex20Shape(std::uint32_t midsideMask = kAllMidside);
@@ -48,4 +49,4 @@ private:
   std::uint32_t mask_;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -15,7 +15,8 @@ namespace caps::fem {
 
 /// The floor of a hole loop: vertices are the surface mesh's hole vertices
 /// (0 .. holeVertexCount - 1).
-struct HoleFloor {
+struct HoleFloor
+{
   /// For each hole vertex, the first hole vertex at the same chart point
   /// (within the tolerance): itself unless it is the twin of an earlier one
   /// that was not offset away.
@@ -46,4 +47,4 @@ struct HoleFloor {
  */
 HoleFloor holeFloor(const SurfaceMesh& surface, double tolerance = 1e-9);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -10,7 +10,8 @@
 namespace caps::fem {
 
 /// Which strain energy a HyperelasticMaterial uses.
-enum class HyperelasticLaw {
+enum class HyperelasticLaw
+{
   /// S = lambda tr(E) I + 2 mu E: the linear material in large deformation,
   /// what CalculiX uses for *ELASTIC under NLGEOM. Not for large compression.
   StVenantKirchhoff,
@@ -31,25 +32,28 @@ enum class HyperelasticLaw {
 const char* lawName(HyperelasticLaw law);
 
 /// Second Piola-Kirchhoff stress and material tangent at one point.
-struct MaterialResponse {
-  Vector6d stress;   ///< S (Voigt xx, yy, zz, xy, yz, zx), MPa
-  Matrix6d tangent;  ///< dS/dE with E in Voigt form, engineering shears (symmetric)
-  double energy = 0.0;  ///< strain energy per reference volume (mJ/mm^3 = MPa)
+struct MaterialResponse
+{
+  Vector6d stress;     ///< S (Voigt xx, yy, zz, xy, yz, zx), MPa
+  Matrix6d tangent;    ///< dS/dE with E in Voigt form, engineering shears (symmetric)
+  double energy = 0.0; ///< strain energy per reference volume (mJ/mm^3 = MPa)
 };
 
 /// What a material evaluation computes: a residual needs S only; the
 /// tangent dS/dE costs several times more.
-enum class ResponseParts {
-  Stress,           ///< S and the energy; the tangent is left zero
-  StressAndTangent  ///< S, dS/dE and the energy
+enum class ResponseParts
+{
+  Stress,          ///< S and the energy; the tangent is left zero
+  StressAndTangent ///< S, dS/dE and the energy
 };
 
 /// The volumetric part U(J) of a split law and its first two derivatives
 /// (for the mixed u/p/J element, which evaluates it at an independent J~).
-struct VolumetricResponse {
-  double energy = 0.0;     ///< U (MPa)
-  double pressure = 0.0;   ///< U'(J) (MPa; positive in tension)
-  double stiffness = 0.0;  ///< U''(J) (MPa)
+struct VolumetricResponse
+{
+  double energy = 0.0;    ///< U (MPa)
+  double pressure = 0.0;  ///< U'(J) (MPa; positive in tension)
+  double stiffness = 0.0; ///< U''(J) (MPa)
 };
 
 /**
@@ -62,12 +66,13 @@ struct VolumetricResponse {
  * mu = 2 (C10 + C01) (Veronda-Westmann: C1 C2), K = 2 / D1.
  * Density in tonnes/mm^3, as LinearElasticMaterial.
  */
-struct HyperelasticMaterial {
+struct HyperelasticMaterial
+{
   HyperelasticLaw law = HyperelasticLaw::NeoHookean;
-  double c10 = 0.0, c01 = 0.0;  ///< MPa (C1 of Veronda-Westmann in c10)
-  double c2 = 0.0;              ///< Veronda-Westmann's exponent C2
-  double d1 = 0.0;              ///< 1/MPa; 2/D1 is the bulk modulus
-  double youngsModulus = 0.0, poissonRatio = 0.0;  ///< St. Venant-Kirchhoff only
+  double c10 = 0.0, c01 = 0.0;                    ///< MPa (C1 of Veronda-Westmann in c10)
+  double c2 = 0.0;                                ///< Veronda-Westmann's exponent C2
+  double d1 = 0.0;                                ///< 1/MPa; 2/D1 is the bulk modulus
+  double youngsModulus = 0.0, poissonRatio = 0.0; ///< St. Venant-Kirchhoff only
   double density = 0.0;
 
   /// The material whose small-strain limit is @a linear (same E, nu,
@@ -125,4 +130,4 @@ struct HyperelasticMaterial {
 /// Hyperelastic material of each region id, as MaterialTable.
 using HyperelasticTable = std::map<int, HyperelasticMaterial>;
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -16,7 +16,8 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
  * Voigt order of strain and stress everywhere in fem/: xx, yy, zz, xy, yz, zx,
  * with engineering shear strains (gamma = 2 epsilon).
  */
-struct LinearElasticMaterial {
+struct LinearElasticMaterial
+{
   double youngsModulus = 0.0;
   double poissonRatio = 0.0;
   double density = 0.0;
@@ -31,4 +32,4 @@ struct LinearElasticMaterial {
 /// Material of each region id (the region of an element selects its material).
 using MaterialTable = std::map<int, LinearElasticMaterial>;
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -16,10 +16,11 @@ namespace caps::fem {
 /// (0..19), -1 marks an absent mid-side node, repeated indices make the
 /// degenerate wedge of Fig. 3.2. Wedge15: the native wedge's 15 nodes in
 /// wedge order (ElementNumbering.h) in slots 0..14, slots 15..19 = -1.
-struct Element {
+struct Element
+{
   std::array<int, kHex20NodeCount> nodes{};
   int region = 0;                        ///< selects the material in a MaterialTable
-  ElementKind kind = ElementKind::Hex20;  ///< how the slots are read
+  ElementKind kind = ElementKind::Hex20; ///< how the slots are read
   /// Points per direction of this element's own rule: 0 takes the
   /// analysis's (AssemblyOptions::gaussPointsPerDirection); 2 is the reduced
   /// rule (C3D20R's 2x2x2; a wedge's 9 points, CalculiX's C3D15 rule), 3 the
@@ -29,7 +30,8 @@ struct Element {
 
 /// Points per direction element @a el is integrated with, when the
 /// analysis's default is @a analysisDefault.
-inline int integrationPointsOf(const Element& el, int analysisDefault) {
+inline int integrationPointsOf(const Element& el, int analysisDefault)
+{
   return el.integrationPoints ? int(el.integrationPoints) : analysisDefault;
 }
 
@@ -37,7 +39,8 @@ inline int integrationPointsOf(const Element& el, int analysisDefault) {
  * @brief Finite element mesh: node coordinates (mm, one column per node) and
  *        elements. Node i carries DOFs 3i, 3i+1, 3i+2 (x, y, z).
  */
-struct Mesh {
+struct Mesh
+{
   Eigen::Matrix3Xd nodes;
   std::vector<Element> elements;
 
@@ -69,8 +72,7 @@ void validateMesh(const Mesh& mesh, const MaterialTable& materials);
  * returned even if absent (node -1). Returns false for any other element
  * (a brick, another degeneration, or a native wedge).
  */
-bool degenerateWedgeSlots(const Element& el, const Eigen::Matrix3Xd& nodes,
-                          std::array<int, kWedge15NodeCount>& slots);
+bool degenerateWedgeSlots(const Element& el, const Eigen::Matrix3Xd& nodes, std::array<int, kWedge15NodeCount>& slots);
 
 /**
  * @brief The same mesh with every degenerate 20-node wedge (Fig. 3.2) that
@@ -83,4 +85,4 @@ bool degenerateWedgeSlots(const Element& el, const Eigen::Matrix3Xd& nodes,
  */
 Mesh withNativeWedges(const Mesh& mesh);
 
-}  // namespace caps::fem
+} // namespace caps::fem

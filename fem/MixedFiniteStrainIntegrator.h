@@ -14,9 +14,10 @@ using MixedFieldVector = Eigen::Matrix<double, kMixedPressureCount, 1>;
 
 /// The condensed fields of one element at the displacement it was evaluated
 /// at: p~ = N . pressure, J~ = N . dilatation with N = (1, r, s, t).
-struct MixedElementFields {
-  MixedFieldVector pressure = MixedFieldVector::Zero();    ///< MPa, positive in tension
-  MixedFieldVector dilatation = MixedFieldVector::Zero();  ///< J~ coefficients
+struct MixedElementFields
+{
+  MixedFieldVector pressure = MixedFieldVector::Zero();   ///< MPa, positive in tension
+  MixedFieldVector dilatation = MixedFieldVector::Zero(); ///< J~ coefficients
 };
 
 /**
@@ -71,4 +72,4 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
                                       int elementIndex, ElementVector& fint, ElementMatrix* kt,
                                       FiniteStrainElementCheck& check, MixedElementFields* fields = nullptr);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -31,13 +31,14 @@ namespace caps::fem {
  * An origin in bone applies no force on the soft tissue: originRadius = 0
  * (the thesis' convention).
  */
-struct Muscle {
-  std::string name;                                     ///< for messages and reports; may be empty
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();     ///< p_o, world mm
-  double originRadius = 0.0;                            ///< r_o, mm; 0: origin in bone (no force)
-  Eigen::Vector3d insertion = Eigen::Vector3d::Zero();  ///< p_i, world mm
-  double insertionRadius = 0.0;                         ///< r_i, mm; > 0
-  double load = 0.0;                                    ///< l, N/mm^4 (>= 0: a muscle only pulls)
+struct Muscle
+{
+  std::string name;                                    ///< for messages and reports; may be empty
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();    ///< p_o, world mm
+  double originRadius = 0.0;                           ///< r_o, mm; 0: origin in bone (no force)
+  Eigen::Vector3d insertion = Eigen::Vector3d::Zero(); ///< p_i, world mm
+  double insertionRadius = 0.0;                        ///< r_i, mm; > 0
+  double load = 0.0;                                   ///< l, N/mm^4 (>= 0: a muscle only pulls)
   /// Width b (mm) of a smooth fall-off outside each sphere (thesis: "make the
   /// muscle force fall off over a region based on the distance from the
   /// attachment shape"); 0 gives the sharp sphere of eq. 4.41.
@@ -77,18 +78,20 @@ Eigen::Vector3d muscleForceDensity(const Muscle& muscle, const Eigen::Vector3d& 
 void validateMuscle(const Muscle& muscle, std::size_t index);
 
 /// What each muscle applies to the mesh, for reports.
-struct MuscleForces {
-  double insertionVolume = 0.0;  ///< integral of the insertion weight over the mesh, mm^3
-  double originVolume = 0.0;     ///< the same for the origin (0 in bone)
-  Eigen::Vector3d insertionForce = Eigen::Vector3d::Zero();  ///< N, towards the origin
-  Eigen::Vector3d originForce = Eigen::Vector3d::Zero();     ///< N, towards the insertion
+struct MuscleForces
+{
+  double insertionVolume = 0.0;                             ///< integral of the insertion weight over the mesh, mm^3
+  double originVolume = 0.0;                                ///< the same for the origin (0 in bone)
+  Eigen::Vector3d insertionForce = Eigen::Vector3d::Zero(); ///< N, towards the origin
+  Eigen::Vector3d originForce = Eigen::Vector3d::Zero();    ///< N, towards the insertion
 };
 
 /// Consistent nodal loads of a set of muscles and the forces they apply.
-struct MuscleLoad {
-  Eigen::VectorXd load;                              ///< 3N nodal forces (N)
-  Eigen::Vector3d totalForce = Eigen::Vector3d::Zero();  ///< sum of @a load over all nodes (N)
-  std::vector<MuscleForces> muscles;                 ///< one per input muscle, same order
+struct MuscleLoad
+{
+  Eigen::VectorXd load;                                 ///< 3N nodal forces (N)
+  Eigen::Vector3d totalForce = Eigen::Vector3d::Zero(); ///< sum of @a load over all nodes (N)
+  std::vector<MuscleForces> muscles;                    ///< one per input muscle, same order
 };
 
 /**
@@ -110,4 +113,4 @@ struct MuscleLoad {
 MuscleLoad assembleMuscleLoad(const Mesh& mesh, const std::vector<Muscle>& muscles,
                               const AssemblyOptions& options = {});
 
-}  // namespace caps::fem
+} // namespace caps::fem

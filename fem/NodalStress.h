@@ -32,12 +32,13 @@ using NodalStressMatrix = Eigen::Matrix<double, 6, Eigen::Dynamic>;
  * stress there. A node on the skin surface lies in skin elements only, so it
  * takes the skin's value whatever the rule.
  */
-struct RegionNodeLayout {
-  Eigen::VectorXi regionOf;        ///< region of each column (R)
-  Eigen::VectorXi nodeOf;          ///< mesh node of each column (R)
-  Eigen::VectorXi elementCount;    ///< elements of that region sharing that node (R)
-  Eigen::VectorXi firstColumn;     ///< N + 1 offsets into the columns
-  Eigen::VectorXi representative;  ///< column standing for each node (N); -1 for a node in no element
+struct RegionNodeLayout
+{
+  Eigen::VectorXi regionOf;       ///< region of each column (R)
+  Eigen::VectorXi nodeOf;         ///< mesh node of each column (R)
+  Eigen::VectorXi elementCount;   ///< elements of that region sharing that node (R)
+  Eigen::VectorXi firstColumn;    ///< N + 1 offsets into the columns
+  Eigen::VectorXi representative; ///< column standing for each node (N); -1 for a node in no element
 
   Eigen::Index size() const { return regionOf.size(); }
   /// Column of (@a region, @a node); -1 when no element of @a region holds @a node.
@@ -66,8 +67,7 @@ struct RegionNodeLayout {
  * mean of its slots first, so the element counts once. Returns
  * @a rows x layout.size().
  */
-Eigen::MatrixXd averageAtRegionNodes(const Mesh& mesh, const RegionNodeLayout& layout, int rows,
-                                     int pointsPerDirection,
+Eigen::MatrixXd averageAtRegionNodes(const Mesh& mesh, const RegionNodeLayout& layout, int rows, int pointsPerDirection,
                                      const std::function<void(int element, Eigen::MatrixXd& values)>& gaussValues);
 
 /// The representative column of each node taken from @a regionValues
@@ -84,11 +84,12 @@ Eigen::MatrixXd representativeValues(const RegionNodeLayout& layout, const Eigen
  * vonMises(), meanStress() and principal() derive from. A node in no
  * element has zero stress and elementCount 0.
  */
-struct NodalStressField {
+struct NodalStressField
+{
   RegionNodeLayout layout;
-  NodalStressMatrix regionStress;  ///< 6 x R (MPa), one column per (region, node)
-  NodalStressMatrix stress;        ///< 6 x N (MPa), the representative region's value
-  Eigen::VectorXi elementCount;    ///< elements averaged into each column of stress (N)
+  NodalStressMatrix regionStress; ///< 6 x R (MPa), one column per (region, node)
+  NodalStressMatrix stress;       ///< 6 x N (MPa), the representative region's value
+  Eigen::VectorXi elementCount;   ///< elements averaged into each column of stress (N)
 
   /// The stress of @a region at @a node (MPa); throws std::out_of_range when
   /// no element of that region holds the node.
@@ -179,4 +180,4 @@ NodalStressField nodalStressesFromGaussPoints(const Mesh& mesh, const MaterialTa
                                               const std::vector<std::vector<StressPoint>>& gaussStress,
                                               int pointsPerDirection = 2);
 
-}  // namespace caps::fem
+} // namespace caps::fem

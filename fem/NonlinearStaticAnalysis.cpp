@@ -14,27 +14,32 @@ namespace caps::fem {
 
 namespace {
 
-struct Cancelled {};
+struct Cancelled
+{};
 
-double secondsSince(std::chrono::steady_clock::time_point t0) {
+double secondsSince(std::chrono::steady_clock::time_point t0)
+{
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 /// How one increment ended.
-struct IncrementOutcome {
+struct IncrementOutcome
+{
   bool converged = false;
   int iterations = 0;
-  int newTangents = 0;  ///< iterations that formed and factored a tangent
+  int newTangents = 0; ///< iterations that formed and factored a tangent
   double residual = 0.0;
   std::string rejection;
-  int worstElement = -1;  ///< an inverted element, when that was the reason
+  int worstElement = -1; ///< an inverted element, when that was the reason
 };
 
 /// A running mean of measured seconds.
-struct MeanTime {
+struct MeanTime
+{
   double total = 0.0;
   int count = 0;
-  void add(double s) {
+  void add(double s)
+  {
     total += s;
     ++count;
   }
@@ -51,30 +56,38 @@ struct MeanTime {
  * (linear convergence). The costs of a force evaluation, a tangent
  * evaluation, a factorization and a solve are measured as the solve goes.
  */
-class TangentReusePolicy {
+class TangentReusePolicy
+{
 public:
   MeanTime forces, tangent, factorization, backSolve;
 
   /// An iteration took the residual from @a before to @a after, with a new
   /// tangent or with a kept one.
-  void record(double before, double after, bool newTangent) {
-    if (!(before > 0.0) || !std::isfinite(after)) {
+  void record(double before, double after, bool newTangent)
+  {
+    if (!(before > 0.0) || !std::isfinite(after))
+    {
       contraction_ = newtonRate_ = kNone;
       return;
     }
     contraction_ = after / before;
-    if (newTangent) newtonRate_ = contraction_ / before;
+    if (newTangent)
+      newtonRate_ = contraction_ / before;
   }
 
   /// Whether the iteration that starts at relative residual @a residual,
   /// with @a iterationsLeft iterations allowed, should form a new tangent.
-  bool wantsNewTangent(double residual, double tolerance, int iterationsLeft) const {
+  bool wantsNewTangent(double residual, double tolerance, int iterationsLeft) const
+  {
     // Without a measured contraction, or kept factorizations that barely contract: a new tangent.
-    if (!(contraction_ < kSlowestKept) || !(newtonRate_ > 0.0)) return true;
-    if (!(residual > tolerance)) return false;
+    if (!(contraction_ < kSlowestKept) || !(newtonRate_ > 0.0))
+      return true;
+    if (!(residual > tolerance))
+      return false;
     const double digits = std::log(residual / tolerance);
     const int keptIterations = int(std::ceil(digits / -std::log(contraction_)));
-    if (keptIterations > iterationsLeft) return true;
+    if (keptIterations > iterationsLeft)
+      return true;
     int newtonIterations = 0;
     for (double r = residual; r > tolerance && newtonIterations < iterationsLeft; ++newtonIterations)
       r *= std::min(1.0, newtonRate_ * r);
@@ -85,32 +98,34 @@ public:
 
 private:
   static constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
-  static constexpr double kSlowestKept = 0.25;  ///< a kept factorization must at least quarter the residual
+  static constexpr double kSlowestKept = 0.25; ///< a kept factorization must at least quarter the residual
   double contraction_ = kNone;
   double newtonRate_ = kNone;
 };
 
-std::string percent(double fraction) {
+std::string percent(double fraction)
+{
   std::ostringstream s;
   s.precision(4);
   s << 100.0 * fraction << " %";
   return s.str();
 }
 
-}  // namespace
+} // namespace
 
 NonlinearStaticAnalysis::NonlinearStaticAnalysis(Mesh mesh, HyperelasticTable materials, Constraints constraints,
                                                  AssemblyOptions options)
-    : mesh_(std::move(mesh)),
-      materials_(std::move(materials)),
-      constraints_(std::move(constraints)),
-      options_(options) {
-  for (const auto& [region, material] : materials_) linear_[region] = material.smallStrainLimit();
+  : mesh_(std::move(mesh)), materials_(std::move(materials)), constraints_(std::move(constraints)), options_(options)
+{
+  for (const auto& [region, material] : materials_)
+    linear_[region] = material.smallStrainLimit();
 }
 
-void NonlinearStaticAnalysis::validate(const LoadCase& load) const {
-  for (const auto& [region, material] : materials_) material.validate("material of region " + std::to_string(region));
-  if (options_.volumetric == VolumetricFormulation::MixedPressure)  // the mixed element needs the split law
+void NonlinearStaticAnalysis::validate(const LoadCase& load) const
+{
+  for (const auto& [region, material] : materials_)
+    material.validate("material of region " + std::to_string(region));
+  if (options_.volumetric == VolumetricFormulation::MixedPressure) // the mixed element needs the split law
     for (const auto& [region, material] : materials_)
       if (!material.hasVolumetricSplit())
         throw std::invalid_argument("material of region " + std::to_string(region) +
@@ -121,11 +136,12 @@ void NonlinearStaticAnalysis::validate(const LoadCase& load) const {
     integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection));
   if (!load.facePressures.empty())
     throw std::invalid_argument(
-        "face pressures are follower loads in large deformation, which the nonlinear analysis does not support; "
-        "apply them as nodal forces or solve the linear model");
+      "face pressures are follower loads in large deformation, which the nonlinear analysis does not support; "
+      "apply them as nodal forces or solve the linear model");
 }
 
-Eigen::VectorXd NonlinearStaticAnalysis::loadVector(const LoadCase& load) const {
+Eigen::VectorXd NonlinearStaticAnalysis::loadVector(const LoadCase& load) const
+{
   // Dead loads only (validate() refuses face pressures, which follow the surface).
   LoadCase dead = load;
   dead.facePressures.clear();
@@ -133,7 +149,8 @@ Eigen::VectorXd NonlinearStaticAnalysis::loadVector(const LoadCase& load) const 
 }
 
 DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k,
-                                                   Eigen::VectorXd* fint) const {
+                                                   Eigen::VectorXd* fint) const
+{
   if (u.size() != mesh_.dofCount())
     throw std::invalid_argument("the displacement vector has " + std::to_string(u.size()) + " entries for a model of " +
                                 std::to_string(mesh_.dofCount()) + " DOFs");
@@ -142,7 +159,8 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     const Element& el = mesh_.elements[e];
     ElementDisplacements ue = ElementDisplacements::Zero();
     for (int a = 0; a < kHex20NodeCount; ++a)
-      if (el.nodes[std::size_t(a)] >= 0) ue.row(a) = u.segment<3>(3 * el.nodes[std::size_t(a)]).transpose();
+      if (el.nodes[std::size_t(a)] >= 0)
+        ue.row(a) = u.segment<3>(3 * el.nodes[std::size_t(a)]).transpose();
     ElementVector local;
     // Formulation switch (AssemblyOptions::volumetric): the mixed u/p/J element or the displacement one.
     const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
@@ -160,11 +178,14 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
   Eigen::VectorXd scratch;
   assembleElements(mesh_, options_.threads, kernel, k, fint ? fint : &scratch);
   DeformationCheck c;
-  if (checks.empty()) return c;
+  if (checks.empty())
+    return c;
   c.minDetF = c.minStretch = std::numeric_limits<double>::infinity();
   c.maxStretch = 0.0;
-  for (std::size_t e = 0; e < checks.size(); ++e) {
-    if (checks[e].minDetF < c.minDetF) {
+  for (std::size_t e = 0; e < checks.size(); ++e)
+  {
+    if (checks[e].minDetF < c.minDetF)
+    {
       c.minDetF = checks[e].minDetF;
       c.minDetFElement = int(e);
     }
@@ -175,36 +196,43 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
   return c;
 }
 
-void NonlinearStaticAnalysis::cacheReferenceGeometry() {
+void NonlinearStaticAnalysis::cacheReferenceGeometry()
+{
   // About 13 kB per 27-point brick: 80 MB for a 100k-DOF model.
   constexpr std::size_t kReferenceCacheBytes = std::size_t(2) << 30;
   reference_.clear();
   std::size_t bytes = 0;
   for (const Element& el : mesh_.elements)
-    bytes += referencePointsBytes(integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)).size());
-  if (bytes > kReferenceCacheBytes) return;
+    bytes +=
+      referencePointsBytes(integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)).size());
+  if (bytes > kReferenceCacheBytes)
+    return;
   reference_.reserve(mesh_.elements.size());
-  for (std::size_t e = 0; e < mesh_.elements.size(); ++e) {
+  for (std::size_t e = 0; e < mesh_.elements.size(); ++e)
+  {
     const Element& el = mesh_.elements[e];
-    reference_.push_back(referencePoints(ElementShape::fromConnectivity(el.kind, el.nodes), mesh_.elementCoordinates(e),
-                                         integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)),
-                                         int(e)));
+    reference_.push_back(
+      referencePoints(ElementShape::fromConnectivity(el.kind, el.nodes), mesh_.elementCoordinates(e),
+                      integrationRule(el.kind, integrationPointsOf(el, options_.gaussPointsPerDirection)), int(e)));
   }
 }
 
-Eigen::VectorXd NonlinearStaticAnalysis::internalForces(const Eigen::VectorXd& u) const {
+Eigen::VectorXd NonlinearStaticAnalysis::internalForces(const Eigen::VectorXd& u) const
+{
   Eigen::VectorXd f;
   evaluate(u, nullptr, &f);
   return f;
 }
 
-Eigen::SparseMatrix<double> NonlinearStaticAnalysis::tangentStiffness(const Eigen::VectorXd& u) const {
+Eigen::SparseMatrix<double> NonlinearStaticAnalysis::tangentStiffness(const Eigen::VectorXd& u) const
+{
   Eigen::SparseMatrix<double> k = stiffnessPattern(mesh_);
   evaluate(u, &k, nullptr);
   return k;
 }
 
-DeformationCheck NonlinearStaticAnalysis::deformationCheck(const Eigen::VectorXd& u) const {
+DeformationCheck NonlinearStaticAnalysis::deformationCheck(const Eigen::VectorXd& u) const
+{
   return evaluate(u, nullptr, nullptr);
 }
 
@@ -217,37 +245,39 @@ namespace {
  * convergence test. The forces and tangents come from @a evaluate (the
  * analysis's elements).
  */
-class NewtonSolve {
+class NewtonSolve
+{
 public:
   using Evaluate =
-      std::function<DeformationCheck(const Eigen::VectorXd&, Eigen::SparseMatrix<double>*, Eigen::VectorXd*)>;
+    std::function<DeformationCheck(const Eigen::VectorXd&, Eigen::SparseMatrix<double>*, Eigen::VectorXd*)>;
 
   NewtonSolve(const Mesh& mesh, const HyperelasticTable& materials, const Constraints& constraints,
               const std::function<Eigen::VectorXd()>& loadVector, Evaluate evaluate, const NewtonOptions& newton,
               const NewtonMonitor& monitor)
-      : map_(resolveConstraints(mesh, constraints)),
-        fext_(loadVector()),
-        k_(stiffnessPattern(mesh)),
-        kbar_(map_.reduceMatrix(k_)),
-        evaluate_(std::move(evaluate)),
-        newton_(newton),
-        monitor_(monitor),
-        fullNewton_(newton.tangentUpdate == TangentUpdate::EveryIteration),
-        roundoffForce_(roundoffForceOf(mesh, materials)) {
+    : map_(resolveConstraints(mesh, constraints)), fext_(loadVector()), k_(stiffnessPattern(mesh)),
+      kbar_(map_.reduceMatrix(k_)), evaluate_(std::move(evaluate)), newton_(newton), monitor_(monitor),
+      fullNewton_(newton.tangentUpdate == TangentUpdate::EveryIteration),
+      roundoffForce_(roundoffForceOf(mesh, materials))
+  {
     // The pattern of K-bar does not change between iterations: analysed once.
     useNodeGroupedOrdering(mesh, map_, solver_);
-    if (map_.reducedCount() > 0) solver_.analyzePattern(kbar_);
+    if (map_.reducedCount() > 0)
+      solver_.analyzePattern(kbar_);
   }
 
   /// 3. The increments: grow after a fast convergence, cut back on failure.
-  NonlinearResult run(const IncrementControl& control) {
+  NonlinearResult run(const IncrementControl& control)
+  {
     Eigen::VectorXd ubar = Eigen::VectorXd::Zero(map_.reducedCount());
     double lambda = 0.0;
     double step = std::min(control.initial, 1.0);
     int accepted = 0;
-    try {
-      while (lambda < 1.0 - 1e-12) {
-        if (int(result_.increments.size()) >= control.maxIncrements) {
+    try
+    {
+      while (lambda < 1.0 - 1e-12)
+      {
+        if (int(result_.increments.size()) >= control.maxIncrements)
+        {
           lastReason_ = "the solve used its " + std::to_string(control.maxIncrements) + " increments";
           break;
         }
@@ -255,24 +285,32 @@ public:
         const double target = (1.0 - lambda - step) < 1e-12 ? 1.0 : lambda + step;
         Eigen::VectorXd state = ubar;
         const IncrementOutcome o = increment(accepted + 1, lambda, target, state);
-        result_.increments.push_back({accepted + 1, lambda, target, o.iterations, o.residual, o.converged, o.rejection});
-        if (o.converged) {
+        result_.increments.push_back(
+          {accepted + 1, lambda, target, o.iterations, o.residual, o.converged, o.rejection});
+        if (o.converged)
+        {
           ++accepted;
           ubar = state;
           lambda = target;
           // Grow after a fast convergence: at most 5 tangents (full Newton: 5
           // iterations), and at most 10 iterations of modified Newton.
-          if (!control.fixed && o.newTangents <= 5 && o.iterations <= 10) step = std::min(control.maximum, 1.5 * step);
+          if (!control.fixed && o.newTangents <= 5 && o.iterations <= 10)
+            step = std::min(control.maximum, 1.5 * step);
           continue;
         }
-        lin_ = {};  // it described the failed trial
+        lin_ = {}; // it described the failed trial
         lastReason_ = o.rejection;
-        if (o.worstElement >= 0) lastWorst_ = o.worstElement;
-        if (control.fixed) break;
-        step *= o.worstElement >= 0 ? 0.25 : 0.5;  // an inversion says the step was far too large
-        if (step < control.minimum) break;
+        if (o.worstElement >= 0)
+          lastWorst_ = o.worstElement;
+        if (control.fixed)
+          break;
+        step *= o.worstElement >= 0 ? 0.25 : 0.5; // an inversion says the step was far too large
+        if (step < control.minimum)
+          break;
       }
-    } catch (const Cancelled&) {
+    }
+    catch (const Cancelled&)
+    {
       result_.status = NonlinearStatus::Cancelled;
       result_.message = "cancelled at load fraction " + percent(lambda) + " (the last converged increment)";
     }
@@ -282,19 +320,21 @@ public:
 private:
   /// What the solver holds of the current trial state, between iterations
   /// and from one converged increment into the next.
-  struct Linearization {
-    Eigen::VectorXd fint;        ///< internal forces at the trial state
-    bool forcesCurrent = false;  ///< fint belongs to the trial state
-    bool tangentInK = false;     ///< k is the tangent at the trial state
-    bool factored = false;       ///< the solver holds a factorization of k (of some earlier state)
+  struct Linearization
+  {
+    Eigen::VectorXd fint;       ///< internal forces at the trial state
+    bool forcesCurrent = false; ///< fint belongs to the trial state
+    bool tangentInK = false;    ///< k is the tangent at the trial state
+    bool factored = false;      ///< the solver holds a factorization of k (of some earlier state)
   };
 
   /// Where a line search ended.
-  struct Step {
+  struct Step
+  {
     bool accepted = false;
     double alpha = 1.0;
-    Eigen::VectorXd next, fint, rbar;  ///< the state, its forces and its reduced residual
-    bool tangentInK = false;           ///< k was formed at next (full Newton)
+    Eigen::VectorXd next, fint, rbar; ///< the state, its forces and its reduced residual
+    bool tangentInK = false;          ///< k was formed at next (full Newton)
   };
 
   /// The residual cannot fall below the rounding of stresses that cancel at
@@ -302,23 +342,28 @@ private:
   /// gives, mu L^2 over the model's size L. Below it, a residual is
   /// converged whatever the load (a nearly stress-free state has no force to
   /// compare with).
-  static double roundoffForceOf(const Mesh& mesh, const HyperelasticTable& materials) {
+  static double roundoffForceOf(const Mesh& mesh, const HyperelasticTable& materials)
+  {
     double stiffest = 0.0;
-    for (const auto& [region, material] : materials) stiffest = std::max(stiffest, material.shearModulus());
+    for (const auto& [region, material] : materials)
+      stiffest = std::max(stiffest, material.shearModulus());
     const double size =
-        mesh.nodeCount() ? (mesh.nodes.rowwise().maxCoeff() - mesh.nodes.rowwise().minCoeff()).norm() : 1.0;
+      mesh.nodeCount() ? (mesh.nodes.rowwise().maxCoeff() - mesh.nodes.rowwise().minCoeff()).norm() : 1.0;
     return 10.0 * std::numeric_limits<double>::epsilon() * stiffest * size * size;
   }
 
   /// The full displacements of the reduced ones at load fraction @a lambda.
-  Eigen::VectorXd expand(const Eigen::VectorXd& reduced, double lambda) const {
+  Eigen::VectorXd expand(const Eigen::VectorXd& reduced, double lambda) const
+  {
     return map_.expand(reduced).col(0) + (lambda - 1.0) * map_.offset;
   }
 
   /// Forces (and tangent) at u, timed.
-  void timedEvaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces) {
+  void timedEvaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces)
+  {
     const auto t0 = std::chrono::steady_clock::now();
-    struct Tally {
+    struct Tally
+    {
       double& total;
       std::chrono::steady_clock::time_point start;
       ~Tally() { total += secondsSince(start); }
@@ -329,14 +374,16 @@ private:
   }
 
   /// Factors K-bar of the current k; false (with a reason) when it is not positive definite.
-  bool factor(std::string& reason) {
+  bool factor(std::string& reason)
+  {
     const auto t0 = std::chrono::steady_clock::now();
     map_.reduceValues(k_, kbar_);
     solver_.factorize(kbar_);
     result_.factorSeconds += secondsSince(t0);
     reuse_.factorization.add(secondsSince(t0));
     ++result_.factorizations;
-    if (solver_.status() == SolverStatus::Success) return true;
+    if (solver_.status() == SolverStatus::Success)
+      return true;
     reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
              "at this deformation)";
     return false;
@@ -344,22 +391,27 @@ private:
 
   /// 2. One increment from the converged state (@a state, @a lambda0) to
   ///    @a lambda1; @a state becomes the converged state when it converges.
-  IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state) {
+  IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state)
+  {
     IncrementOutcome out;
-    if (map_.reducedCount() == 0) {  // everything prescribed: nothing to solve
+    if (map_.reducedCount() == 0)
+    { // everything prescribed: nothing to solve
       out.converged = true;
       return out;
     }
     Eigen::VectorXd trial = state, rbar;
     double firstEnergy = 0.0;
-    for (int it = 1; it <= newton_.maxIterations; ++it) {
+    for (int it = 1; it <= newton_.maxIterations; ++it)
+    {
       out.iterations = it;
       bool refresh = false;
-      if (!tangentWhenDue(it, it == 1 ? lambda0 : lambda1, trial, out, refresh)) return out;
+      if (!tangentWhenDue(it, it == 1 ? lambda0 : lambda1, trial, out, refresh))
+        return out;
       // b. The out-of-balance force; the first iteration is the predictor:
       //    the prescribed increment (lambda1 - lambda0) g enters as a load
       //    through the (factored) tangent.
-      if (it == 1) {
+      if (it == 1)
+      {
         const Eigen::VectorXd dg = (lambda1 - lambda0) * map_.offset;
         rbar = map_.reduceVector(lin_.fint - lambda1 * fext_ + k_.selfadjointView<Eigen::Upper>() * dg).col(0);
       }
@@ -367,11 +419,13 @@ private:
       const Eigen::VectorXd delta = -solver_.solve(rbar);
       reuse_.backSolve.add(secondsSince(solveStart));
       const double s0 = delta.dot(rbar);
-      if (it == 1) firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
+      if (it == 1)
+        firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
 
       Step step = lineSearch(it, lambda1, trial, delta, s0, out);
-      if (!step.accepted) return out;
-      const double energy = std::abs(step.alpha * delta.dot(step.rbar));  // the work the correction leaves undone
+      if (!step.accepted)
+        return out;
+      const double energy = std::abs(step.alpha * delta.dot(step.rbar)); // the work the correction leaves undone
       trial = std::move(step.next);
       lin_.fint = std::move(step.fint);
       lin_.forcesCurrent = true;
@@ -382,18 +436,22 @@ private:
       const double scale = std::max({(lambda1 * fext_).norm(), lin_.fint.norm(), roundoffForce_});
       const double residual = rbar.norm() <= roundoffForce_ ? 0.0 : rbar.norm() / scale;
       const double relEnergy = energy / firstEnergy;
-      if (it > 1) reuse_.record(out.residual, residual, refresh);
+      if (it > 1)
+        reuse_.record(out.residual, residual, refresh);
       out.residual = residual;
       const NewtonIteration report{number, lambda1, it, residual, relEnergy, step.alpha, refresh};
       result_.iterations.push_back(report);
-      if (monitor_ && !monitor_(report)) throw Cancelled{};
-      if (!std::isfinite(residual) || residual > 1e8) {
+      if (monitor_ && !monitor_(report))
+        throw Cancelled{};
+      if (!std::isfinite(residual) || residual > 1e8)
+      {
         out.rejection = "the Newton iteration diverged (relative residual " + std::to_string(residual) + ")";
         return out;
       }
       const bool forceSmall = residual <= newton_.residualTolerance;
       const bool energySmall = relEnergy <= newton_.energyTolerance || residual == 0.0;
-      if ((forceSmall && energySmall && it > 1) || (it == 1 && residual == 0.0)) {
+      if ((forceSmall && energySmall && it > 1) || (it == 1 && residual == 0.0))
+      {
         // (A zero residual after the first iteration: linear in this increment, e.g. a rigid motion.)
         out.converged = true;
         state = trial;
@@ -412,15 +470,19 @@ private:
   ///    factorization it has and forms a new tangent at its second
   ///    iteration, when the increment's own contraction is not known yet.
   ///    False, with the reason in @a out, when the increment must stop.
-  bool tangentWhenDue(int it, double lambdaAtTrial, const Eigen::VectorXd& trial, IncrementOutcome& out,
-                      bool& refresh) {
+  bool tangentWhenDue(int it, double lambdaAtTrial, const Eigen::VectorXd& trial, IncrementOutcome& out, bool& refresh)
+  {
     refresh = !lin_.factored || fullNewton_ || it == 2;
     if (!refresh && it > 2)
       refresh = reuse_.wantsNewTangent(out.residual, newton_.residualTolerance, newton_.maxIterations - it + 1);
-    if ((refresh && !lin_.tangentInK) || !lin_.forcesCurrent) {
-      try {
+    if ((refresh && !lin_.tangentInK) || !lin_.forcesCurrent)
+    {
+      try
+      {
         timedEvaluate(expand(trial, lambdaAtTrial), refresh ? &k_ : nullptr, &lin_.fint);
-      } catch (const InvertedElementError& e) {  // cannot happen at an accepted state, but be safe
+      }
+      catch (const InvertedElementError& e)
+      { // cannot happen at an accepted state, but be safe
         out.rejection = e.what();
         out.worstElement = e.element();
         return false;
@@ -428,10 +490,12 @@ private:
       lin_.forcesCurrent = true;
       lin_.tangentInK = lin_.tangentInK || refresh;
     }
-    if (refresh) {
+    if (refresh)
+    {
       ++out.newTangents;
       lin_.factored = false;
-      if (!factor(out.rejection)) return false;
+      if (!factor(out.rejection))
+        return false;
       lin_.factored = true;
     }
     return true;
@@ -441,17 +505,23 @@ private:
   ///    trial halves the step. Full Newton builds the next tangent with the
   ///    first trial. Not accepted, with the reason in @a out, when no step is.
   Step lineSearch(int it, double lambda1, const Eigen::VectorXd& trial, const Eigen::VectorXd& delta, double s0,
-                  IncrementOutcome& out) {
+                  IncrementOutcome& out)
+  {
     Step step;
     double sPrevAlpha = 0.0, sPrev = s0;
     double& alpha = step.alpha;
-    for (int ls = 0; ls <= newton_.maxLineSearchSteps + 6; ++ls) {
+    for (int ls = 0; ls <= newton_.maxLineSearchSteps + 6; ++ls)
+    {
       step.next = trial + alpha * delta;
       const bool withTangent = fullNewton_ && ls == 0;
-      try {
+      try
+      {
         timedEvaluate(expand(step.next, lambda1), withTangent ? &k_ : nullptr, &step.fint);
-      } catch (const InvertedElementError& e) {
-        if (it == 1 || ls >= newton_.maxLineSearchSteps + 6) {
+      }
+      catch (const InvertedElementError& e)
+      {
+        if (it == 1 || ls >= newton_.maxLineSearchSteps + 6)
+        {
           // The predictor itself inverts an element: the increment is too large.
           out.rejection = e.what();
           out.worstElement = e.element();
@@ -460,29 +530,35 @@ private:
         alpha *= 0.5;
         continue;
       }
-      if (withTangent) lin_.factored = false;  // k no longer matches the factorization
+      if (withTangent)
+        lin_.factored = false; // k no longer matches the factorization
       step.rbar = map_.reduceVector(step.fint - lambda1 * fext_).col(0);
       step.tangentInK = withTangent;
-      if (!newton_.lineSearch || it == 1 || ls >= newton_.maxLineSearchSteps) {
+      if (!newton_.lineSearch || it == 1 || ls >= newton_.maxLineSearchSteps)
+      {
         step.accepted = true;
         return step;
       }
       const double s = delta.dot(step.rbar);
-      if (!std::isfinite(s)) {
+      if (!std::isfinite(s))
+      {
         alpha *= 0.5;
         continue;
       }
-      if (std::abs(s) <= newton_.lineSearchRatio * std::abs(s0)) {
+      if (std::abs(s) <= newton_.lineSearchRatio * std::abs(s0))
+      {
         step.accepted = true;
         return step;
       }
       // Secant root of s(alpha) through (alphaPrev, sPrev) and (alpha, s).
       double root = (sPrev * alpha - s * sPrevAlpha) / (sPrev - s);
-      if (!std::isfinite(root)) root = 0.5 * alpha;
+      if (!std::isfinite(root))
+        root = 0.5 * alpha;
       sPrevAlpha = alpha;
       sPrev = s;
       alpha = std::clamp(root, 0.1 * alpha, alpha == 1.0 ? 1.0 : 2.0 * alpha);
-      if (alpha == sPrevAlpha) {
+      if (alpha == sPrevAlpha)
+      {
         step.accepted = true;
         return step;
       }
@@ -494,13 +570,16 @@ private:
   /// 4. The result: the last converged state, its checks, and when the
   ///    loads were not all applied the message saying how far it got, what
   ///    failed, and what to try.
-  NonlinearResult finish(const Eigen::VectorXd& ubar, double lambda, int accepted) {
+  NonlinearResult finish(const Eigen::VectorXd& ubar, double lambda, int accepted)
+  {
     NonlinearResult& result = result_;
     result.loadFraction = lambda;
     result.displacements = expand(ubar, lambda);
     result.check = evaluate_(result.displacements, nullptr, nullptr);
-    if (result.status == NonlinearStatus::Cancelled) return std::move(result_);
-    if (lambda >= 1.0 - 1e-12) {
+    if (result.status == NonlinearStatus::Cancelled)
+      return std::move(result_);
+    if (lambda >= 1.0 - 1e-12)
+    {
       result.status = NonlinearStatus::Converged;
       result.loadFraction = 1.0;
       return std::move(result_);
@@ -510,10 +589,12 @@ private:
     std::ostringstream m;
     m << "the large-deformation solve did not converge: increment " << accepted + 1 << ", from load fraction "
       << percent(lambda) << ", failed at the smallest allowed size";
-    if (!lastReason_.empty()) m << " (" << lastReason_ << ")";
+    if (!lastReason_.empty())
+      m << " (" << lastReason_ << ")";
     m << "; the last converged state is " << percent(lambda) << " of the loads, prescribed displacements and suture "
       << "closure, which is not a prediction";
-    if (lastWorst_ >= 0) m << "; the element that failed is " << lastWorst_;
+    if (lastWorst_ >= 0)
+      m << "; the element that failed is " << lastWorst_;
     else if (result.check.minDetFElement >= 0)
       m << "; the most compressed element is " << result.check.minDetFElement << " (det F = " << result.check.minDetF
         << ")";
@@ -532,17 +613,18 @@ private:
   const NewtonMonitor& monitor_;
   const bool fullNewton_;
   const double roundoffForce_;
-  TangentReusePolicy reuse_;  // measures the costs it weighs
+  TangentReusePolicy reuse_; // measures the costs it weighs
   Linearization lin_;
   NonlinearResult result_;
   int lastWorst_ = -1;
   std::string lastReason_;
 };
 
-}  // namespace
+} // namespace
 
 NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const IncrementControl& control,
-                                               const NewtonOptions& newton, const NewtonMonitor& monitor) {
+                                               const NewtonOptions& newton, const NewtonMonitor& monitor)
+{
   // 1. Check the input and set up the constrained system once.
   validate(load);
   cacheReferenceGeometry();
@@ -550,12 +632,12 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
         control.minimum <= control.initial && control.maximum >= control.initial))
     throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
   NewtonSolve newtonSolve(
-      mesh_, materials_, constraints_, [&] { return loadVector(load); },
-      [this](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
-        return evaluate(u, k, fint);
-      },
-      newton, monitor);
+    mesh_, materials_, constraints_, [&] { return loadVector(load); },
+    [this](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
+      return evaluate(u, k, fint);
+    },
+    newton, monitor);
   return newtonSolve.run(control);
 }
 
-}  // namespace caps::fem
+} // namespace caps::fem

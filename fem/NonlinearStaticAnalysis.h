@@ -18,7 +18,8 @@
 namespace caps::fem {
 
 /// When the Newton iteration forms and factors a new tangent.
-enum class TangentUpdate {
+enum class TangentUpdate
+{
   /// Full Newton: a new tangent and one numeric factorization every iteration.
   EveryIteration,
   /// Modified Newton: the last factorization is kept, across iterations and
@@ -31,7 +32,8 @@ enum class TangentUpdate {
 };
 
 /// Tolerances and safeguards of the Newton-Raphson iteration in one increment.
-struct NewtonOptions {
+struct NewtonOptions
+{
   /// Converged when |R| <= residualTolerance * the force scale (the larger
   /// of |f_ext| and |f_int|, reactions included) ...
   double residualTolerance = 1e-8;
@@ -50,10 +52,11 @@ struct NewtonOptions {
 
 /// The load increments: fractions of the load, the prescribed displacements
 /// and the suture gaps, applied together from 0 to 1.
-struct IncrementControl {
-  double initial = 1.0;   ///< first increment
-  double minimum = 1e-5;  ///< below it, a failing increment ends the solve
-  double maximum = 1.0;   ///< the largest increment after growing
+struct IncrementControl
+{
+  double initial = 1.0;  ///< first increment
+  double minimum = 1e-5; ///< below it, a failing increment ends the solve
+  double maximum = 1.0;  ///< the largest increment after growing
   /// Fixed increments of @a initial (CalculiX *STATIC, DIRECT): a failing
   /// increment ends the solve instead of being cut back.
   bool fixed = false;
@@ -61,7 +64,8 @@ struct IncrementControl {
 };
 
 /// What one Newton iteration reached (for the log and the progress bar).
-struct NewtonIteration {
+struct NewtonIteration
+{
   int increment = 0;           ///< 1-based, counting accepted increments
   double loadFraction = 0.0;   ///< the fraction the increment aims at
   int iteration = 0;           ///< 1-based within the increment
@@ -72,39 +76,43 @@ struct NewtonIteration {
 };
 
 /// One attempted increment, accepted or cut back.
-struct IncrementRecord {
+struct IncrementRecord
+{
   int increment = 0;
   double startFraction = 0.0, endFraction = 0.0;
   int iterations = 0;
-  double residual = 0.0;  ///< the last relative residual
+  double residual = 0.0; ///< the last relative residual
   bool accepted = false;
-  std::string rejection;  ///< why it was cut back (empty when accepted)
+  std::string rejection; ///< why it was cut back (empty when accepted)
 };
 
-enum class NonlinearStatus {
-  Converged,     ///< the whole load reached, every increment converged
-  NotConverged,  ///< an increment failed at the smallest size: result is the last converged state, NOT a prediction
-  Cancelled      ///< stopped by the monitor
+enum class NonlinearStatus
+{
+  Converged,    ///< the whole load reached, every increment converged
+  NotConverged, ///< an increment failed at the smallest size: result is the last converged state, NOT a prediction
+  Cancelled     ///< stopped by the monitor
 };
 
 /// The checks every large-deformation result carries (DESIGN.md).
-struct DeformationCheck {
+struct DeformationCheck
+{
   double minDetF = 1.0;
   int minDetFElement = -1;
   double maxStretch = 1.0;
   double minStretch = 1.0;
-  double strainEnergy = 0.0;  ///< N mm
+  double strainEnergy = 0.0; ///< N mm
 };
 
-struct NonlinearResult {
+struct NonlinearResult
+{
   NonlinearStatus status = NonlinearStatus::NotConverged;
-  std::string message;         ///< empty when converged; otherwise what happened and what to try
-  double loadFraction = 0.0;   ///< the last converged fraction (1 when converged)
-  Eigen::VectorXd displacements;  ///< 3N at loadFraction
-  DeformationCheck check;      ///< of the displacements above
-  int failedElement = -1;      ///< the element that inverted in the last failed try, if that was why
-  std::vector<IncrementRecord> increments;  ///< every attempt, in order
-  std::vector<NewtonIteration> iterations;  ///< every iteration, in order
+  std::string message;                     ///< empty when converged; otherwise what happened and what to try
+  double loadFraction = 0.0;               ///< the last converged fraction (1 when converged)
+  Eigen::VectorXd displacements;           ///< 3N at loadFraction
+  DeformationCheck check;                  ///< of the displacements above
+  int failedElement = -1;                  ///< the element that inverted in the last failed try, if that was why
+  std::vector<IncrementRecord> increments; ///< every attempt, in order
+  std::vector<NewtonIteration> iterations; ///< every iteration, in order
   int factorizations = 0;
   int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
   double assembleSeconds = 0.0; ///< in those evaluations
@@ -134,15 +142,16 @@ using NewtonMonitor = std::function<bool(const NewtonIteration&)>;
  * muscles) are dead loads scaled by lambda; face pressures (follower loads
  * in large deformation) are refused.
  */
-class NonlinearStaticAnalysis {
+class NonlinearStaticAnalysis
+{
 public:
   NonlinearStaticAnalysis(Mesh mesh, HyperelasticTable materials, Constraints constraints,
                           AssemblyOptions options = {});
 
   /// Runs the increments. Throws std::invalid_argument / ElementError on bad
   /// input (mesh, materials, constraints, a face pressure), naming the culprit.
-  NonlinearResult solve(const LoadCase& load, const IncrementControl& control = {},
-                        const NewtonOptions& newton = {}, const NewtonMonitor& monitor = {});
+  NonlinearResult solve(const LoadCase& load, const IncrementControl& control = {}, const NewtonOptions& newton = {},
+                        const NewtonMonitor& monitor = {});
 
   /// Full load vector (3N) of @a load at fraction 1.
   Eigen::VectorXd loadVector(const LoadCase& load) const;
@@ -172,7 +181,7 @@ private:
   MaterialTable linear_;
   Constraints constraints_;
   AssemblyOptions options_;
-  std::vector<ReferencePoints> reference_;  ///< per element, or empty
+  std::vector<ReferencePoints> reference_; ///< per element, or empty
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -10,15 +10,17 @@ namespace caps::fem {
 
 /// Gauss-Legendre points and weights over the cube [-1, 1]^3 (or, from
 /// wedgeRule(), over the reference wedge).
-struct IntegrationRule {
-  std::vector<Eigen::Vector3d> points;  ///< (r, s, t) of each point
-  std::vector<double> weights;          ///< alpha_i alpha_j alpha_k (thesis eq. 4.39)
-  int pointsPerDirection = 0;           ///< Gauss points along t (and r, s for the cube)
+struct IntegrationRule
+{
+  std::vector<Eigen::Vector3d> points; ///< (r, s, t) of each point
+  std::vector<double> weights;         ///< alpha_i alpha_j alpha_k (thesis eq. 4.39)
+  int pointsPerDirection = 0;          ///< Gauss points along t (and r, s for the cube)
   std::size_t size() const { return points.size(); }
 };
 
 /// Gauss-Legendre points and weights on the interval [-1, 1].
-struct LineRule {
+struct LineRule
+{
   std::vector<double> points;
   std::vector<double> weights;
 };
@@ -53,4 +55,4 @@ const IntegrationRule& wedgeRule(int level);
 /// Hex20, wedgeRule(@a pointsPerDirection) for Wedge15 (3 full, 2 lower).
 const IntegrationRule& integrationRule(ElementKind kind, int pointsPerDirection);
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -10,10 +10,11 @@
 namespace caps::fem {
 
 /// Outcome of the last stage run by a SparseCholeskySolver.
-enum class SolverStatus {
-  Success,              ///< the stage finished; solve() may be called after factorize()
-  NotPositiveDefinite,  ///< the factorization met a zero, negative or vanishing pivot
-  InvalidInput          ///< the matrix was rejected before any numerical work
+enum class SolverStatus
+{
+  Success,             ///< the stage finished; solve() may be called after factorize()
+  NotPositiveDefinite, ///< the factorization met a zero, negative or vanishing pivot
+  InvalidInput         ///< the matrix was rejected before any numerical work
 };
 
 /**
@@ -50,7 +51,8 @@ enum class SolverStatus {
  *
  * @warning Not thread-safe: solve() reuses the CHOLMOD workspace.
  */
-class SparseCholeskySolver {
+class SparseCholeskySolver
+{
 public:
   using SparseMatrix = Eigen::SparseMatrix<double>;
 
@@ -76,11 +78,14 @@ public:
   Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
   /// Evaluates an expression argument (e.g. VectorXd::Ones(n)), which would
   /// otherwise convert equally well to either overload above.
-  template <typename Derived>
-  auto solve(const Eigen::MatrixBase<Derived>& b) const {
-    if constexpr (Derived::ColsAtCompileTime == 1) {
+  template <typename Derived> auto solve(const Eigen::MatrixBase<Derived>& b) const
+  {
+    if constexpr (Derived::ColsAtCompileTime == 1)
+    {
       return solve(Eigen::VectorXd(b));
-    } else {
+    }
+    else
+    {
       return solve(Eigen::MatrixXd(b));
     }
   }
@@ -111,7 +116,8 @@ public:
   /// first in the order (-1: none). For a mid-edge node beside the ends of
   /// its edge: its neighbours are all neighbours of either end, so this adds
   /// no fill, and the graph left to dissect holds the element vertices only.
-  struct AttachedGroup {
+  struct AttachedGroup
+  {
     int group = -1;
     int first = -1;
     int second = -1;
@@ -136,4 +142,4 @@ private:
   std::unique_ptr<Impl> d;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

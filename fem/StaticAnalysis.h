@@ -18,20 +18,22 @@ namespace caps::fem {
 
 /// One load condition (§4.6.1 step 3): nodal forces, gravity, muscles and
 /// pressures on element faces.
-struct LoadCase {
-  std::vector<std::pair<int, Eigen::Vector3d>> nodalForces;  ///< (node, force N)
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();          ///< acceleration, mm/s^2
-  std::vector<Muscle> muscles;  ///< muscle force functions (eq. 4.40-4.42), summed
-  std::vector<FacePressure> facePressures;  ///< uniform pressures (MPa) on element faces
+struct LoadCase
+{
+  std::vector<std::pair<int, Eigen::Vector3d>> nodalForces; ///< (node, force N)
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();        ///< acceleration, mm/s^2
+  std::vector<Muscle> muscles;                              ///< muscle force functions (eq. 4.40-4.42), summed
+  std::vector<FacePressure> facePressures;                  ///< uniform pressures (MPa) on element faces
 };
 
 /// Wall-clock seconds of each phase of the last prepare()/solve().
-struct PhaseTimes {
-  double assemble = 0.0;   ///< master-slave map, K's pattern, element stiffnesses into K
-  double constrain = 0.0;  ///< K̄'s pattern, K̄ = T^T K T, K g
-  double analyse = 0.0;    ///< ordering and symbolic factorization (on its own thread, beside assemble)
-  double factor = 0.0;     ///< numeric factorization
-  double solve = 0.0;      ///< loads, reduction, substitution, expansion (last solve())
+struct PhaseTimes
+{
+  double assemble = 0.0;  ///< master-slave map, K's pattern, element stiffnesses into K
+  double constrain = 0.0; ///< K̄'s pattern, K̄ = T^T K T, K g
+  double analyse = 0.0;   ///< ordering and symbolic factorization (on its own thread, beside assemble)
+  double factor = 0.0;    ///< numeric factorization
+  double solve = 0.0;     ///< loads, reduction, substitution, expansion (last solve())
 };
 
 /// Full load vector R (3N) of @a load on @a mesh (eq. 4.35-4.42): nodal
@@ -58,10 +60,10 @@ void useNodeGroupedOrdering(const Mesh& mesh, const ConstraintMap& map, SparseCh
  * (std::invalid_argument, ElementError) with a message naming the culprit;
  * status() is then InvalidInput and message() the same text.
  */
-class LinearStaticAnalysis {
+class LinearStaticAnalysis
+{
 public:
-  LinearStaticAnalysis(Mesh mesh, MaterialTable materials, Constraints constraints,
-                       AssemblyOptions options = {});
+  LinearStaticAnalysis(Mesh mesh, MaterialTable materials, Constraints constraints, AssemblyOptions options = {});
 
   SolverStatus prepare();
   SolverStatus status() const { return status_; }
@@ -114,11 +116,11 @@ private:
   AssemblyOptions options_;
   Eigen::SparseMatrix<double> k_, kbar_;
   ConstraintMap map_;
-  Eigen::VectorXd kg_;  ///< K g
+  Eigen::VectorXd kg_; ///< K g
   SparseCholeskySolver solver_;
   SolverStatus status_ = SolverStatus::InvalidInput;
   std::string message_ = "prepare() has not been called";
   PhaseTimes times_;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

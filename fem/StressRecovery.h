@@ -11,9 +11,10 @@ namespace caps::fem {
 
 /// Strain and stress at one point (Voigt xx, yy, zz, xy, yz, zx; engineering
 /// shear strain; stress in MPa).
-struct StressPoint {
-  Eigen::Vector3d natural;  ///< (r, s, t)
-  Eigen::Vector3d world;    ///< x(r, s, t), undeformed, mm
+struct StressPoint
+{
+  Eigen::Vector3d natural; ///< (r, s, t)
+  Eigen::Vector3d world;   ///< x(r, s, t), undeformed, mm
   Vector6d strain;
   Vector6d stress;
 
@@ -30,8 +31,8 @@ struct StressPoint {
  *        cube, or the wedge's triangle times t). @a u holds the 3N nodal
  *        displacements. Throws ElementError if the Jacobian is bad there.
  */
-StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u,
-                          int element, const Eigen::Vector3d& rst);
+StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, const Eigen::VectorXd& u, int element,
+                          const Eigen::Vector3d& rst);
 
 /// The same at every point of the element's own rule, integrationRule(kind,
 /// integrationPointsOf(element, @a pointsPerDirection)): the n x n x n Gauss
@@ -39,15 +40,14 @@ StressPoint recoverStress(const Mesh& mesh, const MaterialTable& materials, cons
 /// native wedge. @a pointsPerDirection is the default for elements whose
 /// integrationPoints is 0. Points in gaussRule()/wedgeRule() order.
 std::vector<StressPoint> recoverStressAtGaussPoints(const Mesh& mesh, const MaterialTable& materials,
-                                                   const Eigen::VectorXd& u, int element,
-                                                   int pointsPerDirection = 3);
+                                                    const Eigen::VectorXd& u, int element, int pointsPerDirection = 3);
 
 /// recoverStressAtGaussPoints() of every element (element e's points at
 /// [e]), the elements shared among @a threads threads in contiguous blocks;
 /// the same values for any thread count. Throws what the first failing
 /// element (lowest index) throws.
 std::vector<std::vector<StressPoint>> recoverStressAtAllGaussPoints(const Mesh& mesh, const MaterialTable& materials,
-                                                                   const Eigen::VectorXd& u, int pointsPerDirection = 3,
-                                                                   int threads = 1);
+                                                                    const Eigen::VectorXd& u,
+                                                                    int pointsPerDirection = 3, int threads = 1);
 
-}  // namespace caps::fem
+} // namespace caps::fem

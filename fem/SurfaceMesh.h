@@ -21,7 +21,8 @@ using ChartPoint = Eigen::Vector2d;
 
 /// The hole the incision makes (Fig. 4.11): a closed loop of border vertices
 /// with twins for every inner cut-path point.
-struct HoleLoop {
+struct HoleLoop
+{
   /// Border vertices in loop order. The cut path p0..p(n-1) becomes
   /// p0, p1, ..., p(n-1), p(n-2)', ..., p1': the end points once, each inner
   /// point twice (one per side of the cut). Twins start at the same position;
@@ -39,7 +40,8 @@ struct HoleLoop {
 /// edge b = (b0, b1), a0 onto b0 and a1 onto b1, as loop vertex indices.
 /// When a0 == b0 (or a1 == b1) the corner is being closed and that vertex
 /// gets no suture (the thesis's corner rule).
-struct SutureEdgePair {
+struct SutureEdgePair
+{
   std::array<int, 2> a;
   std::array<int, 2> b;
 };
@@ -49,7 +51,8 @@ struct SutureEdgePair {
 /// loop order; the rest are added by the mesher. Polygons are
 /// counter-clockwise in the chart (u right, v up), i.e. seen from outside the
 /// head, with 3 or 4 vertex indices.
-struct SurfaceMesh {
+struct SurfaceMesh
+{
   std::vector<ChartPoint> vertices;
   std::vector<std::vector<int>> polygons;
   /// Number of leading vertices that are the hole loop.
@@ -58,4 +61,4 @@ struct SurfaceMesh {
   std::vector<int> outerBorder;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -15,7 +15,8 @@ namespace caps::fem {
 /// Shape limits every polygon of a surface mesh must meet (angles in radians).
 /// The mesher refuses to emit polygons outside them; surfaceMeshQuality()
 /// reports polygons that are.
-struct MeshQualityLimits {
+struct MeshQualityLimits
+{
   double minAngle = 15.0 * std::numbers::pi / 180.0;
   double maxAngle = 165.0 * std::numbers::pi / 180.0;
   /// Longest edge squared over area, scaled so an equilateral triangle and a
@@ -25,7 +26,8 @@ struct MeshQualityLimits {
 
 /// Parameters of the surface mesher. Lengths in mm of the chart, angles in
 /// radians.
-struct SurfaceMesherOptions {
+struct SurfaceMesherOptions
+{
   /// t1 (§4.5.1): stage 1 fills border concavities turning more than this with
   /// a triangle. Thesis default 30°.
   double triangleFillAngle = 30.0 * std::numbers::pi / 180.0;
@@ -60,30 +62,32 @@ struct SurfaceMesherOptions {
 };
 
 /// Counts and shape statistics of a surface mesh, and what is wrong with it.
-struct SurfaceMeshQuality {
+struct SurfaceMeshQuality
+{
   int vertexCount = 0;
   int triangleCount = 0;
   int quadCount = 0;
-  double minAngle = 0.0;        ///< smallest polygon corner angle (rad)
-  double maxAngle = 0.0;        ///< largest polygon corner angle (rad)
-  double maxAspectRatio = 0.0;  ///< as in MeshQualityLimits
-  double meshArea = 0.0;        ///< sum of polygon areas (mm²)
-  double holeArea = 0.0;        ///< area inside the hole loop (0 for a cut)
-  double outerArea = 0.0;       ///< area inside the outer border
+  double minAngle = 0.0;       ///< smallest polygon corner angle (rad)
+  double maxAngle = 0.0;       ///< largest polygon corner angle (rad)
+  double maxAspectRatio = 0.0; ///< as in MeshQualityLimits
+  double meshArea = 0.0;       ///< sum of polygon areas (mm²)
+  double holeArea = 0.0;       ///< area inside the hole loop (0 for a cut)
+  double outerArea = 0.0;      ///< area inside the outer border
   /// One line per problem found (first few of each kind); empty = valid.
   std::vector<std::string> problems;
   bool valid() const { return problems.empty(); }
 };
 
 /// What meshAroundHole() built, and why it stopped where it did.
-struct SurfaceMesherResult {
+struct SurfaceMesherResult
+{
   SurfaceMesh mesh;
-  int stageOneTriangles = 0;  ///< triangles stage 1 added to the hole (Fig. 4.13's 1 and 2)
+  int stageOneTriangles = 0; ///< triangles stage 1 added to the hole (Fig. 4.13's 1 and 2)
   int layersPlanned = 0;
   int layersBuilt = 0;
-  double reach = 0.0;  ///< summed thickness of the layers built (mm)
-  bool reachedChartBound = false;  ///< part of the rim lies on vMin or vMax
-  bool stoppedEarly = false;       ///< fewer layers than planned (see message)
+  double reach = 0.0;             ///< summed thickness of the layers built (mm)
+  bool reachedChartBound = false; ///< part of the rim lies on vMin or vMax
+  bool stoppedEarly = false;      ///< fewer layers than planned (see message)
   /// Empty when all went as planned; otherwise a sentence for the surgeon.
   std::string message;
   SurfaceMeshQuality quality;
@@ -102,7 +106,8 @@ struct SurfaceMesherResult {
 HoleLoop holeLoopFromCutPath(const std::vector<ChartPoint>& cutPath);
 
 /// A cut path with points added along long segments.
-struct RefinedCutPath {
+struct RefinedCutPath
+{
   std::vector<ChartPoint> points;
   /// For each point of the original path, its index in points.
   std::vector<int> originalIndex;
@@ -148,4 +153,4 @@ SurfaceMesherResult meshAroundHole(const HoleLoop& hole, const SurfaceMesherOpti
  */
 SurfaceMeshQuality surfaceMeshQuality(const SurfaceMesh& mesh, const MeshQualityLimits& limits = {});
 
-}  // namespace caps::fem
+} // namespace caps::fem

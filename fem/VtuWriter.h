@@ -18,7 +18,8 @@ inline constexpr int kVtkQuadraticHexahedron = 25;
 inline constexpr int kVtkQuadraticWedge = 26;
 
 /// One element as a VTK cell: its type and the mesh node of each VTK point.
-struct VtkCell {
+struct VtkCell
+{
   int type = kVtkQuadraticHexahedron;
   std::vector<int> nodes;
 };
@@ -50,7 +51,8 @@ const std::array<int, kHex20NodeCount>& vtkQuadraticHexToBathe();
 VtkCell vtkCell(const Element& el, const Eigen::Matrix3Xd& nodes);
 
 /// A named data array: one column per point (or cell), one row per component.
-struct VtuArray {
+struct VtuArray
+{
   std::string name;
   Eigen::MatrixXd values;
 };
@@ -69,4 +71,4 @@ std::string vtuDocument(const Mesh& mesh, const std::vector<VtuArray>& pointData
 void writeVtu(const std::string& path, const Mesh& mesh, const std::vector<VtuArray>& pointData,
               const std::vector<VtuArray>& cellData = {});
 
-}  // namespace caps::fem
+} // namespace caps::fem

@@ -24,7 +24,8 @@ namespace caps::fem {
  * Results use the 20-slot vectors of Hex20Shape; slots 15..19 are 0, so the
  * element integrators treat a wedge like a hexahedron without those nodes.
  */
-class Wedge15Shape {
+class Wedge15Shape
+{
 public:
   /// h_k(r, s, t) into @a h (slots 15..19 zero).
   void values(const Eigen::Vector3d& rst, ShapeVector& h) const;
@@ -32,4 +33,4 @@ public:
   void evaluate(const Eigen::Vector3d& rst, ShapeVector& h, ShapeDerivatives& dh) const;
 };
 
-}  // namespace caps::fem
+} // namespace caps::fem

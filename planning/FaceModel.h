@@ -54,9 +54,9 @@ struct FaceMesh
   double centreTheta = 0.0;
   double centreZ = 0.0;
   double chartRadius = 0.0;
-  fem::SurfaceMesh surface;       ///< quadrilaterals on the skin, in the chart
-  fem::ContinuumMesh continuum;   ///< 20-node bricks from the skin to the bone, no sutures
-  fem::MaterialTable materials;   ///< by layer
+  fem::SurfaceMesh surface;     ///< quadrilaterals on the skin, in the chart
+  fem::ContinuumMesh continuum; ///< 20-node bricks from the skin to the bone, no sutures
+  fem::MaterialTable materials; ///< by layer
   /// Quadrilaterals of the grid left out because the skin map has no skin
   /// under a corner or an edge's middle (a hole in the scan: nostrils, the
   /// eyes' shadow on a surface scan).

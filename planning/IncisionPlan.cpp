@@ -47,7 +47,10 @@ int edgeStart(int loopSize, const std::array<int, 2>& e)
   return -1;
 }
 
-double cross2(const ChartPoint& a, const ChartPoint& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross2(const ChartPoint& a, const ChartPoint& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// Whether segments pq and rs cross at a point inside both (touching or overlapping does not count).
 bool segmentsCross(const ChartPoint& p, const ChartPoint& q, const ChartPoint& r, const ChartPoint& s)
@@ -56,8 +59,7 @@ bool segmentsCross(const ChartPoint& p, const ChartPoint& q, const ChartPoint& r
   const double eps = 1e-9 * scale * scale;
   const double d1 = cross2(q - p, r - p), d2 = cross2(q - p, s - p);
   const double d3 = cross2(s - r, p - r), d4 = cross2(s - r, q - r);
-  return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) &&
-         ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
+  return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) && ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
 }
 
 /// A length for a message: "0.2", "100" (std::to_string gives "0.200000").
@@ -79,7 +81,10 @@ std::string whereText(const SkinPoint& s)
 
 } // namespace
 
-int holeLoopSize(int pathPoints) { return pathPoints < 2 ? 0 : 2 * (pathPoints - 1); }
+int holeLoopSize(int pathPoints)
+{
+  return pathPoints < 2 ? 0 : 2 * (pathPoints - 1);
+}
 
 int rightSideVertex(int pathIndex, int pathPoints)
 {
@@ -100,8 +105,8 @@ fem::HoleLoop makeHoleLoop(const std::vector<ChartPoint>& path, const std::vecto
     throw std::invalid_argument("a cut needs at least two points");
   const int loopSize = holeLoopSize(n);
   if (!offsets.empty() && int(offsets.size()) != loopSize)
-    throw std::invalid_argument("makeHoleLoop: " + std::to_string(offsets.size()) +
-                                " offsets for a hole of " + std::to_string(loopSize) + " border points");
+    throw std::invalid_argument("makeHoleLoop: " + std::to_string(offsets.size()) + " offsets for a hole of " +
+                                std::to_string(loopSize) + " border points");
   fem::HoleLoop loop;
   loop.points.resize(loopSize);
   loop.pathIndex.resize(loopSize);
@@ -127,16 +132,15 @@ std::vector<fem::SutureEdgePair> resolveSutures(int loopSize, const std::vector<
       if (start < 0)
         throw SutureError(k, sutureText(k, s) + ": " + edgeText(edge) +
                                " is not a border edge of the hole; border edges join neighbouring "
-                               "border points 0.." + std::to_string(loopSize - 1) + " (and " +
-                               std::to_string(loopSize - 1) + " back to 0)");
+                               "border points 0.." +
+                               std::to_string(loopSize - 1) + " (and " + std::to_string(loopSize - 1) + " back to 0)");
     if (startA == startB)
       throw SutureError(k, sutureText(k, s) + ": an edge cannot be sewn to itself");
     for (int start : {startA, startB})
       if (auto it = sewnBy.find(start); it != sewnBy.end())
         throw SutureError(k, sutureText(k, s) + ": border edge (" + std::to_string(start) + "," +
                                std::to_string((start + 1) % loopSize) + ") is already sewn by " +
-                               sutureText(it->second, written[it->second]) +
-                               "; each border edge can be sewn once");
+                               sutureText(it->second, written[it->second]) + "; each border edge can be sewn once");
     sewnBy[startA] = k;
     sewnBy[startB] = k;
     // Face to face: the loop-order start of one edge meets the end of the other.
@@ -149,9 +153,10 @@ std::vector<fem::SutureEdgePair> resolveSutures(int loopSize, const std::vector<
     classes.join(pair.a[1], pair.b[1]);
     for (int v = 0; v < loopSize; ++v)
       if (classes.find(v) == classes.find((v + 1) % loopSize))
-        throw SutureError(k, sutureText(k, s) + ": together with the sutures before it, it pulls both "
-                               "ends of border edge (" + std::to_string(v) + "," +
-                               std::to_string((v + 1) % loopSize) +
+        throw SutureError(k, sutureText(k, s) +
+                               ": together with the sutures before it, it pulls both "
+                               "ends of border edge (" +
+                               std::to_string(v) + "," + std::to_string((v + 1) % loopSize) +
                                ") onto one point; check which points each suture brings together");
     resolved.push_back(pair);
   }
@@ -177,8 +182,7 @@ std::vector<std::vector<int>> sutureClasses(int loopSize, const std::vector<fem:
 
 IncisionPlan::IncisionPlan(std::vector<Eigen::Vector2d> cutPath, SkinPoint centre)
   : cutPath_(std::move(cutPath)), centre_(centre)
-{
-}
+{}
 
 void IncisionPlan::moveCutPoint(int i, const Eigen::Vector2d& thetaZN)
 {
@@ -213,7 +217,10 @@ std::vector<ChartPoint> IncisionPlan::borderOffsets() const
   return result;
 }
 
-bool IncisionPlan::isExcision() const { return !offsets_.empty(); }
+bool IncisionPlan::isExcision() const
+{
+  return !offsets_.empty();
+}
 
 void IncisionPlan::setSutures(std::vector<SutureEdges> written)
 {
@@ -253,17 +260,15 @@ void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSp
   const auto path = plan.chartPath(chart);
   for (int i = 0; i + 1 < n; ++i)
     if ((path[i + 1] - path[i]).norm() < minSpacing)
-      throw std::invalid_argument("cut points " + std::to_string(i) + " and " + std::to_string(i + 1) +
-                                  " are " + mmText((path[i + 1] - path[i]).norm()) +
-                                  " mm apart, closer than " + mmText(minSpacing) +
-                                  " mm: move one of them or delete it");
+      throw std::invalid_argument("cut points " + std::to_string(i) + " and " + std::to_string(i + 1) + " are " +
+                                  mmText((path[i + 1] - path[i]).norm()) + " mm apart, closer than " +
+                                  mmText(minSpacing) + " mm: move one of them or delete it");
   for (int i = 0; i + 1 < n; ++i)
     for (int j = i + 2; j + 1 < n; ++j)
       if (segmentsCross(path[i], path[i + 1], path[j], path[j + 1]))
         throw std::invalid_argument("limb " + std::to_string(i) + " (cut points " + std::to_string(i) + "–" +
-                                    std::to_string(i + 1) + ") crosses limb " + std::to_string(j) +
-                                    " (cut points " + std::to_string(j) + "–" + std::to_string(j + 1) +
-                                    "): a cut may not cross itself");
+                                    std::to_string(i + 1) + ") crosses limb " + std::to_string(j) + " (cut points " +
+                                    std::to_string(j) + "–" + std::to_string(j + 1) + "): a cut may not cross itself");
   const fem::HoleLoop loop = plan.holeLoop(chart);
   const int loopSize = int(loop.points.size());
   for (int e = 0; e < loopSize; ++e)

@@ -32,8 +32,7 @@ int rightSideVertex(int pathIndex, int pathPoints);
 int pathIndexOfVertex(int loopVertex, int pathPoints);
 /// The hole loop of a cut path drawn in the chart; offsets (one per loop
 /// vertex, or empty) move border points away from their twins (§4.4.4).
-fem::HoleLoop makeHoleLoop(const std::vector<ChartPoint>& path,
-                           const std::vector<ChartPoint>& offsets = {});
+fem::HoleLoop makeHoleLoop(const std::vector<ChartPoint>& path, const std::vector<ChartPoint>& offsets = {});
 ///@}
 
 /// Two border edges to sew together as the thesis writes them (§4.4.5),

@@ -58,8 +58,7 @@ Eigen::VectorXd MuscleResponses::combined(const Eigen::VectorXd& activations) co
 ExpressionSurface::ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface,
                                      const MuscleResponses& responses)
   : ExpressionSurface(mesh, std::move(surface), responses.displacements())
-{
-}
+{}
 
 ExpressionSurface::ExpressionSurface(const fem::Mesh& mesh, fem::DisplaySurface surface,
                                      const Eigen::MatrixXd& responses, const Eigen::VectorXd& base)

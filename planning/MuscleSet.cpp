@@ -102,7 +102,7 @@ private:
   MuscleDefinition* muscle_ = nullptr;
   ForceFunctionDefinition* function_ = nullptr;
   std::optional<double> muscleLoad_;
-  std::map<std::string, int> seen_;        // keys of the current block
+  std::map<std::string, int> seen_; // keys of the current block
   bool sideGiven_ = false;
   std::vector<std::pair<bool, bool>> ends_; // per function: origin, insertion given
   std::vector<bool> ownLoad_;
@@ -123,8 +123,10 @@ void Parser::checkAnchorSide(const std::string& anchor) const
   if (!muscle_)
     return;
   if (muscle_->side == MuscleSide::Both && endsWith(anchor, "_right"))
-    fail("'" + anchor + "': a side = both muscle is written for the patient's LEFT side (the right one is its "
-         "mirror image); anchor it on " + mirroredName(anchor));
+    fail("'" + anchor +
+         "': a side = both muscle is written for the patient's LEFT side (the right one is its "
+         "mirror image); anchor it on " +
+         mirroredName(anchor));
   if (muscle_->side == MuscleSide::Left && endsWith(anchor, "_right"))
     fail("'" + anchor + "' is on the right, but the muscle is side = left; use " + mirroredName(anchor) +
          " or make the muscle midline");
@@ -172,8 +174,10 @@ AttachmentDefinition Parser::point(const std::string& value, bool isOrigin) cons
         fail(end + ": 'at " + w[4] + "' must be a fraction from 0 (at " + w[0] + ") to 1 (at " + w[2] + ")");
     }
     else
-      fail(end + ": the place must be a landmark ('cheilion_left') or a blend of two ('cheilion_left to "
-                 "labrale_superius at 0.5'), got '" + parts[0] + "'");
+      fail(end +
+           ": the place must be a landmark ('cheilion_left') or a blend of two ('cheilion_left to "
+           "labrale_superius at 0.5'), got '" +
+           parts[0] + "'");
     checkName(p.anchor);
     if (!p.towards.empty())
       checkName(p.towards);
@@ -186,8 +190,9 @@ AttachmentDefinition Parser::point(const std::string& value, bool isOrigin) cons
     const std::string word = space == std::string::npos ? parts[i] : parts[i].substr(0, space);
     const std::string rest = space == std::string::npos ? std::string() : trim(parts[i].substr(space));
     if (word != "across" && word != "up" && word != "depth" && word != "radius")
-      fail(end + ": unknown part '" + parts[i] + "'; after the landmark write 'across MM', 'up MM', "
-                 "'depth FRACTION' (or 'depth bone') and 'radius MM', separated by commas");
+      fail(end + ": unknown part '" + parts[i] +
+           "'; after the landmark write 'across MM', 'up MM', "
+           "'depth FRACTION' (or 'depth bone') and 'radius MM', separated by commas");
     if (!given.insert(word).second)
       fail(end + ": '" + word + "' is given twice");
     if (rest.empty())
@@ -242,11 +247,15 @@ void Parser::finishMuscle()
   if (muscle_->title.empty())
     fail("muscle '" + muscle_->id + "' has no title; add 'title = ...' after its 'muscle =' line", muscle_->line);
   if (!sideGiven_)
-    fail("muscle '" + muscle_->id + "' has no side; add 'side = both' (left muscle mirrored to the right), "
-         "'left', 'right' or 'midline'", muscle_->line);
+    fail("muscle '" + muscle_->id +
+           "' has no side; add 'side = both' (left muscle mirrored to the right), "
+           "'left', 'right' or 'midline'",
+         muscle_->line);
   if (muscle_->functions.empty())
-    fail("muscle '" + muscle_->id + "' has no force function; add 'function = NAME' with an origin, an "
-         "insertion and a load", muscle_->line);
+    fail("muscle '" + muscle_->id +
+           "' has no force function; add 'function = NAME' with an origin, an "
+           "insertion and a load",
+         muscle_->line);
   for (std::size_t i = 0; i < muscle_->functions.size(); ++i)
   {
     auto& f = muscle_->functions[i];
@@ -254,21 +263,27 @@ void Parser::finishMuscle()
       fail("function '" + f.name + "' of muscle '" + muscle_->id + "' has no origin; add 'origin = LANDMARK, ...'",
            f.line);
     if (!ends_[i].second)
-      fail("function '" + f.name + "' of muscle '" + muscle_->id + "' has no insertion; add 'insertion = "
-           "LANDMARK, across MM, up MM, depth FRACTION, radius MM'", f.line);
+      fail("function '" + f.name + "' of muscle '" + muscle_->id +
+             "' has no insertion; add 'insertion = "
+             "LANDMARK, across MM, up MM, depth FRACTION, radius MM'",
+           f.line);
     if (!ownLoad_[i])
     {
       if (!muscleLoad_)
-        fail("function '" + f.name + "' of muscle '" + muscle_->id + "' has no load; add 'load = L' (N/mm^4) "
-             "to the function or to the muscle before its first function", f.line);
+        fail("function '" + f.name + "' of muscle '" + muscle_->id +
+               "' has no load; add 'load = L' (N/mm^4) "
+               "to the function or to the muscle before its first function",
+             f.line);
       f.load = *muscleLoad_;
     }
     const auto& o = f.origin;
     const auto& n = f.insertion;
-    if (o.anchor == n.anchor && o.towards == n.towards && o.blend == n.blend && o.across == n.across &&
-        o.up == n.up && o.depth == n.depth)
-      fail("function '" + f.name + "': the origin and the insertion are the same point; a muscle pulls its "
-           "insertion towards its origin, so they must differ", f.line);
+    if (o.anchor == n.anchor && o.towards == n.towards && o.blend == n.blend && o.across == n.across && o.up == n.up &&
+        o.depth == n.depth)
+      fail("function '" + f.name +
+             "': the origin and the insertion are the same point; a muscle pulls its "
+             "insertion towards its origin, so they must differ",
+           f.line);
   }
 }
 
@@ -452,8 +467,7 @@ void Parser::readMuscleKey(const std::string& key, const std::string& value)
     else if (value == "midline")
       muscle_->side = MuscleSide::Midline;
     else
-      fail("side must be both (the left muscle, mirrored to the right), left, right or midline; got '" + value +
-           "'");
+      fail("side must be both (the left muscle, mirrored to the right), left, right or midline; got '" + value + "'");
     sideGiven_ = true;
   }
   else if (key == "load")
@@ -509,17 +523,20 @@ std::string located(const fs::path& file, int line, const std::string& message)
 
 MuscleSetFileError::MuscleSetFileError(const fs::path& file, int line, const std::string& message)
   : std::runtime_error(located(file, line, message)), file_(file), line_(line)
-{
-}
+{}
 
 const char* sideName(MuscleSide side)
 {
   switch (side)
   {
-  case MuscleSide::Left: return "left";
-  case MuscleSide::Right: return "right";
-  case MuscleSide::Both: return "both";
-  case MuscleSide::Midline: return "midline";
+  case MuscleSide::Left:
+    return "left";
+  case MuscleSide::Right:
+    return "right";
+  case MuscleSide::Both:
+    return "both";
+  case MuscleSide::Midline:
+    return "midline";
   }
   return "?";
 }
@@ -532,7 +549,10 @@ const MuscleDefinition* MuscleSet::find(const std::string& muscleId) const
   return nullptr;
 }
 
-MuscleSet readMuscleSet(const fs::path& path) { return Parser(path).run(); }
+MuscleSet readMuscleSet(const fs::path& path)
+{
+  return Parser(path).run();
+}
 
 fs::path defaultMuscleSetPath()
 {
@@ -551,7 +571,7 @@ fs::path defaultMuscleSetPath()
 
 std::vector<std::string> derivedAnchorNames()
 {
-  return {"stomion",          "cheilion_left",    "cheilion_right",      "eye_left",           "eye_right",
+  return {"stomion",           "cheilion_left",      "cheilion_right",   "eye_left",         "eye_right",
           "endocanthion_left", "endocanthion_right", "exocanthion_left", "exocanthion_right"};
 }
 
@@ -686,7 +706,8 @@ AttachmentPlacement placeAttachment(const AttachmentDefinition& point, bool mirr
         {
           const int i = ((k % frame.nTheta()) + frame.nTheta()) % frame.nTheta();
           const double t = double(skin.at(i, j)) - double(bone.at(i, j));
-          if (valid(t) && std::pow((k - u) * du, 2) + std::pow((j - v) * dv, 2) <= options.boneSearch * options.boneSearch)
+          if (valid(t) &&
+              std::pow((k - u) * du, 2) + std::pow((j - v) * dv, 2) <= options.boneSearch * options.boneSearch)
             near.push_back(t);
         }
       }
@@ -742,10 +763,10 @@ void checkLandmarksPlaced(const MuscleSet& set, const std::vector<seg::Landmark>
   if (derived && !findLandmark(landmarks, "menton") && !findLandmark(landmarks, "pogonion"))
     missing += std::string(missing.empty() ? "" : ", ") + "menton or pogonion (for the mouth and eye anchors)";
   if (!missing.empty())
-    throw std::invalid_argument("The muscle set '" + set.id + "' is placed by facial landmarks, and these are "
-                                "missing: " + missing +
-                                ". Place them in the Range maps module (or run it again to find them).");
-
+    throw std::invalid_argument("The muscle set '" + set.id +
+                                "' is placed by facial landmarks, and these are "
+                                "missing: " +
+                                missing + ". Place them in the Range maps module (or run it again to find them).");
 }
 
 /// The muscle's instances: both sides (the right one mirrored), one side, or
@@ -754,10 +775,14 @@ std::vector<std::pair<std::string, bool>> instancesOf(const MuscleDefinition& m)
 {
   switch (m.side)
   {
-  case MuscleSide::Both: return {{"left", false}, {"right", true}};
-  case MuscleSide::Left: return {{"left", false}};
-  case MuscleSide::Right: return {{"right", false}};
-  case MuscleSide::Midline: return {{"midline", false}};
+  case MuscleSide::Both:
+    return {{"left", false}, {"right", true}};
+  case MuscleSide::Left:
+    return {{"left", false}};
+  case MuscleSide::Right:
+    return {{"right", false}};
+  case MuscleSide::Midline:
+    return {{"midline", false}};
   }
   return {};
 }
@@ -776,8 +801,8 @@ void placeFunction(const MuscleSet& set, const MuscleDefinition& m, const ForceF
     }
     catch (const std::invalid_argument& e)
     {
-      std::string where = set.file.empty() ? std::string() : " (" + set.file.string() + ":" +
-                                                                std::to_string(p.line) + ")";
+      std::string where =
+        set.file.empty() ? std::string() : " (" + set.file.string() + ":" + std::to_string(p.line) + ")";
       throw std::invalid_argument("The " + std::string(end) + " of " + fm.id + " function " + name + where +
                                   " cannot be placed on this patient: " + e.what() +
                                   ". Check the landmarks, or move the point in the muscle file.");

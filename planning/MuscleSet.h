@@ -51,10 +51,10 @@ private:
 /// Which side of the face a muscle definition describes.
 enum class MuscleSide
 {
-  Left,    ///< one muscle on the patient's left, as written
-  Right,   ///< one muscle on the patient's right, as written
-  Both,    ///< written for the LEFT side; the fit also makes the mirrored right one
-  Midline  ///< one muscle across the midline (orbicularis oris, the corrugator pair)
+  Left,   ///< one muscle on the patient's left, as written
+  Right,  ///< one muscle on the patient's right, as written
+  Both,   ///< written for the LEFT side; the fit also makes the mirrored right one
+  Midline ///< one muscle across the midline (orbicularis oris, the corrugator pair)
 };
 
 /// "left", "right", "both", "midline".
@@ -65,25 +65,25 @@ const char* sideName(MuscleSide side);
 /// face's size (faceSize()).
 struct AttachmentDefinition
 {
-  std::string anchor;     ///< landmark name (standard or derived: muscleAnchorNames())
-  std::string towards;    ///< "" or a second landmark: the anchor is blend of the way from @a anchor to it
-  double blend = 0.0;     ///< fraction 0..1 from @a anchor to @a towards, in (θ, z)
-  double across = 0.0;    ///< mm across the face (placeAttachment()), + towards the patient's left
-  double up = 0.0;        ///< mm along the head axis, + superior
-  bool inBone = false;    ///< `depth = bone`: on the bone surface (an origin only)
-  double depth = 0.0;     ///< 0 the skin .. 1 the bone surface (ignored when inBone)
-  double radius = 0.0;    ///< attachment sphere radius, mm; 0: no force at this end
-  int line = 0;           ///< where the file gives it
+  std::string anchor;  ///< landmark name (standard or derived: muscleAnchorNames())
+  std::string towards; ///< "" or a second landmark: the anchor is blend of the way from @a anchor to it
+  double blend = 0.0;  ///< fraction 0..1 from @a anchor to @a towards, in (θ, z)
+  double across = 0.0; ///< mm across the face (placeAttachment()), + towards the patient's left
+  double up = 0.0;     ///< mm along the head axis, + superior
+  bool inBone = false; ///< `depth = bone`: on the bone surface (an origin only)
+  double depth = 0.0;  ///< 0 the skin .. 1 the bone surface (ignored when inBone)
+  double radius = 0.0; ///< attachment sphere radius, mm; 0: no force at this end
+  int line = 0;        ///< where the file gives it
 };
 
 /// One force function (Table 4.7) as written in the file.
 struct ForceFunctionDefinition
 {
-  std::string name;  ///< e.g. "main", "ala"
+  std::string name; ///< e.g. "main", "ala"
   AttachmentDefinition origin;
   AttachmentDefinition insertion;
-  double load = 0.0;     ///< l, N/mm^4, before the load_scale keys
-  double falloff = 0.0;  ///< fall-off width b, mm on the adult mean face (fem::Muscle::falloff)
+  double load = 0.0;    ///< l, N/mm^4, before the load_scale keys
+  double falloff = 0.0; ///< fall-off width b, mm on the adult mean face (fem::Muscle::falloff)
   /// Only in a midline muscle: the fit also makes this function's mirror
   /// image (named NAME_left and NAME_right), so half a ring can be written.
   bool mirror = false;
@@ -93,8 +93,8 @@ struct ForceFunctionDefinition
 /// One muscle as written in the file.
 struct MuscleDefinition
 {
-  std::string id;         ///< "zygomaticus_major"
-  std::string title;      ///< "Zygomaticus major"
+  std::string id;    ///< "zygomaticus_major"
+  std::string title; ///< "Zygomaticus major"
   MuscleSide side = MuscleSide::Both;
   std::string reference;  ///< where its anatomy comes from
   double loadScale = 1.0; ///< multiplies the loads of its functions
@@ -106,10 +106,10 @@ struct MuscleDefinition
 struct MuscleSet
 {
   std::filesystem::path file;
-  std::string id;          ///< "default"
+  std::string id; ///< "default"
   std::string title;
   std::string reference;
-  double loadScale = 1.0;  ///< multiplies every load of the set (for calibration)
+  double loadScale = 1.0; ///< multiplies every load of the set (for calibration)
   std::vector<MuscleDefinition> muscles;
 
   /// nullptr when there is no muscle definition of that id.
@@ -153,7 +153,7 @@ struct MuscleAnchors
   /// Every anchor, standard and derived, as landmarks (θ, z). Derived anchors
   /// are present only when incision::FaceLayout can be made.
   std::vector<seg::Landmark> anchors;
-  double size = 1.0;       ///< faceSize()
+  double size = 1.0; ///< faceSize()
   /// mm of arc per radian of θ for the offsets across: the skin radius at the
   /// nasion (90 mm without one), as incision::FaceLayout::scale.
   double arcRadius = 90.0;
@@ -189,11 +189,11 @@ enum class ThicknessSource
 /// One attachment placed on the patient.
 struct AttachmentPlacement
 {
-  double theta = 0.0;       ///< cylindrical frame, radians
-  double z = 0.0;           ///< mm
-  double r = 0.0;           ///< mm from the axis
-  double skinRadius = 0.0;  ///< skin map at (θ, z)
-  double thickness = 0.0;   ///< soft-tissue thickness used, mm
+  double theta = 0.0;      ///< cylindrical frame, radians
+  double z = 0.0;          ///< mm
+  double r = 0.0;          ///< mm from the axis
+  double skinRadius = 0.0; ///< skin map at (θ, z)
+  double thickness = 0.0;  ///< soft-tissue thickness used, mm
   ThicknessSource source = ThicknessSource::Measured;
   Eigen::Vector3d position = Eigen::Vector3d::Zero(); ///< world LPS mm
 };
@@ -201,10 +201,10 @@ struct AttachmentPlacement
 /// One muscle of the patient: a definition fitted, on one side.
 struct FittedMuscle
 {
-  std::string id;        ///< "zygomaticus_major_left"; a midline muscle keeps its id
-  std::string title;     ///< "Zygomaticus major (left)"
+  std::string id;         ///< "zygomaticus_major_left"; a midline muscle keeps its id
+  std::string title;      ///< "Zygomaticus major (left)"
   std::string definition; ///< the id in the file, "zygomaticus_major"
-  std::string side;      ///< "left", "right" or "midline"
+  std::string side;       ///< "left", "right" or "midline"
   /// The force functions in world space, loads times the load_scale keys:
   /// the unit response (activation 1). Names "MUSCLE.FUNCTION".
   std::vector<fem::Muscle> functions;

@@ -23,8 +23,7 @@ namespace {
 
 constexpr double kKiloPascalPerMegaPascal = 1000.0;
 
-template <class Array>
-vtkSmartPointer<Array> namedArray(const char* name, int components, vtkIdType tuples)
+template <class Array> vtkSmartPointer<Array> namedArray(const char* name, int components, vtkIdType tuples)
 {
   auto a = vtkSmartPointer<Array>::New();
   a->SetName(name);

@@ -32,8 +32,7 @@ using json = nlohmann::json;
 const char* const formatName = "caps-plan";
 const char* const operationKinds = "place, move, offset, set-parameter, undermine, clear-undermining, draw";
 
-template <class... F>
-struct Overloaded : F...
+template <class... F> struct Overloaded : F...
 {
   using F::operator()...;
 };
@@ -150,9 +149,8 @@ private:
 
 bool isSha256Hex(const std::string& s)
 {
-  return s.size() == 64 && std::all_of(s.begin(), s.end(), [](char c) {
-           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
-         });
+  return s.size() == 64 &&
+         std::all_of(s.begin(), s.end(), [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
 IncisionPlan checked(IncisionPlan plan, const seg::RangeMap& skin)
@@ -165,18 +163,17 @@ IncisionPlan checked(IncisionPlan plan, const seg::RangeMap& skin)
 
 std::string describe(const PlanOperation& operation)
 {
-  return std::visit(Overloaded{
-                      [](const PlaceProcedure& o) { return "place " + o.procedure; },
-                      [](const MoveCutPoint& o) { return "move cut point " + std::to_string(o.point); },
-                      [](const OffsetBorderPoint& o) { return "offset border point " + std::to_string(o.vertex); },
-                      [](const SetParameter& o) { return "set parameter " + o.name; },
-                      [](const UndermineRegion& o) {
-                        return "undermine a region of " + std::to_string(o.region.size()) + " points";
-                      },
-                      [](const ClearUndermining&) { return std::string("clear undermining"); },
-                      [](const DrawCut& o) { return "draw a cut of " + std::to_string(o.points.size()) + " points"; },
-                    },
-                    operation);
+  return std::visit(
+    Overloaded{
+      [](const PlaceProcedure& o) { return "place " + o.procedure; },
+      [](const MoveCutPoint& o) { return "move cut point " + std::to_string(o.point); },
+      [](const OffsetBorderPoint& o) { return "offset border point " + std::to_string(o.vertex); },
+      [](const SetParameter& o) { return "set parameter " + o.name; },
+      [](const UndermineRegion& o) { return "undermine a region of " + std::to_string(o.region.size()) + " points"; },
+      [](const ClearUndermining&) { return std::string("clear undermining"); },
+      [](const DrawCut& o) { return "draw a cut of " + std::to_string(o.points.size()) + " points"; },
+    },
+    operation);
 }
 
 std::vector<SutureEdges> straightClosureSutures(int pathPoints)
@@ -196,10 +193,9 @@ const ProcedureTemplate& findProcedure(const ProcedureLibrary& library, const st
   std::string known;
   for (const auto& t : library.procedures())
     known += (known.empty() ? "" : ", ") + t.id();
-  std::string message = "there is no procedure '" + id + "' (" +
-                        (known.empty() ? std::string("the procedures folder has none that can be used")
-                                       : "there are: " + known) +
-                        ")";
+  std::string message =
+    "there is no procedure '" + id + "' (" +
+    (known.empty() ? std::string("the procedures folder has none that can be used") : "there are: " + known) + ")";
   if (!library.errors().empty())
   {
     // A file that fails validation is left out: say so, or the surgeon
@@ -334,39 +330,41 @@ void RecordedPlan::apply(const PlanOperation& operation, const seg::RangeMap& sk
 
 json operationToJson(const PlanOperation& operation)
 {
-  return std::visit(Overloaded{
-                      [](const PlaceProcedure& o) {
-                        return json{{"operation", "place"}, {"procedure", o.procedure}, {"theta", o.at.theta},
-                                    {"z", o.at.z},          {"values", o.values}};
-                      },
-                      [](const MoveCutPoint& o) {
-                        return json{{"operation", "move"},
-                                    {"point", o.point},
-                                    {"thetaZN", {o.thetaZN.x(), o.thetaZN.y()}}};
-                      },
-                      [](const OffsetBorderPoint& o) {
-                        return json{{"operation", "offset"},
-                                    {"vertex", o.vertex},
-                                    {"offset", {o.offset.x(), o.offset.y()}}};
-                      },
-                      [](const SetParameter& o) {
-                        return json{{"operation", "set-parameter"}, {"name", o.name}, {"value", o.value}};
-                      },
-                      [](const UndermineRegion& o) {
-                        json points = json::array();
-                        for (const auto& p : o.region)
-                          points.push_back({p.x(), p.y()});
-                        return json{{"operation", "undermine"}, {"region", std::move(points)}};
-                      },
-                      [](const ClearUndermining&) { return json{{"operation", "clear-undermining"}}; },
-                      [](const DrawCut& o) {
-                        json points = json::array();
-                        for (const auto& p : o.points)
-                          points.push_back({p.x(), p.y()});
-                        return json{{"operation", "draw"}, {"points", std::move(points)}};
-                      },
-                    },
-                    operation);
+  return std::visit(
+    Overloaded{
+      [](const PlaceProcedure& o) {
+        return json{{"operation", "place"},
+                    {"procedure", o.procedure},
+                    {"theta", o.at.theta},
+                    {"z", o.at.z},
+                    {"values", o.values}};
+      },
+      [](const MoveCutPoint& o) {
+        return json{{"operation", "move"}, {"point", o.point}, {"thetaZN", {o.thetaZN.x(), o.thetaZN.y()}}};
+      },
+      [](const OffsetBorderPoint& o) {
+        return json{{"operation", "offset"}, {"vertex", o.vertex}, {"offset", {o.offset.x(), o.offset.y()}}};
+      },
+      [](const SetParameter& o) {
+        return json{{"operation", "set-parameter"}, {"name", o.name}, {"value", o.value}};
+      },
+      [](const UndermineRegion& o) {
+        json points = json::array();
+        for (const auto& p : o.region)
+          points.push_back({p.x(), p.y()});
+        return json{{"operation", "undermine"}, {"region", std::move(points)}};
+      },
+      [](const ClearUndermining&) {
+        return json{{"operation", "clear-undermining"}};
+      },
+      [](const DrawCut& o) {
+        json points = json::array();
+        for (const auto& p : o.points)
+          points.push_back({p.x(), p.y()});
+        return json{{"operation", "draw"}, {"points", std::move(points)}};
+      },
+    },
+    operation);
 }
 
 PlanOperation operationFromJson(const json& j, int number)
@@ -377,8 +375,7 @@ PlanOperation operationFromJson(const json& j, int number)
   const auto kindIt = j.find("operation");
   if (kindIt == j.end() || !kindIt->is_string())
     throw RecipeError(number, "operation " + std::to_string(number) +
-                                " does not say which operation it is: give \"operation\": one of " +
-                                operationKinds);
+                                " does not say which operation it is: give \"operation\": one of " + operationKinds);
   OperationReader r{j, number, kindIt->get<std::string>()};
   if (r.kind == "place")
   {
@@ -441,8 +438,8 @@ PlanRecipe recipeFromJson(const json& j)
     bad("the plan was written in plan format " + version->dump() + " by a newer CAPS; this one reads format " +
         std::to_string(recipeFormatVersion) + ": update CAPS to replay it");
   PlanRecipe recipe;
-  for (const auto& [key, out] : {std::pair{"softwareVersion", &recipe.softwareVersion},
-                                 std::pair{"ctSha256", &recipe.ctSha256}})
+  for (const auto& [key, out] :
+       {std::pair{"softwareVersion", &recipe.softwareVersion}, std::pair{"ctSha256", &recipe.ctSha256}})
     if (const auto it = j.find(key); it != j.end() && !it->is_null())
     {
       if (!it->is_string())
@@ -493,8 +490,9 @@ PlanRecipe readRecipe(const fs::path& file)
 {
   std::ifstream in(file, std::ios::binary);
   if (!in)
-    throw RecipeError(0, "cannot read the plan file " + file.string() + ": check the path (caps plan writes "
-                         "DIR/plan.json)");
+    throw RecipeError(0, "cannot read the plan file " + file.string() +
+                           ": check the path (caps plan writes "
+                           "DIR/plan.json)");
   json j;
   try
   {
@@ -557,6 +555,9 @@ std::string ctContentHash(vtkImageData* image)
   return h.hex();
 }
 
-std::string softwareVersion() { return CAPS_VERSION; }
+std::string softwareVersion()
+{
+  return CAPS_VERSION;
+}
 
 } // namespace caps::incision

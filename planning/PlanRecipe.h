@@ -62,7 +62,7 @@ struct OffsetBorderPoint
 /// placement are dropped, as they are when the panel's slider moves.
 struct SetParameter
 {
-  std::string name; ///< "limb_angle"
+  std::string name;   ///< "limb_angle"
   double value = 0.0; ///< API units
 };
 
@@ -99,8 +99,7 @@ std::vector<SutureEdges> straightClosureSutures(int pathPoints);
 /// Removes every undermined region of the plan (the band along the sutured
 /// edges is a simulation option and stays).
 struct ClearUndermining
-{
-};
+{};
 
 using PlanOperation = std::variant<PlaceProcedure, MoveCutPoint, OffsetBorderPoint, SetParameter, UndermineRegion,
                                    ClearUndermining, DrawCut>;

@@ -278,7 +278,6 @@ RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<Ch
   return out;
 }
 
-
 namespace {
 
 /// The plan's model from the cut to the closure (thesis §4.5), one step per
@@ -290,8 +289,7 @@ public:
   PlanModel(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
             const SimulationOptions& options)
     : skin_(skin), bone_(bone), plan_(plan), options_(options), chart_(checkedChart(skin, bone, plan, options))
-  {
-  }
+  {}
 
   PlanPrediction run(bool meshOnly)
   {
@@ -345,10 +343,7 @@ private:
   }
 
   /// Between steps only: a step, once started, runs to its end.
-  void phase(double fraction, const std::string& step) const
-  {
-    seg::reportProgress(options_.progress, fraction, step);
-  }
+  void phase(double fraction, const std::string& step) const { seg::reportProgress(options_.progress, fraction, step); }
 
   /// 1. The hole, refined to the element size consistently with the sutures.
   void refineTheCut()
@@ -382,8 +377,9 @@ private:
     const fem::SurfaceMesh& surface = out_.surface.mesh;
     auto checkSkin = [&](const ChartPoint& c) {
       if (!chart_.lift(c).allFinite())
-        throw std::invalid_argument("the skin map has no surface under the meshed region at " + where(chart_, c) +
-                                    " (a hole in the map or beyond the scan): reduce the region radius or move the plan");
+        throw std::invalid_argument(
+          "the skin map has no surface under the meshed region at " + where(chart_, c) +
+          " (a hole in the map or beyond the scan): reduce the region radius or move the plan");
     };
     for (const auto& v : surface.vertices)
       checkSkin(v);

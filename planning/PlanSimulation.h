@@ -104,12 +104,12 @@ struct SimulationOptions : TissueDepthOptions
 /// surface-mesh vertex (its skin node), and the surface polygons.
 struct DisplacedSkin
 {
-  std::vector<ChartPoint> chart;         ///< chart position (mm) before the operation
-  std::vector<Eigen::Vector3d> original; ///< world (LPS mm) before
-  std::vector<Eigen::Vector3d> displaced;///< world after the solve
-  std::vector<int> nodes;                ///< FE node of each vertex (the skin node of its column)
-  std::vector<std::vector<int>> polygons;///< surface-mesh polygons (counter-clockwise seen from outside)
-  int holeVertexCount = 0;               ///< leading vertices that are the hole loop
+  std::vector<ChartPoint> chart;          ///< chart position (mm) before the operation
+  std::vector<Eigen::Vector3d> original;  ///< world (LPS mm) before
+  std::vector<Eigen::Vector3d> displaced; ///< world after the solve
+  std::vector<int> nodes;                 ///< FE node of each vertex (the skin node of its column)
+  std::vector<std::vector<int>> polygons; ///< surface-mesh polygons (counter-clockwise seen from outside)
+  int holeVertexCount = 0;                ///< leading vertices that are the hole loop
 };
 
 /// Wall-clock seconds of the pipeline's phases.
@@ -120,13 +120,13 @@ struct SimulationTimes
   /// Ordering, symbolic and numeric factorisation: the wall time they add
   /// after the assembly (the ordering runs on its own thread beside it).
   double factor = 0.0;
-  double solve = 0.0;    ///< substitution and expansion
+  double solve = 0.0; ///< substitution and expansion
 };
 
 /// Z-plasty gain predicted by the simulation next to the Fig. 2.2 table.
 struct ZPlastyPrediction
 {
-  double limbAngle = 0.0;   ///< radians (plan parameter)
+  double limbAngle = 0.0; ///< radians (plan parameter)
   /// From the displaced pivot corners at the ends of the central limb (the
   /// copies the sutures do not carry; see simulatePlan()).
   ZPlastyGain predicted;
@@ -153,8 +153,8 @@ struct SuturedEdgeForce
   /// A suture at a cut point shared by two pairs counts in both.
   int sutureCount = 0;
   Eigen::Vector3d resultant = Eigen::Vector3d::Zero(); ///< sum of the forces on the sutured nodes (N)
-  double resultantMagnitude = 0.0; ///< |resultant| (N)
-  double magnitudeSum = 0.0;       ///< sum of the sutures' force magnitudes (N)
+  double resultantMagnitude = 0.0;                     ///< |resultant| (N)
+  double magnitudeSum = 0.0;                           ///< sum of the sutures' force magnitudes (N)
 };
 
 /// What holds the wound closed (issue: how far to undermine).
@@ -171,13 +171,13 @@ struct ClosureForces
 /// Everything simulatePlan() computed.
 struct PlanPrediction
 {
-  fem::SurfaceMesherResult surface;  ///< the surface mesh of the refined hole (chart mm)
-  fem::HoleLoop hole;                ///< the refined hole loop the mesh was grown from
+  fem::SurfaceMesherResult surface;         ///< the surface mesh of the refined hole (chart mm)
+  fem::HoleLoop hole;                       ///< the refined hole loop the mesh was grown from
   std::vector<fem::SutureEdgePair> sutures; ///< the plan's sutures on the refined loop
   /// For each loop vertex of the plan's own hole loop, its vertex in the refined loop.
   std::vector<int> refinedVertexOf;
-  fem::ContinuumMesh continuum;      ///< FE mesh, constraints, node columns
-  Eigen::VectorXd displacements;     ///< 3N: (x, y, z) of node i at 3i..3i+2 (mm)
+  fem::ContinuumMesh continuum;  ///< FE mesh, constraints, node columns
+  Eigen::VectorXd displacements; ///< 3N: (x, y, z) of node i at 3i..3i+2 (mm)
   /// Internal nodal forces K U (N), 3N like displacements: zero to round-off
   /// at free nodes, the reactions at fixed and sutured ones.
   Eigen::VectorXd nodalForces;
@@ -200,11 +200,11 @@ struct PlanPrediction
   double maxSutureGap = 0.0;
   /// The same before the solve: how wide the wound was.
   double maxSutureGapBefore = 0.0;
-  Eigen::Index dofCount = 0;         ///< 3 × nodes
-  Eigen::Index reducedDofCount = 0;  ///< unknowns after constraints
+  Eigen::Index dofCount = 0;        ///< 3 × nodes
+  Eigen::Index reducedDofCount = 0; ///< unknowns after constraints
   SimulationTimes times;
   std::optional<ZPlastyPrediction> zPlasty; ///< for plans of a Z generator
-  fem::MaterialTable materials;      ///< what was used
+  fem::MaterialTable materials;             ///< what was used
 
   /// Displaced world position of FE node i.
   Eigen::Vector3d displacedNode(int i) const;

@@ -43,8 +43,8 @@ void checkSize(const incision::PlanPrediction& prediction, const Eigen::VectorXd
 
 } // namespace
 
-PlanExpressionResponses::PlanExpressionResponses(const incision::PlanPrediction& prediction,
-                                                 const fem::Mesh& faceMesh, const MuscleResponses& faceResponses,
+PlanExpressionResponses::PlanExpressionResponses(const incision::PlanPrediction& prediction, const fem::Mesh& faceMesh,
+                                                 const MuscleResponses& faceResponses,
                                                  const std::vector<std::vector<fem::Muscle>>& muscles, int threads)
   : closure_(prediction.displacements)
 {
@@ -80,11 +80,10 @@ PlanExpressionResponses::PlanExpressionResponses(const incision::PlanPrediction&
         if (!found)
           found = locator.find(x + sign * step * outward);
     if (!found)
-      throw std::invalid_argument("the plan's model reaches beyond the whole-face model (a rim node at " +
-                                  std::to_string(int(std::lround(x.x()))) + ", " +
-                                  std::to_string(int(std::lround(x.y()))) + ", " +
-                                  std::to_string(int(std::lround(x.z()))) +
-                                  " mm): move the plan onto the face or make the face region larger");
+      throw std::invalid_argument(
+        "the plan's model reaches beyond the whole-face model (a rim node at " +
+        std::to_string(int(std::lround(x.x()))) + ", " + std::to_string(int(std::lround(x.y()))) + ", " +
+        std::to_string(int(std::lround(x.z()))) + " mm): move the plan onto the face or make the face region larger");
     inFace.push_back(*found);
   }
 
@@ -125,7 +124,7 @@ Eigen::VectorXd PlanExpressionResponses::displacement(const Eigen::VectorXd& act
 }
 
 std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const incision::PlanPrediction& prediction,
-                                                                int threads)
+                                                                 int threads)
 {
   fem::AssemblyOptions assembly;
   assembly.threads = threads;
@@ -159,7 +158,8 @@ std::vector<int> fingertipNodes(const incision::PlanPrediction& prediction, cons
       skinNodes.push_back(column.front());
   std::vector<int> out;
   for (int node : skinNodes)
-    if (!sutured[std::size_t(node)] && (displaced(prediction, prediction.displacements, node) - centre).norm() <= radius)
+    if (!sutured[std::size_t(node)] &&
+        (displaced(prediction, prediction.displacements, node) - centre).norm() <= radius)
       out.push_back(node);
   if (out.empty())
     throw std::invalid_argument("no skin of the plan's model lies under the fingertip: put it on the meshed skin "
@@ -194,8 +194,8 @@ Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, c
   return analysis.solve(fem::LoadCase{});
 }
 
-PushResponses::PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre,
-                             double radius, int threads)
+PushResponses::PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
+                             int threads)
   : closure_(prediction.displacements), pushedNodes_(fingertipNodes(prediction, centre, radius))
 {
   // One factorisation with the fingertip's nodes held, then one solve per

@@ -21,7 +21,7 @@ namespace caps::expression {
 /// materials, fixed bone and sutures (PlanPrediction::continuum).
 /// @throws std::runtime_error when it cannot be factored.
 std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const incision::PlanPrediction& prediction,
-                                                                int threads = 2);
+                                                                 int threads = 2);
 
 /// @class PlanExpressionResponses
 /// @brief The post-operative plan under the muscles of the whole face: a
@@ -75,8 +75,7 @@ struct SkinPush
 /// holds the skin where the closure put it).
 /// @throws std::invalid_argument when no skin node lies under the fingertip;
 /// std::runtime_error when the model cannot be solved.
-Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push,
-                                   int threads = 2);
+Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push, int threads = 2);
 
 /// @class PushResponses
 /// @brief The post-operative model under a fingertip for any travel, at
@@ -134,9 +133,9 @@ struct PushPath
 /// dog-ear or a ridge stands out.
 struct ContourBumps
 {
-  int vertices = 0;              ///< skin vertices in the window
-  double largest = 0.0;          ///< largest |height − fit| (mm)
-  double rms = 0.0;              ///< root mean square of height − fit (mm)
+  int vertices = 0;                                ///< skin vertices in the window
+  double largest = 0.0;                            ///< largest |height − fit| (mm)
+  double rms = 0.0;                                ///< root mean square of height − fit (mm)
   Eigen::Vector3d where = Eigen::Vector3d::Zero(); ///< displaced vertex of the largest
 };
 

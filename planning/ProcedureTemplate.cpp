@@ -36,7 +36,10 @@ struct Generator
   std::function<ProcedureCut(const Values&, int points)> build;
 };
 
-ChartPoint polar(double length, double angle) { return {length * std::cos(angle), length * std::sin(angle)}; }
+ChartPoint polar(double length, double angle)
+{
+  return {length * std::cos(angle), length * std::sin(angle)};
+}
 
 /// A cut with no excision: every border point on its cut point.
 ProcedureCut slit(std::vector<ChartPoint> path)
@@ -62,7 +65,7 @@ ProcedureCut ellipse(const Values& v, int n)
   for (int i = 1; i + 1 < n; ++i)
   {
     const double h = b * std::sin(pi * (1.0 - double(i) / (n - 1)));
-    cut.offsets[i] = {0.0, h};                        // left side of the cut opens to the left
+    cut.offsets[i] = {0.0, h};                      // left side of the cut opens to the left
     cut.offsets[rightSideVertex(i, n)] = {0.0, -h}; // and its twin to the right
   }
   return cut;
@@ -171,9 +174,12 @@ const char* unitName(ParameterUnit u)
 {
   switch (u)
   {
-  case ParameterUnit::Millimetre: return "mm";
-  case ParameterUnit::Degree: return "deg";
-  case ParameterUnit::Ratio: return "ratio";
+  case ParameterUnit::Millimetre:
+    return "mm";
+  case ParameterUnit::Degree:
+    return "deg";
+  case ParameterUnit::Ratio:
+    return "ratio";
   }
   return "?";
 }
@@ -192,7 +198,10 @@ std::string shownValue(const ProcedureParameter& p, double apiValue)
   return o.str();
 }
 
-double toApi(ParameterUnit u, double v) { return u == ParameterUnit::Degree ? v * degree : v; }
+double toApi(ParameterUnit u, double v)
+{
+  return u == ParameterUnit::Degree ? v * degree : v;
+}
 
 /// What a procedure file says, line by line, before the whole-file checks.
 struct ProcedureFile
@@ -211,8 +220,8 @@ void readId(ProcedureFile& read, int lineNo, const std::string& value)
 {
   static const std::regex idRe(R"(^[a-z0-9][a-z0-9-]*$)");
   if (!std::regex_match(value, idRe))
-    throw ProcedureFileError(read.file, lineNo, "procedure id '" + value +
-                                                  "' must be lower case letters, digits and '-' (e.g. z-plasty)");
+    throw ProcedureFileError(read.file, lineNo,
+                             "procedure id '" + value + "' must be lower case letters, digits and '-' (e.g. z-plasty)");
   read.id = value;
 }
 
@@ -249,31 +258,36 @@ ProcedureParameter readParameter(const ProcedureFile& read, int lineNo, const st
   static const std::regex nameRe(R"(^[a-z][a-z0-9_]*$)");
   const fs::path& file = read.file;
   if (!std::regex_match(paramName, nameRe))
-    throw ProcedureFileError(file, lineNo, "parameter name '" + paramName +
-                                             "' must be lower case letters, digits and '_'");
+    throw ProcedureFileError(file, lineNo,
+                             "parameter name '" + paramName + "' must be lower case letters, digits and '_'");
   std::smatch m;
   if (!std::regex_match(value, m, paramRe))
-    throw ProcedureFileError(file, lineNo, "parameter '" + paramName +
-                                             "': expected 'DEFAULT UNIT [MIN, MAX] label' with UNIT mm, deg "
-                                             "or ratio, e.g. '60 deg [30, 90] limb angle'");
+    throw ProcedureFileError(file, lineNo,
+                             "parameter '" + paramName +
+                               "': expected 'DEFAULT UNIT [MIN, MAX] label' with UNIT mm, deg "
+                               "or ratio, e.g. '60 deg [30, 90] limb angle'");
   for (const auto& p : read.parameters)
     if (p.name == paramName)
-      throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "' is declared twice (first on line " +
-                                               std::to_string(p.line) + ")");
+      throw ProcedureFileError(
+        file, lineNo, "parameter '" + paramName + "' is declared twice (first on line " + std::to_string(p.line) + ")");
   ProcedureParameter p;
   p.name = paramName;
   p.unit = m[2] == "mm" ? ParameterUnit::Millimetre : m[2] == "deg" ? ParameterUnit::Degree : ParameterUnit::Ratio;
   const double def = std::stod(m[1]), lo = std::stod(m[3]), hi = std::stod(m[4]);
   if (!(lo < hi))
-    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the range [" + std::string(m[3]) + ", " +
-                                             std::string(m[4]) + "] is empty; write [MIN, MAX] with MIN < MAX");
+    throw ProcedureFileError(file, lineNo,
+                             "parameter '" + paramName + "': the range [" + std::string(m[3]) + ", " +
+                               std::string(m[4]) + "] is empty; write [MIN, MAX] with MIN < MAX");
   if (def < lo || def > hi)
-    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': the default " + std::string(m[1]) +
-                                             " is outside its range [" + std::string(m[3]) + ", " +
-                                             std::string(m[4]) + "]");
+    throw ProcedureFileError(file, lineNo,
+                             "parameter '" + paramName + "': the default " + std::string(m[1]) +
+                               " is outside its range [" + std::string(m[3]) + ", " + std::string(m[4]) + "]");
   if (p.unit != ParameterUnit::Degree && lo <= 0.0)
-    throw ProcedureFileError(file, lineNo, "parameter '" + paramName + "': lengths and ratios must be positive; "
-                                             "the range starts at " + std::string(m[3]));
+    throw ProcedureFileError(file, lineNo,
+                             "parameter '" + paramName +
+                               "': lengths and ratios must be positive; "
+                               "the range starts at " +
+                               std::string(m[3]));
   p.defaultValue = toApi(p.unit, def);
   p.minimum = toApi(p.unit, lo);
   p.maximum = toApi(p.unit, hi);
@@ -287,8 +301,10 @@ void readSuture(ProcedureFile& read, int lineNo, const std::string& value)
   static const std::regex edgePairRe(R"(^\(?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*,?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*\)?$)");
   std::smatch m;
   if (!std::regex_match(value, m, edgePairRe))
-    throw ProcedureFileError(read.file, lineNo, "expected a pair of border edges like '(5,0) (5,4)' or "
-                                                  "'((5,0),(5,4))', got '" + value + "'");
+    throw ProcedureFileError(read.file, lineNo,
+                             "expected a pair of border edges like '(5,0) (5,4)' or "
+                             "'((5,0),(5,4))', got '" +
+                               value + "'");
   read.written.push_back({{std::stoi(m[1]), std::stoi(m[2])}, {std::stoi(m[3]), std::stoi(m[4])}});
   read.sutureLines.push_back(lineNo);
 }
@@ -299,8 +315,10 @@ void readZip(ProcedureFile& read, int lineNo, const std::string& value)
   static const std::regex zipRe(R"(^(\d+)\s+(\d+)$)");
   std::smatch m;
   if (!std::regex_match(value, m, zipRe) || std::stoi(m[1]) >= std::stoi(m[2]))
-    throw ProcedureFileError(read.file, lineNo, "expected 'zip = FIRST LAST' with two cut point numbers, FIRST < "
-                                                  "LAST, got '" + value + "'");
+    throw ProcedureFileError(read.file, lineNo,
+                             "expected 'zip = FIRST LAST' with two cut point numbers, FIRST < "
+                             "LAST, got '" +
+                               value + "'");
   read.zips.push_back({lineNo, {std::stoi(m[1]), std::stoi(m[2])}});
 }
 
@@ -322,8 +340,8 @@ void readLine(ProcedureFile& read, int lineNo, const std::string& line)
   }
   const bool repeatable = key == "param" || key == "suture" || key == "zip";
   if (!repeatable && read.seenKeys.count(key))
-    throw ProcedureFileError(file, lineNo, "'" + key + "' is given twice (first on line " +
-                                             std::to_string(read.seenKeys[key]) + ")");
+    throw ProcedureFileError(file, lineNo,
+                             "'" + key + "' is given twice (first on line " + std::to_string(read.seenKeys[key]) + ")");
   read.seenKeys.emplace(key, lineNo);
   if (key == "procedure")
     readId(read, lineNo, value);
@@ -342,9 +360,10 @@ void readLine(ProcedureFile& read, int lineNo, const std::string& line)
   else if (key == "zip")
     readZip(read, lineNo, value);
   else
-    throw ProcedureFileError(file, lineNo, "unknown key '" + key +
-                                             "'; known: procedure, title, reference, generator, points, param, "
-                                             "suture, zip");
+    throw ProcedureFileError(file, lineNo,
+                             "unknown key '" + key +
+                               "'; known: procedure, title, reference, generator, points, param, "
+                               "suture, zip");
 }
 
 /// Every line of the file, each checked on its own.
@@ -381,9 +400,9 @@ int cutPoints(const ProcedureFile& read, const Generator& g)
   if (g.fixedPoints > 0)
   {
     if (read.explicitPoints && read.explicitPoints != g.fixedPoints)
-      throw ProcedureFileError(read.file, read.pointsLine, "the '" + g.name + "' generator cuts " +
-                                                             std::to_string(g.fixedPoints) + " points, not " +
-                                                             std::to_string(read.explicitPoints));
+      throw ProcedureFileError(read.file, read.pointsLine,
+                               "the '" + g.name + "' generator cuts " + std::to_string(g.fixedPoints) +
+                                 " points, not " + std::to_string(read.explicitPoints));
     return g.fixedPoints;
   }
   if (!read.explicitPoints)
@@ -408,15 +427,15 @@ void checkParameters(const ProcedureTemplate& t, const Generator& g, int generat
         found.push_back(p);
     }
     if (found.size() != 1)
-      throw ProcedureFileError(file, found.empty() ? generatorLine : found[1]->line,
-                               "the '" + g.name + "' generator needs " +
-                                 (names.find('|') == std::string::npos ? "parameter '" + names + "'"
-                                                                       : "exactly one of '" + names + "'"));
+      throw ProcedureFileError(
+        file, found.empty() ? generatorLine : found[1]->line,
+        "the '" + g.name + "' generator needs " +
+          (names.find('|') == std::string::npos ? "parameter '" + names + "'" : "exactly one of '" + names + "'"));
     const ProcedureParameter& p = *found[0];
     const ParameterUnit want = p.name == "width" ? ParameterUnit::Millimetre : unit;
     if (p.unit != want)
-      throw ProcedureFileError(file, p.line, "parameter '" + p.name + "' is measured in " + unitName(want) +
-                                               ", not " + unitName(p.unit));
+      throw ProcedureFileError(
+        file, p.line, "parameter '" + p.name + "' is measured in " + unitName(want) + ", not " + unitName(p.unit));
   }
   for (const auto& p : t.parameters())
     if (!expected.count(p.name))
@@ -429,9 +448,9 @@ void expandZips(ProcedureFile& read, int pathPoints)
   for (const auto& [line, range] : read.zips)
   {
     if (range.second >= pathPoints)
-      throw ProcedureFileError(read.file, line, "zip to cut point " + std::to_string(range.second) +
-                                                  ", but the cut has " + std::to_string(pathPoints) + " points (0.." +
-                                                  std::to_string(pathPoints - 1) + ")");
+      throw ProcedureFileError(read.file, line,
+                               "zip to cut point " + std::to_string(range.second) + ", but the cut has " +
+                                 std::to_string(pathPoints) + " points (0.." + std::to_string(pathPoints - 1) + ")");
     // The two sides of the cut between the two points, sewn back together.
     for (int i = range.first; i < range.second; ++i)
     {
@@ -453,9 +472,9 @@ std::vector<fem::SutureEdgePair> resolvedSutures(const ProcedureTemplate& t, con
   catch (const SutureError& e)
   {
     const int line = e.suture() >= 0 ? sutureLines[e.suture()] : 0;
-    throw ProcedureFileError(t.file(), line, std::string(e.what()) + " (the hole of a " +
-                                               std::to_string(t.pathPoints()) + "-point cut has border points 0.." +
-                                               std::to_string(t.holeVertices() - 1) + ")");
+    throw ProcedureFileError(t.file(), line,
+                             std::string(e.what()) + " (the hole of a " + std::to_string(t.pathPoints()) +
+                               "-point cut has border points 0.." + std::to_string(t.holeVertices() - 1) + ")");
   }
 }
 
@@ -491,8 +510,7 @@ void checkDefaultCut(const ProcedureTemplate& t, int generatorLine)
 ProcedureFileError::ProcedureFileError(const fs::path& file, int line, const std::string& message)
   : std::runtime_error(file.string() + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": " + message),
     file_(file), line_(line)
-{
-}
+{}
 
 std::vector<std::string> procedureGenerators()
 {
@@ -606,8 +624,8 @@ ProcedureLibrary ProcedureLibrary::load(const fs::path& folder)
     {
       ProcedureTemplate t = ProcedureTemplate::load(file);
       if (const ProcedureTemplate* other = library.find(t.id()))
-        throw ProcedureFileError(file, 0, "procedure '" + t.id() + "' is already defined by " +
-                                            other->file().filename().string());
+        throw ProcedureFileError(
+          file, 0, "procedure '" + t.id() + "' is already defined by " + other->file().filename().string());
       library.procedures_.push_back(std::move(t));
     }
     catch (const ProcedureFileError& e)

@@ -29,7 +29,10 @@ Eigen::Vector3d liftOrThrow(const SkinChart& chart, const ChartPoint& p, const c
   return x;
 }
 
-double cross2(const ChartPoint& a, const ChartPoint& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross2(const ChartPoint& a, const ChartPoint& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 /// Unit 3D tangent of the lifted chart segment corner→towards where it leaves the corner.
 Eigen::Vector3d tangent(const SkinChart& chart, const ChartPoint& corner, const ChartPoint& towards)
@@ -192,8 +195,7 @@ double tissueVolume(const SkinChart& chart, const seg::RangeMap& bone, const std
   return std::abs(volume);
 }
 
-double excisedVolume(const IncisionPlan& plan, const seg::RangeMap& skin, const seg::RangeMap& bone,
-                     double noBoneDepth)
+double excisedVolume(const IncisionPlan& plan, const seg::RangeMap& skin, const seg::RangeMap& bone, double noBoneDepth)
 {
   if (!plan.isExcision())
     return 0.0;
@@ -232,8 +234,8 @@ PlanMeasurements measurePlan(const IncisionPlan& plan, const seg::RangeMap& skin
     // Skin is to the left of the border: the angle turns counter-clockwise
     // from the next edge to the previous one (chart orientation = seen from outside).
     const double turn = cross2(next - here, prev - here);
-    const bool slit = std::abs(turn) < 1e-12 * (prev - here).norm() * (next - here).norm() &&
-                      (prev - here).dot(next - here) > 0.0;
+    const bool slit =
+      std::abs(turn) < 1e-12 * (prev - here).norm() * (next - here).norm() && (prev - here).dot(next - here) > 0.0;
     double angle = turn >= 0.0 ? between : 2.0 * pi - between;
     if (slit)
       angle = 2.0 * pi - between;
@@ -265,7 +267,10 @@ double zPlastyTheoreticalGain(double limbAngle)
   return gains[4];
 }
 
-double zPlastyGeometricGain(double limbAngle) { return std::sqrt(5.0 - 4.0 * std::cos(limbAngle)) - 1.0; }
+double zPlastyGeometricGain(double limbAngle)
+{
+  return std::sqrt(5.0 - 4.0 * std::cos(limbAngle)) - 1.0;
+}
 
 ZPlastyGain zPlastyPredictedGain(const std::array<Eigen::Vector3d, 2>& tipsBefore,
                                  const std::array<Eigen::Vector3d, 2>& tipsAfter, const Eigen::Vector3d& axis)
@@ -296,8 +301,7 @@ Eigen::Vector3d centralAxis(const IncisionPlan& plan, const seg::RangeMap& skin)
   const auto tips = zPlastyFlapTips(plan);
   const SkinChart chart = plan.chart(skin);
   const auto path = plan.chartPath(chart);
-  return (liftOrThrow(chart, path[tips[1]], "the central axis") -
-          liftOrThrow(chart, path[tips[0]], "the central axis"))
+  return (liftOrThrow(chart, path[tips[1]], "the central axis") - liftOrThrow(chart, path[tips[0]], "the central axis"))
     .normalized();
 }
 

@@ -84,11 +84,11 @@ struct BorderAngle
 /// Everything measured on a plan, for the report and the panel.
 struct PlanMeasurements
 {
-  std::vector<LimbLength> limbs;        ///< every limb of the cut
-  std::vector<LimbLength> borderEdges;  ///< every hole border edge (differ from limbs in excisions)
-  std::vector<LimbAngle> limbAngles;    ///< at every inner cut point
+  std::vector<LimbLength> limbs;       ///< every limb of the cut
+  std::vector<LimbLength> borderEdges; ///< every hole border edge (differ from limbs in excisions)
+  std::vector<LimbAngle> limbAngles;   ///< at every inner cut point
   std::vector<BorderAngle> borderAngles;
-  double excisedArea = 0.0;             ///< skin area of the hole (mm²): 0 without excision
+  double excisedArea = 0.0; ///< skin area of the hole (mm²): 0 without excision
 };
 
 /// Measures a plan on its skin map.

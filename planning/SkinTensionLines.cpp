@@ -90,8 +90,9 @@ FaceLayout FaceLayout::fromLandmarks(const std::vector<seg::Landmark>& landmarks
   f.zStomion = 0.5 * (upperLip + f.zLabraleInferius);
   if (!(f.zGlabella > f.zNasion - 5.0 && f.zNasion > f.zPronasale && f.zPronasale > f.zSubnasale &&
         f.zSubnasale > upperLip && upperLip > f.zLabraleInferius && f.zLabraleInferius > f.zMenton))
-    throw std::invalid_argument("The facial landmarks are not in anatomical order from the glabella down to the menton; "
-                                "check them in the Range maps module before showing the skin tension lines.");
+    throw std::invalid_argument(
+      "The facial landmarks are not in anatomical order from the glabella down to the menton; "
+      "check them in the Range maps module before showing the skin tension lines.");
   const seg::Landmark* nasion = findLandmark(landmarks, "nasion");
   f.frontTheta = nasion->theta;
   const double r = skin.sample(nasion->theta, nasion->z);
@@ -132,7 +133,7 @@ double SkinTensionLines::planeAngle(double x, double y) const
   }
   // Glabella: vertical between the brows.
   field.add(6.0 * (1.0 - smooth(ax, 0.3 * w, 0.5 * w)) * smooth(y, f.zNasion - 0.05 * h, f.zNasion + 0.15 * h) *
-                (1.0 - smooth(y, f.zGlabella + 0.25 * h, f.zGlabella + 0.5 * h)),
+              (1.0 - smooth(y, f.zGlabella + 0.25 * h, f.zGlabella + 0.5 * h)),
             kPi / 2.0);
   // Eyes: flat arcs along the lids, radiating from the lateral canthus.
   for (const double side : {1.0, -1.0})
@@ -149,7 +150,7 @@ double SkinTensionLines::planeAngle(double x, double y) const
   }
   // Nasal dorsum: across the nose.
   field.add(5.0 * (1.0 - smooth(ax, 0.3 * w, 0.5 * w)) * smooth(y, f.zPronasale - 0.05 * h, f.zPronasale + 0.1 * h) *
-                (1.0 - smooth(y, f.zNasion - 0.15 * h, f.zNasion)),
+              (1.0 - smooth(y, f.zNasion - 0.15 * h, f.zNasion)),
             0.0);
   // Lips: radial to the mouth, up to the nose and down to the chin.
   {
@@ -164,7 +165,7 @@ double SkinTensionLines::planeAngle(double x, double y) const
   {
     const Eigen::Vector2d p(x, y - (f.zMenton + 3.0 * h));
     field.add(6.0 * (1.0 - smooth(y, f.zLabraleInferius - 0.25 * h, f.zLabraleInferius - 0.1 * h)) *
-                  (1.0 - smooth(ax, 0.9 * w, 1.3 * w)),
+                (1.0 - smooth(ax, 0.9 * w, 1.3 * w)),
               std::atan2(p.x(), -p.y()));
   }
   // Neck: horizontal.

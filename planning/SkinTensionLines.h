@@ -50,9 +50,9 @@ struct FaceLayout
   double zStomion = 0.0;
   double zLabraleInferius = 0.0;
   double zMenton = 0.0;
-  double eyeOffset = 0.0;       ///< midline to the centre of each eye, mm of arc
-  double eyeZ = 0.0;            ///< height of the eyes' centres
-  double mouthHalfWidth = 0.0;  ///< midline to each mouth corner, mm of arc
+  double eyeOffset = 0.0;      ///< midline to the centre of each eye, mm of arc
+  double eyeZ = 0.0;           ///< height of the eyes' centres
+  double mouthHalfWidth = 0.0; ///< midline to each mouth corner, mm of arc
 
   /// The layout from facial landmarks (seg::placeLandmarks() or placed by
   /// hand): glabella, nasion, pronasale, subnasale, labrale_superius,
@@ -113,7 +113,7 @@ vtkSmartPointer<vtkPolyData> skinTensionLinesPolyData(const SkinTensionLines& li
 /// last point) and the angle to the local line at the axis's middle.
 struct AxisToTensionLines
 {
-  std::string axis;   ///< e.g. "p1–p2"
+  std::string axis; ///< e.g. "p1–p2"
   double degrees = 0.0;
 };
 /// @throws std::invalid_argument when the axis's middle is off the guide.

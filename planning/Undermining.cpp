@@ -13,7 +13,10 @@ constexpr double pi = 3.14159265358979323846;
 /// Chart points closer than this (mm) are one point; borders closer than this touch.
 constexpr double kSamePlace = 1e-6;
 
-double cross2(const ChartPoint& a, const ChartPoint& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross2(const ChartPoint& a, const ChartPoint& b)
+{
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 double distanceToSegment(const ChartPoint& p, const ChartPoint& a, const ChartPoint& b)
 {
@@ -50,7 +53,10 @@ std::string mmText(double mm)
   return o.str();
 }
 
-std::string pointText(int k) { return "point " + std::to_string(k); }
+std::string pointText(int k)
+{
+  return "point " + std::to_string(k);
+}
 
 std::string edgeText(int k, int n)
 {
@@ -88,8 +94,7 @@ bool insidePolygon(const std::vector<ChartPoint>& polygon, const ChartPoint& p)
     const ChartPoint& b = polygon[j];
     // Edge (b, a) straddles the horizontal line through p (half-open in v),
     // and meets it to the right of p.
-    if ((a.y() > p.y()) != (b.y() > p.y()) &&
-        p.x() < a.x() + (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()))
+    if ((a.y() > p.y()) != (b.y() > p.y()) && p.x() < a.x() + (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()))
       inside = !inside;
   }
   return inside;
@@ -110,7 +115,8 @@ void checkUnderminedRegion(const UnderminedRegion& region, const SkinChart& char
   const int n = int(region.size());
   if (n < 3)
     throw std::invalid_argument("an undermined region is a closed polygon of at least 3 points on the skin; this one "
-                                "has " + std::to_string(n) + ": add points round the skin to undermine");
+                                "has " +
+                                std::to_string(n) + ": add points round the skin to undermine");
   const seg::RangeMap& skin = chart.skin();
   const seg::CylindricalFrame& frame = skin.frame();
   for (int k = 0; k < n; ++k)

@@ -18,13 +18,13 @@ namespace caps::incision {
 /// The plan predicted with one undermining width.
 struct UnderminingStudyRow
 {
-  double width = 0.0;                  ///< mm, of the band along the sutured edges
-  std::size_t releasedBoneNodes = 0;   ///< bone nodes no longer fixed
-  double closureForce = 0.0;           ///< N, summed over the sutures
-  double largestSutureForce = 0.0;     ///< N
-  double sutureGap = 0.0;              ///< mm, after closure
-  double peakVonMisesKPa = 0.0;        ///< skin within woundStressRadius of the wound
-  double meanVonMisesKPa = 0.0;        ///< the same band
+  double width = 0.0;                ///< mm, of the band along the sutured edges
+  std::size_t releasedBoneNodes = 0; ///< bone nodes no longer fixed
+  double closureForce = 0.0;         ///< N, summed over the sutures
+  double largestSutureForce = 0.0;   ///< N
+  double sutureGap = 0.0;            ///< mm, after closure
+  double peakVonMisesKPa = 0.0;      ///< skin within woundStressRadius of the wound
+  double meanVonMisesKPa = 0.0;      ///< the same band
 };
 
 struct UnderminingStudy

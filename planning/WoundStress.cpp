@@ -31,8 +31,9 @@ double distanceToHoleBorder(const fem::HoleLoop& hole, const fem::ChartPoint& p)
 WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
 {
   if (!std::isfinite(radius) || radius <= 0.0)
-    throw std::invalid_argument("the distance from the wound for the skin stress must be a positive number of mm (got " +
-                                std::to_string(radius) + ")");
+    throw std::invalid_argument(
+      "the distance from the wound for the skin stress must be a positive number of mm (got " + std::to_string(radius) +
+      ")");
   const DisplacedSkin& skin = prediction.skin;
   const std::size_t vertexCount = skin.nodes.size();
   if (vertexCount == 0 || skin.chart.size() != vertexCount || skin.original.size() != vertexCount ||

@@ -15,16 +15,16 @@ namespace caps::incision {
 /// Stresses in MPa (the model is in mm and N), lengths in mm.
 struct WoundStress
 {
-  double radius = 0.0;  ///< the band: skin vertices at most this far from the hole border (chart mm)
-  int vertexCount = 0;  ///< skin (surface-mesh) vertices in the band
+  double radius = 0.0; ///< the band: skin vertices at most this far from the hole border (chart mm)
+  int vertexCount = 0; ///< skin (surface-mesh) vertices in the band
   /// Where the von Mises stress is largest in the band.
-  int vertex = -1;                                   ///< surface-mesh vertex (DisplacedSkin index)
-  int node = -1;                                     ///< its FE skin node
-  fem::ChartPoint chart = fem::ChartPoint::Zero();   ///< its chart point (mm) before the operation
-  double distance = 0.0;                             ///< its chart distance to the hole border (mm)
+  int vertex = -1;                                     ///< surface-mesh vertex (DisplacedSkin index)
+  int node = -1;                                       ///< its FE skin node
+  fem::ChartPoint chart = fem::ChartPoint::Zero();     ///< its chart point (mm) before the operation
+  double distance = 0.0;                               ///< its chart distance to the hole border (mm)
   Eigen::Vector3d original = Eigen::Vector3d::Zero();  ///< world (LPS mm) before
   Eigen::Vector3d displaced = Eigen::Vector3d::Zero(); ///< world after the closure
-  double peakVonMises = 0.0;                         ///< the largest von Mises stress there (MPa)
+  double peakVonMises = 0.0;                           ///< the largest von Mises stress there (MPa)
   /// The largest maximum principal stress (tension) in the band (MPa) and
   /// its vertex; it need not be where the von Mises stress peaks.
   double peakMaxPrincipal = 0.0;

@@ -147,8 +147,8 @@ Camera turntableCamera(const seg::CylindricalFrame& frame, double rMax, double z
 /// @a sequence.folder with @a sequence.camera, coloured by the surfaces' skin
 /// shade when they have one, else in a skin tone; @a step is called before
 /// each frame.
-void renderSurfaces(const std::function<vtkSmartPointer<vtkPolyData>(int)>& surfaceAt, int total,
-                    const Figure& base, FrameSequence& sequence, const std::function<void(const char*)>& step)
+void renderSurfaces(const std::function<vtkSmartPointer<vtkPolyData>(int)>& surfaceAt, int total, const Figure& base,
+                    FrameSequence& sequence, const std::function<void(const char*)>& step)
 {
   prepareFolder(sequence.folder);
   for (int k = 0; k < total; ++k)
@@ -216,10 +216,9 @@ void encodeVideos(const std::vector<FrameSequence*>& sequences, const AnimationO
   const std::optional<fs::path> ffmpeg = findFfmpeg();
   result.ffmpegFound = ffmpeg.has_value();
   for (FrameSequence* sequence : sequences)
-    sequence->ffmpegCommand = ffmpegCommandLine(ffmpeg.value_or("ffmpeg"), *sequence,
-                                                sequence->folder.parent_path() /
-                                                  (sequence->folder.filename().string() + ".mp4"),
-                                                options.framesPerSecond);
+    sequence->ffmpegCommand = ffmpegCommandLine(
+      ffmpeg.value_or("ffmpeg"), *sequence,
+      sequence->folder.parent_path() / (sequence->folder.filename().string() + ".mp4"), options.framesPerSecond);
   if (options.video && !ffmpeg)
   {
     const char* env = std::getenv("CAPS_FFMPEG");
@@ -394,8 +393,8 @@ AnimationResult writeSequence(const std::function<vtkSmartPointer<vtkPolyData>(i
 
 AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const std::string& name,
                                     const Eigen::Vector3d& toCamera, const Eigen::Vector3d& viewUp,
-                                    const fs::path& outDir, int frames, bool andBack,
-                                    const AnimationOptions& options, const seg::ProgressCallback& progress)
+                                    const fs::path& outDir, int frames, bool andBack, const AnimationOptions& options,
+                                    const seg::ProgressCallback& progress)
 {
   if (frames < 2)
     throw std::invalid_argument("an animation needs at least 2 frames");

@@ -48,15 +48,15 @@ struct FrameSequence
   int frames = 0;
   int width = 0;
   int height = 0;
-  Camera camera;                 ///< the pre → post camera; the turntable's first (front) camera
-  std::filesystem::path video;   ///< the MP4, empty when none was made
-  std::string ffmpegCommand;     ///< the command line that makes (or would make) the MP4
+  Camera camera;               ///< the pre → post camera; the turntable's first (front) camera
+  std::filesystem::path video; ///< the MP4, empty when none was made
+  std::string ffmpegCommand;   ///< the command line that makes (or would make) the MP4
 };
 
 /// What an animation writer wrote.
 struct AnimationResult
 {
-  std::string planName;           ///< the plan animated (report/PlanAnimation.h), or the animation's name
+  std::string planName; ///< the plan animated (report/PlanAnimation.h), or the animation's name
   FrameSequence prePost;
   std::optional<FrameSequence> turntable;
   /// False when videos were asked for and ffmpeg was not found (nothing failed: the frames are written).

@@ -109,11 +109,15 @@ void applyCamera(vtkCamera* camera, const Camera& c)
   camera->OrthogonalizeViewUp();
 }
 
-Eigen::Vector3d toEigen(const std::array<double, 3>& a) { return {a[0], a[1], a[2]}; }
+Eigen::Vector3d toEigen(const std::array<double, 3>& a)
+{
+  return {a[0], a[1], a[2]};
+}
 
 vtkSmartPointer<vtkPolyData> withNormals(vtkPolyData* surface)
 {
-  if (surface->GetPointData()->GetNormals() != nullptr || surface->GetNumberOfPolys() + surface->GetNumberOfStrips() == 0)
+  if (surface->GetPointData()->GetNormals() != nullptr ||
+      surface->GetNumberOfPolys() + surface->GetNumberOfStrips() == 0)
     return surface;
   vtkNew<vtkPolyDataNormals> normals;
   normals->SetInputData(surface);
@@ -137,19 +141,24 @@ vtkSmartPointer<vtkActor> surfaceActor(const SurfaceLayer& layer, std::size_t in
   mapper->SetResolveCoincidentTopologyToPolygonOffset();
   mapper->SetRelativeCoincidentTopologyPolygonOffsetParameters(1.0, 1.0);
   mapper->ScalarVisibilityOff();
-  if (layer.colouring != SurfaceLayer::Colouring::Solid) {
+  if (layer.colouring != SurfaceLayer::Colouring::Solid)
+  {
     vtkDataArray* array = surface->GetPointData()->GetArray(layer.array.c_str());
     if (array == nullptr)
       throw std::invalid_argument(what + " has no point array \"" + layer.array + "\"");
     mapper->ScalarVisibilityOn();
     mapper->SetScalarModeToUsePointFieldData();
     mapper->SelectColorArray(layer.array.c_str());
-    if (layer.colouring == SurfaceLayer::Colouring::PointRgb) {
-      if (array->GetDataType() != VTK_UNSIGNED_CHAR || (array->GetNumberOfComponents() != 3 && array->GetNumberOfComponents() != 4))
+    if (layer.colouring == SurfaceLayer::Colouring::PointRgb)
+    {
+      if (array->GetDataType() != VTK_UNSIGNED_CHAR ||
+          (array->GetNumberOfComponents() != 3 && array->GetNumberOfComponents() != 4))
         throw std::invalid_argument(what + ": point array \"" + layer.array +
                                     "\" is not an RGB(A) unsigned char array");
       mapper->SetColorModeToDirectScalars();
-    } else {
+    }
+    else
+    {
       checkRange(layer.range, what);
       auto table = makeLookupTable(layer.colourMap, layer.range);
       if (array->GetNumberOfComponents() > 1)
@@ -167,14 +176,17 @@ vtkSmartPointer<vtkActor> surfaceActor(const SurfaceLayer& layer, std::size_t in
   p->SetColor(layer.colour[0], layer.colour[1], layer.colour[2]);
   p->SetOpacity(std::clamp(layer.opacity, 0.0, 1.0));
   p->SetInterpolationToPhong();
-  if (layer.lit) {
+  if (layer.lit)
+  {
     // Mapped colours keep more ambient light so shading does not move them far along the map.
     const bool mapped = layer.colouring == SurfaceLayer::Colouring::PointScalars;
     p->SetAmbient(mapped ? 0.25 : 0.12);
     p->SetDiffuse(mapped ? 0.75 : 0.88);
     p->SetSpecular(mapped ? 0.05 : 0.1);
     p->SetSpecularPower(25.0);
-  } else {
+  }
+  else
+  {
     p->SetAmbient(1.0);
     p->SetDiffuse(0.0);
     p->SetSpecular(0.0);
@@ -213,7 +225,8 @@ void addLineLayer(const Figure& figure, const LineLayer& line, std::size_t index
   const double lift = line.lift >= 0.0 ? line.lift : 0.006 * distance;
 
   vtkNew<vtkPoints> points;
-  for (const Eigen::Vector3d& p : line.points) {
+  for (const Eigen::Vector3d& p : line.points)
+  {
     const Eigen::Vector3d towardEye = eye - p;
     const double n = towardEye.norm();
     const Eigen::Vector3d lifted = n > lift ? Eigen::Vector3d(p + towardEye * (lift / n)) : p;
@@ -253,11 +266,13 @@ void addLineLayer(const Figure& figure, const LineLayer& line, std::size_t index
   // Dots at the labelled points.
   vtkNew<vtkCellArray> vertices;
   for (vtkIdType i = 0; i < n; ++i)
-    if (!line.labels[std::size_t(i)].empty()) {
+    if (!line.labels[std::size_t(i)].empty())
+    {
       vertices->InsertNextCell(1);
       vertices->InsertCellPoint(i);
     }
-  if (line.markLabelledPoints && vertices->GetNumberOfCells() > 0) {
+  if (line.markLabelledPoints && vertices->GetNumberOfCells() > 0)
+  {
     vtkNew<vtkPolyData> dots;
     dots->SetPoints(points);
     dots->SetVerts(vertices);
@@ -276,7 +291,8 @@ void addLineLayer(const Figure& figure, const LineLayer& line, std::size_t index
   // it on the side away from the line's centre, along it beyond open ends.
   std::vector<Eigen::Vector2d> screen;
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-  for (const Eigen::Vector3d& p : line.points) {
+  for (const Eigen::Vector3d& p : line.points)
+  {
     screen.push_back(toDisplay(figure, p));
     centre += screen.back();
   }
@@ -284,7 +300,8 @@ void addLineLayer(const Figure& figure, const LineLayer& line, std::size_t index
   const double fontPx = figure.textPoints * figure.pixelsPerPoint();
   const double offset = 1.1 * line.widthPixels + 0.75 * fontPx;
   const std::size_t count = screen.size();
-  for (std::size_t i = 0; i < count; ++i) {
+  for (std::size_t i = 0; i < count; ++i)
+  {
     if (line.labels[i].empty())
       continue;
     const bool first = i == 0, last = i + 1 == count;
@@ -326,7 +343,8 @@ bool unoccluded(const Figure& figure, const std::vector<vtkSmartPointer<vtkCellL
   const Eigen::Vector3d eye = toEigen(figure.camera.position);
   double from[3] = {point.x(), point.y(), point.z()};
   double to[3] = {eye.x(), eye.y(), eye.z()};
-  for (const auto& locator : locators) {
+  for (const auto& locator : locators)
+  {
     double t = 0.0, x[3], pcoords[3];
     int subId = 0;
     if (locator->IntersectWithLine(from, to, 1e-9, t, x, pcoords, subId) != 0)
@@ -345,10 +363,12 @@ void spreadLabels(std::vector<PendingLabel>& labels)
     // Bold Arial: about 0.62 em per character, plus the background's margin.
     return Eigen::Vector2d(0.5 * (0.62 * double(l.text.size()) + 0.5) * l.fontPx, 0.5 * 1.3 * l.fontPx);
   };
-  for (int pass = 0; pass < 200; ++pass) {
+  for (int pass = 0; pass < 200; ++pass)
+  {
     bool moved = false;
     for (std::size_t i = 0; i < labels.size(); ++i)
-      for (std::size_t j = i + 1; j < labels.size(); ++j) {
+      for (std::size_t j = i + 1; j < labels.size(); ++j)
+      {
         const Eigen::Vector2d d = labels[j].at - labels[i].at;
         const Eigen::Vector2d reach = halfSize(labels[i]) + halfSize(labels[j]);
         const double overlapX = reach.x() - std::abs(d.x()), overlapY = reach.y() - std::abs(d.y());
@@ -390,12 +410,12 @@ void addLabel(vtkRenderer* overlay, const PendingLabel& label)
 struct BarLayout
 {
   double font = 0.0;
-  double x0 = 0.0;       ///< left of the bar
+  double x0 = 0.0; ///< left of the bar
   double barWidth = 0.0;
   double boxWidth = 0.0; ///< bar and labels
   double y0 = 0.0, y1 = 0.0;
-  double titleX = 0.0;   ///< centre of the vertical title
-  double column = 0.0;   ///< width of the whole column at the right of the figure
+  double titleX = 0.0; ///< centre of the vertical title
+  double column = 0.0; ///< width of the whole column at the right of the figure
 };
 
 BarLayout barLayout(const Figure& figure)
@@ -430,7 +450,8 @@ void addColourBar(const Figure& figure, const ColourBar& bar, vtkRenderer* overl
   vtkNew<vtkUnsignedCharArray> colours;
   colours->SetNumberOfComponents(3);
   vtkNew<vtkCellArray> quads;
-  for (int i = 0; i <= steps; ++i) {
+  for (int i = 0; i <= steps; ++i)
+  {
     const double t = double(i) / steps;
     const double y = l.y0 + t * (l.y1 - l.y0);
     points->InsertNextPoint(x0, y, 0.0);
@@ -441,7 +462,8 @@ void addColourBar(const Figure& figure, const ColourBar& bar, vtkRenderer* overl
                                   static_cast<unsigned char>(std::lround(255.0 * c[2]))};
     colours->InsertNextTypedTuple(rgb);
     colours->InsertNextTypedTuple(rgb);
-    if (i > 0) {
+    if (i > 0)
+    {
       const vtkIdType quad[4] = {2 * i - 2, 2 * i - 1, 2 * i + 1, 2 * i};
       quads->InsertNextCell(4, quad);
     }
@@ -473,7 +495,8 @@ void addColourBar(const Figure& figure, const ColourBar& bar, vtkRenderer* overl
   segment(x1, l.y0, x1, l.y1);
   segment(x1, l.y1, x0, l.y1);
   segment(x0, l.y1, x0, l.y0);
-  for (int k = 0; k < labels; ++k) {
+  for (int k = 0; k < labels; ++k)
+  {
     const double y = l.y0 + (l.y1 - l.y0) * k / (labels - 1);
     segment(x1, y, x1 + tick, y);
   }
@@ -490,7 +513,8 @@ void addColourBar(const Figure& figure, const ColourBar& bar, vtkRenderer* overl
   overlay->AddActor2D(frameActor);
 
   // Tick labels at their values.
-  for (int k = 0; k < labels; ++k) {
+  for (int k = 0; k < labels; ++k)
+  {
     const double value = bar.range[0] + (bar.range[1] - bar.range[0]) * k / (labels - 1);
     char text[64];
     std::snprintf(text, sizeof text, bar.labelFormat.c_str(), value);
@@ -569,7 +593,8 @@ void LineLayer::numberPoints()
 void LineLayer::numberPoints(const std::vector<std::size_t>& indices)
 {
   labels.assign(points.size(), std::string());
-  for (std::size_t k = 0; k < indices.size(); ++k) {
+  for (std::size_t k = 0; k < indices.size(); ++k)
+  {
     if (indices[k] >= points.size())
       throw std::invalid_argument("numberPoints: point " + std::to_string(indices[k]) + " of a line of " +
                                   std::to_string(points.size()));
@@ -603,7 +628,8 @@ double Figure::sceneAspect() const
 
 double viewTheta(View view)
 {
-  switch (view) {
+  switch (view)
+  {
   case View::Front:
     return -kPi / 2.0;
   case View::ObliqueLeft:
@@ -642,7 +668,8 @@ Camera fitCamera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector
   const double tanH = aspect * tanV;
 
   Eigen::Vector3d lo = points.front(), hi = points.front();
-  for (const Eigen::Vector3d& p : points) {
+  for (const Eigen::Vector3d& p : points)
+  {
     lo = lo.cwiseMin(p);
     hi = hi.cwiseMax(p);
   }
@@ -650,9 +677,11 @@ Camera fitCamera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector
   double distance = 0.0;
   // Fit the distance for the current focal point, then re-centre the focal
   // point on the projected extent; a few rounds converge for perspective.
-  for (int round = 0; round < 6; ++round) {
+  for (int round = 0; round < 6; ++round)
+  {
     double xLo = 1e300, xHi = -1e300, yLo = 1e300, yHi = -1e300;
-    for (const Eigen::Vector3d& p : points) {
+    for (const Eigen::Vector3d& p : points)
+    {
       const Eigen::Vector3d d = p - focal;
       xLo = std::min(xLo, d.dot(b.r));
       xHi = std::max(xHi, d.dot(b.r));
@@ -663,12 +692,14 @@ Camera fitCamera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector
       focal += 0.5 * (xLo + xHi) * b.r + 0.5 * (yLo + yHi) * b.u;
     distance = 0.0;
     double sxLo = 1e300, sxHi = -1e300, syLo = 1e300, syHi = -1e300;
-    for (const Eigen::Vector3d& p : points) {
+    for (const Eigen::Vector3d& p : points)
+    {
       const Eigen::Vector3d d = p - focal;
       const double a = d.dot(b.v), x = d.dot(b.r), y = d.dot(b.u);
       distance = std::max({distance, a + std::abs(x) / tanH, a + std::abs(y) / tanV});
     }
-    for (const Eigen::Vector3d& p : points) {
+    for (const Eigen::Vector3d& p : points)
+    {
       const Eigen::Vector3d d = p - focal;
       const double depth = distance - d.dot(b.v);
       const double sx = d.dot(b.r) / depth, sy = d.dot(b.u) / depth;
@@ -685,7 +716,8 @@ Camera fitCamera(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector
   }
   // Final distance for the final focal point.
   distance = 0.0;
-  for (const Eigen::Vector3d& p : points) {
+  for (const Eigen::Vector3d& p : points)
+  {
     const Eigen::Vector3d d = p - focal;
     const double a = d.dot(b.v), x = d.dot(b.r), y = d.dot(b.u);
     distance = std::max({distance, a + std::abs(x) / tanH, a + std::abs(y) / tanV});
@@ -711,10 +743,12 @@ Camera fitCamera(const std::vector<vtkPolyData*>& surfaces, const Eigen::Vector3
                  const Eigen::Vector3d& viewUp, double aspect, double viewAngleDeg, double margin)
 {
   std::vector<Eigen::Vector3d> points;
-  for (vtkPolyData* surface : surfaces) {
+  for (vtkPolyData* surface : surfaces)
+  {
     if (surface == nullptr)
       continue;
-    for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i) {
+    for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i)
+    {
       double p[3];
       surface->GetPoint(i, p);
       points.emplace_back(p[0], p[1], p[2]);
@@ -816,12 +850,14 @@ vtkSmartPointer<vtkImageData> renderFigure(const Figure& figure)
     addColourBar(figure, *figure.colourBar, overlay);
   scene->ResetCameraClippingRange();
 
-  if (!labels.empty()) {
+  if (!labels.empty())
+  {
     // Labels are 2D and would show through the head: keep those whose point
     // no surface (at least half opaque) hides from the eye.
     std::vector<vtkSmartPointer<vtkCellLocator>> locators;
     for (const SurfaceLayer& layer : figure.surfaces)
-      if (layer.opacity >= 0.5 && layer.surface->GetNumberOfCells() > 0) {
+      if (layer.opacity >= 0.5 && layer.surface->GetNumberOfCells() > 0)
+      {
         auto locator = vtkSmartPointer<vtkCellLocator>::New();
         locator->SetDataSet(layer.surface);
         locator->BuildLocator();
@@ -850,8 +886,8 @@ vtkSmartPointer<vtkImageData> renderFigure(const Figure& figure)
   image->GetDimensions(dims);
   if (dims[0] != figure.width || dims[1] != figure.height)
     throw std::runtime_error("figure: the renderer returned " + std::to_string(dims[0]) + " × " +
-                             std::to_string(dims[1]) + " pixels instead of " + std::to_string(figure.width) +
-                             " × " + std::to_string(figure.height));
+                             std::to_string(dims[1]) + " pixels instead of " + std::to_string(figure.width) + " × " +
+                             std::to_string(figure.height));
   return image;
 }
 
@@ -924,7 +960,8 @@ RgbBytes rgbBytesTopDown(vtkImageData* image)
   out.bytes.resize(std::size_t(p.width) * std::size_t(p.height) * 3);
   std::uint8_t* o = out.bytes.data();
   for (int y = 0; y < p.height; ++y)
-    for (int x = 0; x < p.width; ++x) {
+    for (int x = 0; x < p.width; ++x)
+    {
       const unsigned char* c = p.at(x, y);
       *o++ = c[0];
       *o++ = c[1];
@@ -957,7 +994,8 @@ double pixelVariance(vtkImageData* image)
   if (n == 0)
     return 0.0;
   double sum = 0.0, sum2 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < n; ++i)
+  {
     const unsigned char* c = p.data + i * std::size_t(p.components);
     const double luminance = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
     sum += luminance;
@@ -987,7 +1025,8 @@ std::optional<PixelBox> boundingBoxOfNonBackground(vtkImageData* image, const Rg
   PixelBox box{p.width, p.height, -1, -1};
   for (int y = 0; y < p.height; ++y)
     for (int x = 0; x < p.width; ++x)
-      if (differs(p.at(x, y), bg, tolerance)) {
+      if (differs(p.at(x, y), bg, tolerance))
+      {
         box.x0 = std::min(box.x0, x);
         box.y0 = std::min(box.y0, y);
         box.x1 = std::max(box.x1, x);

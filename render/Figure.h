@@ -94,7 +94,7 @@ struct ColourBar
   std::string title; ///< with units, e.g. "von Mises stress (kPa)"
   std::array<double, 2> range{0.0, 1.0};
   ColourMap colourMap = ColourMap::Viridis;
-  int labelCount = 5;            ///< evenly spaced from range[0] to range[1], each level with its value
+  int labelCount = 5;               ///< evenly spaced from range[0] to range[1], each level with its value
   std::string labelFormat = "%.3g"; ///< printf format of one double
 };
 
@@ -134,11 +134,11 @@ struct Figure
 /// The θ of a view in the head's cylindrical frame (θ = -π/2 is the face).
 enum class View
 {
-  Front,         ///< θ = -π/2
-  ObliqueLeft,   ///< 45° towards the patient's left: θ = -π/4
-  ObliqueRight,  ///< θ = -3π/4
-  ProfileLeft,   ///< the patient's left side: θ = 0
-  ProfileRight,  ///< θ = -π
+  Front,        ///< θ = -π/2
+  ObliqueLeft,  ///< 45° towards the patient's left: θ = -π/4
+  ObliqueRight, ///< θ = -3π/4
+  ProfileLeft,  ///< the patient's left side: θ = 0
+  ProfileRight, ///< θ = -π
 };
 double viewTheta(View view);
 

@@ -53,14 +53,16 @@ std::string findXvfb()
   if (const char* chosen = std::getenv("CAPS_XVFB"))
     return ::access(chosen, X_OK) == 0 ? std::string(chosen) : std::string();
   std::vector<std::string> directories;
-  if (const char* path = std::getenv("PATH")) {
+  if (const char* path = std::getenv("PATH"))
+  {
     std::istringstream in(path);
     for (std::string dir; std::getline(in, dir, ':');)
       if (!dir.empty())
         directories.push_back(dir);
   }
   directories.push_back("/usr/bin");
-  for (const std::string& dir : directories) {
+  for (const std::string& dir : directories)
+  {
     const std::string candidate = dir + "/Xvfb";
     if (::access(candidate.c_str(), X_OK) == 0)
       return candidate;
@@ -104,7 +106,8 @@ std::string readLog(int fd)
   std::string text;
   char buffer[4096];
   off_t offset = 0;
-  for (;;) {
+  for (;;)
+  {
     const ssize_t n = ::pread(fd, buffer, sizeof buffer, offset);
     if (n <= 0)
       break;
@@ -125,7 +128,8 @@ void stopProcess(pid_t pid)
     return;
   ::kill(pid, SIGTERM);
   const auto deadline = std::chrono::steady_clock::now() + kStopTimeout;
-  for (;;) {
+  for (;;)
+  {
     int status = 0;
     const pid_t r = ::waitpid(pid, &status, WNOHANG);
     if (r == pid || (r < 0 && errno != EINTR))
@@ -136,8 +140,8 @@ void stopProcess(pid_t pid)
   }
   ::kill(pid, SIGKILL);
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR)
+  {}
 }
 
 /// True when pid (our child) has exited; reaps it.
@@ -158,9 +162,12 @@ std::string readDisplayNumber(int fd, std::string& failure)
 {
   std::string number;
   const auto deadline = std::chrono::steady_clock::now() + kStartTimeout;
-  for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) {
+  for (;;)
+  {
+    const auto left =
+      std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0)
+    {
       failure = "it did not report a display within " + std::to_string(kStartTimeout.count()) + " s";
       break;
     }
@@ -168,7 +175,8 @@ std::string readDisplayNumber(int fd, std::string& failure)
     const int ready = ::poll(&p, 1, int(left.count()));
     if (ready < 0 && errno == EINTR)
       continue;
-    if (ready < 0) {
+    if (ready < 0)
+    {
       failure = std::string("poll failed: ") + std::strerror(errno);
       break;
     }
@@ -178,7 +186,8 @@ std::string readDisplayNumber(int fd, std::string& failure)
     const ssize_t n = ::read(fd, buffer, sizeof buffer);
     if (n < 0 && errno == EINTR)
       continue;
-    if (n <= 0) {
+    if (n <= 0)
+    {
       failure = "it exited before accepting connections";
       break;
     }
@@ -186,7 +195,8 @@ std::string readDisplayNumber(int fd, std::string& failure)
     if (number.find('\n') != std::string::npos)
       break;
   }
-  if (failure.empty()) {
+  if (failure.empty())
+  {
     number = number.substr(0, number.find('\n'));
     if (number.empty() || number.find_first_not_of("0123456789") != std::string::npos)
       failure = "it reported an unexpected display \"" + number + "\"";
@@ -197,9 +207,9 @@ std::string readDisplayNumber(int fd, std::string& failure)
 struct State
 {
   std::mutex mutex;
-  pid_t pid = -1;              ///< the private Xvfb, or -1
-  std::string ownDisplay;      ///< ":N" of the private Xvfb
-  std::string verified;        ///< a DISPLAY value found usable
+  pid_t pid = -1;                      ///< the private Xvfb, or -1
+  std::string ownDisplay;              ///< ":N" of the private Xvfb
+  std::string verified;                ///< a DISPLAY value found usable
   std::optional<std::string> previous; ///< DISPLAY before the private server (nullopt: unset)
   int objects = 0;
 
@@ -211,7 +221,8 @@ struct State
       return;
     stopProcess(pid);
     pid = -1;
-    if (const char* current = std::getenv("DISPLAY"); current && current == ownDisplay) {
+    if (const char* current = std::getenv("DISPLAY"); current && current == ownDisplay)
+    {
       if (previous)
         ::setenv("DISPLAY", previous->c_str(), 1);
       else
@@ -244,20 +255,23 @@ struct State
 
     // Everything the child needs is prepared here: between fork and exec it
     // may only make async-signal-safe calls.
-    const char* argv[] = {"Xvfb", "-displayfd", "3", "-screen", "0", "2560x2048x24",
-                          "-nolisten", "tcp", "-noreset", nullptr};
+    const char* argv[] = {"Xvfb",         "-displayfd", "3",   "-screen",  "0",
+                          "2560x2048x24", "-nolisten",  "tcp", "-noreset", nullptr};
     const pid_t parent = ::getpid();
     const bool mainThread = ::gettid() == parent; // PDEATHSIG follows the forking thread
     sigset_t none;
     sigemptyset(&none);
-    struct sigaction defaultAction {};
+    struct sigaction defaultAction
+    {};
     defaultAction.sa_handler = SIG_DFL;
 
     const pid_t child = ::fork();
     if (child < 0)
       throw std::runtime_error(std::string("cannot start Xvfb: fork failed: ") + std::strerror(errno));
-    if (child == 0) {
-      if (mainThread) {
+    if (child == 0)
+    {
+      if (mainThread)
+      {
         ::prctl(PR_SET_PDEATHSIG, SIGTERM);
         if (::getppid() != parent)
           ::_exit(1);
@@ -278,7 +292,8 @@ struct State
 
     std::string failure;
     const std::string number = readDisplayNumber(readEnd.get(), failure);
-    if (!failure.empty()) {
+    if (!failure.empty())
+    {
       stopProcess(child);
       const std::string output = readLog(log.get());
       throw std::runtime_error("Could not start Xvfb (" + xvfb + ") for offscreen rendering: " + failure +
@@ -287,7 +302,8 @@ struct State
     }
 
     const std::string name = ":" + number;
-    if (const auto problem = displayProblem(name.c_str())) {
+    if (const auto problem = displayProblem(name.c_str()))
+    {
       stopProcess(child);
       throw std::runtime_error("Xvfb started on " + name + " but " + *problem + "; " + kInstallHint + ".");
     }
@@ -305,12 +321,15 @@ struct State
   {
     const char* current = std::getenv("DISPLAY");
     const std::string display = current ? current : "";
-    if (pid > 0) {
-      if (hasExited(pid)) { // the private server died: forget it and start another
+    if (pid > 0)
+    {
+      if (hasExited(pid))
+      { // the private server died: forget it and start another
         pid = -1;
         if (verified == ownDisplay)
           verified.clear();
-        if (display == ownDisplay) {
+        if (display == ownDisplay)
+        {
           if (previous)
             ::setenv("DISPLAY", previous->c_str(), 1);
           else
@@ -326,15 +345,18 @@ struct State
     if (!display.empty() && display == verified)
       return;
     std::string why = "DISPLAY is not set";
-    if (!display.empty()) {
+    if (!display.empty())
+    {
       const auto problem = displayProblem(display.c_str());
-      if (!problem) {
+      if (!problem)
+      {
         verified = display;
         return;
       }
       why = *problem;
     }
-    if (pid > 0) { // DISPLAY was changed to something unusable: go back to ours
+    if (pid > 0)
+    { // DISPLAY was changed to something unusable: go back to ours
       ::setenv("DISPLAY", ownDisplay.c_str(), 1);
       return;
     }

@@ -47,7 +47,8 @@ void validate(const XyPlot& plot)
   {
     if (s.x.empty() || s.x.size() != s.y.size())
       throw std::invalid_argument("the curve \"" + s.label + "\" has " + std::to_string(s.x.size()) + " x and " +
-                                  std::to_string(s.y.size()) + " y values: it needs at least one point, as many x as y");
+                                  std::to_string(s.y.size()) +
+                                  " y values: it needs at least one point, as many x as y");
     for (std::size_t i = 0; i < s.x.size(); ++i)
       if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i]))
         throw std::invalid_argument("the curve \"" + s.label + "\" has a value that is not a number at point " +
@@ -170,8 +171,7 @@ private:
   {
     const double pad = pad_;
     g_.left = pad + labelMetrics_.height() + pad + widestTick(yTicks_[0]) + pad;
-    g_.right = plot_.width -
-               (twoAxes_ ? pad + labelMetrics_.height() + pad + widestTick(yTicks_[1]) + pad : 3.0 * pad);
+    g_.right = plot_.width - (twoAxes_ ? pad + labelMetrics_.height() + pad + widestTick(yTicks_[1]) + pad : 3.0 * pad);
     g_.top = pad + titleMetrics_.height() + pad + labelMetrics_.height() + 1.5 * pad;
     g_.bottom = plot_.height - (pad + labelMetrics_.height() + pad + tickMetrics_.height() + pad);
     g_.xRange = {xTicks_.front(), xTicks_.back()};
@@ -332,8 +332,7 @@ private:
       drawMarker(s, QPointF(x + sample / 2.0, y));
       painter_.setPen(kInk);
       const QString text = QString::fromStdString(plot_.series[s].label);
-      painter_.drawText(QPointF(x + sample + gap, y + (labelMetrics_.ascent() - labelMetrics_.descent()) / 2.0),
-                        text);
+      painter_.drawText(QPointF(x + sample + gap, y + (labelMetrics_.ascent() - labelMetrics_.descent()) / 2.0), text);
       x += sample + gap + labelMetrics_.horizontalAdvance(text) + spacing;
     }
   }

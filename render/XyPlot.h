@@ -16,10 +16,10 @@ namespace caps::render {
 /// One curve: points joined in the order given, a marker at each.
 struct PlotSeries
 {
-  std::string label;             ///< legend and y axis title, with the unit: "closure force (N)"
-  std::vector<double> x;         ///< abscissae (the same unit for every series)
-  std::vector<double> y;         ///< ordinates, as many as x
-  std::uint32_t rgb = 0x1f77b4;  ///< line colour 0xRRGGBB
+  std::string label;            ///< legend and y axis title, with the unit: "closure force (N)"
+  std::vector<double> x;        ///< abscissae (the same unit for every series)
+  std::vector<double> y;        ///< ordinates, as many as x
+  std::uint32_t rgb = 0x1f77b4; ///< line colour 0xRRGGBB
 };
 
 /// A plot of one or two series over a common x axis. The first series is
@@ -28,13 +28,13 @@ struct PlotSeries
 struct XyPlot
 {
   std::string title;
-  std::string xLabel;                ///< with the unit: "undermining width (mm)"
-  std::vector<PlotSeries> series;    ///< 1 or 2
+  std::string xLabel;             ///< with the unit: "undermining width (mm)"
+  std::vector<PlotSeries> series; ///< 1 or 2
   /// Each y axis reaches 0 when its data keep one sign (from 0 up for
   /// positive data, down to 0 for negative), so a change of a few per cent
   /// is not drawn as a large one; false: the axis spans the data only.
   bool yFromZero = true;
-  int width = 1000;                  ///< pixels
+  int width = 1000; ///< pixels
   int height = 600;
 };
 

@@ -14,8 +14,9 @@ namespace caps {
 /// rest to 1 the muscle file's strong contraction; muscles not listed are at
 /// rest. The face model of the Expression module turns them into a skin
 /// shape by superposition (§3.1.2). Small fields only.
-class ExpressionNode : public Node {
- public:
+class ExpressionNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::Expression; }
 
   /// The muscle set the ids belong to ("default": data/muscles/default.muscles).
@@ -32,14 +33,14 @@ class ExpressionNode : public Node {
   /// The activation of @a muscle, 0 when not listed.
   double activation(const std::string& muscle) const;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   std::string muscleSet_ = "default";
   std::string description_;
   std::map<std::string, double> activations_;
 };
 
-}  // namespace caps
+} // namespace caps

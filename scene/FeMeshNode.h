@@ -10,8 +10,9 @@ namespace caps {
 /// @brief The continuum finite element mesh of a plan (thesis §4.5.2):
 /// quadratic hexahedra and wedges, skin to bone, with the region id of each
 /// element as cell data. Points in patient LPS, mm. Bulk file: VTU.
-class FeMeshNode : public Node {
- public:
+class FeMeshNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::FeMesh; }
 
   vtkUnstructuredGrid* mesh() const { return mesh_; }
@@ -25,13 +26,13 @@ class FeMeshNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   vtkSmartPointer<vtkUnstructuredGrid> mesh_;
   NodeId planId_;
 };
 
-}  // namespace caps
+} // namespace caps

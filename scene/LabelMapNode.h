@@ -16,20 +16,23 @@ namespace caps {
 ///
 /// Same geometry rules as VolumeNode (LPS, mm, direction matrix), usually on
 /// the grid of the reference volume. Bulk file: NRRD.
-class LabelMapNode : public Node {
- public:
+class LabelMapNode : public Node
+{
+public:
   /// One entry of the label table.
-  struct Label {
+  struct Label
+  {
     std::string name;
-    std::array<double, 3> color{1.0, 1.0, 1.0};  ///< RGB in [0, 1]
+    std::array<double, 3> color{1.0, 1.0, 1.0}; ///< RGB in [0, 1]
     bool operator==(const Label&) const = default;
   };
 
   /// The HU thresholds a segmentation was made with: the range maps search
   /// their sub-voxel skin and bone crossings at the same values.
-  struct Thresholds {
-    double skinHu = 0.0;  ///< air / soft tissue
-    double boneHu = 0.0;  ///< soft tissue / bone
+  struct Thresholds
+  {
+    double skinHu = 0.0; ///< air / soft tissue
+    double boneHu = 0.0; ///< soft tissue / bone
     bool operator==(const Thresholds&) const = default;
   };
 
@@ -55,15 +58,15 @@ class LabelMapNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   vtkSmartPointer<vtkImageData> image_;
   NodeId referenceVolumeId_;
   std::map<int, Label> labels_;
   std::optional<Thresholds> thresholds_;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -11,11 +11,13 @@ namespace caps {
 /// @brief Named points on the patient (nasion, pogonion, the corner of the
 /// mouth...) placed by the surgeon while reviewing the tissue thickness;
 /// the muscle sets (planning/MuscleSet.h) are placed relative to them. Small fields only.
-class LandmarksNode : public Node {
- public:
-  struct Landmark {
+class LandmarksNode : public Node
+{
+public:
+  struct Landmark
+  {
     std::string name;
-    std::array<double, 3> position{};  ///< patient LPS, mm
+    std::array<double, 3> position{}; ///< patient LPS, mm
     bool operator==(const Landmark&) const = default;
   };
 
@@ -27,12 +29,12 @@ class LandmarksNode : public Node {
   /// Removes landmark @a index; nothing if there is none.
   void remove(std::size_t index);
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   std::vector<Landmark> landmarks_;
 };
 
-}  // namespace caps
+} // namespace caps

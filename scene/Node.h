@@ -20,8 +20,9 @@ using NodeId = std::string;
 /// mementos); bulky data (images, meshes) goes to one file per node
 /// (writeBulk/readBulk) whose extension bulkFileExtension() gives, "" when
 /// the node has nothing bulky to store.
-class Node {
- public:
+class Node
+{
+public:
   virtual ~Node();
   Node(const Node&) = delete;
   Node& operator=(const Node&) = delete;
@@ -57,17 +58,17 @@ class Node {
   /// A default-constructed node of the given type.
   static std::unique_ptr<Node> create(NodeType type);
 
- protected:
+protected:
   Node() = default;
   /// One line per field each way (Slicer's WriteXML / ReadXMLAttributes).
   virtual void writeFields(nlohmann::json& j) const = 0;
   virtual void readFields(const nlohmann::json& j) = 0;
 
- private:
+private:
   friend class Scene;
   NodeId id_;
   std::string name_;
   Scene* scene_ = nullptr;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -17,14 +17,18 @@ namespace caps {
 /// either endianness, LPS/RAS/LAS spaces, attached data only.
 /// @warning Single-component scalars only; throws SceneError naming the file
 /// on anything else, and on truncated or foreign files.
-class NrrdIO {
- public:
-  enum class Encoding { Gzip, Raw };
+class NrrdIO
+{
+public:
+  enum class Encoding
+  {
+    Gzip,
+    Raw
+  };
 
   /// Writes a single-component image (any integer or float VTK scalar type)
   /// with its origin, spacing and direction matrix (patient LPS, mm).
-  static void writeImage(vtkImageData* image, const std::filesystem::path& file,
-                         Encoding encoding = Encoding::Gzip);
+  static void writeImage(vtkImageData* image, const std::filesystem::path& file, Encoding encoding = Encoding::Gzip);
   /// Reads a 2D or 3D single-component image; the extent starts at 0.
   static vtkSmartPointer<vtkImageData> readImage(const std::filesystem::path& file);
 
@@ -35,4 +39,4 @@ class NrrdIO {
   static Eigen::MatrixXf readMatrix(const std::filesystem::path& file);
 };
 
-}  // namespace caps
+} // namespace caps

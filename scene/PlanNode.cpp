@@ -5,27 +5,32 @@
 
 namespace caps {
 
-void PlanNode::setProcedure(std::string procedure) {
+void PlanNode::setProcedure(std::string procedure)
+{
   procedure_ = std::move(procedure);
   modified();
 }
 
-void PlanNode::setParameters(std::map<std::string, double> parameters) {
+void PlanNode::setParameters(std::map<std::string, double> parameters)
+{
   parameters_ = std::move(parameters);
   modified();
 }
 
-void PlanNode::setParameter(const std::string& key, double value) {
+void PlanNode::setParameter(const std::string& key, double value)
+{
   parameters_[key] = value;
   modified();
 }
 
-void PlanNode::setCutPath(std::vector<Eigen::Vector2d> path) {
+void PlanNode::setCutPath(std::vector<Eigen::Vector2d> path)
+{
   cutPath_ = std::move(path);
   modified();
 }
 
-void PlanNode::setCutPoint(std::size_t index, const Eigen::Vector2d& p) {
+void PlanNode::setCutPoint(std::size_t index, const Eigen::Vector2d& p)
+{
   if (index >= cutPath_.size())
     throw SceneError("plan '" + name() + "' has " + std::to_string(cutPath_.size()) + " cut points; point " +
                      std::to_string(index) + " does not exist");
@@ -33,83 +38,100 @@ void PlanNode::setCutPoint(std::size_t index, const Eigen::Vector2d& p) {
   modified();
 }
 
-void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures) {
+void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures)
+{
   sutures_ = std::move(sutures);
   modified();
 }
 
-void PlanNode::setGenerator(std::string generator) {
+void PlanNode::setGenerator(std::string generator)
+{
   generator_ = std::move(generator);
   modified();
 }
 
-void PlanNode::setCentre(const Eigen::Vector2d& thetaZ) {
+void PlanNode::setCentre(const Eigen::Vector2d& thetaZ)
+{
   centre_ = thetaZ;
   modified();
 }
 
-void PlanNode::setBorderOffsets(std::vector<Eigen::Vector2d> offsets) {
+void PlanNode::setBorderOffsets(std::vector<Eigen::Vector2d> offsets)
+{
   borderOffsets_ = std::move(offsets);
   modified();
 }
 
-void PlanNode::setOperations(nlohmann::json operations) {
+void PlanNode::setOperations(nlohmann::json operations)
+{
   operations_ = jsonfields::list(operations, "the plan's operations");
   modified();
 }
 
-void PlanNode::setCtSha256(std::string hash) {
+void PlanNode::setCtSha256(std::string hash)
+{
   ctSha256_ = std::move(hash);
   modified();
 }
 
-void PlanNode::setSoftwareVersion(std::string version) {
+void PlanNode::setSoftwareVersion(std::string version)
+{
   softwareVersion_ = std::move(version);
   modified();
 }
 
-void PlanNode::setSimulation(nlohmann::json simulation) {
+void PlanNode::setSimulation(nlohmann::json simulation)
+{
   if (!simulation.is_null() && !simulation.is_object())
     throw SceneError("a plan's simulation settings must be an object, not " + simulation.dump());
   simulation_ = std::move(simulation);
   modified();
 }
 
-void PlanNode::setNotes(std::string notes) {
+void PlanNode::setNotes(std::string notes)
+{
   notes_ = std::move(notes);
   modified();
 }
 
-void PlanNode::setRangeMapId(NodeId id) {
+void PlanNode::setRangeMapId(NodeId id)
+{
   rangeMapId_ = std::move(id);
   modified();
 }
 
-void PlanNode::writeFields(nlohmann::json& j) const {
+void PlanNode::writeFields(nlohmann::json& j) const
+{
   j["procedure"] = procedure_;
   j["parameters"] = parameters_;
   auto& path = j["cutPath"] = nlohmann::json::array();
-  for (const auto& p : cutPath_) path.push_back({p.x(), p.y()});
+  for (const auto& p : cutPath_)
+    path.push_back({p.x(), p.y()});
   j["sutures"] = sutures_;
   j["generator"] = generator_;
   j["centre"] = {centre_.x(), centre_.y()};
   auto& offsets = j["borderOffsets"] = nlohmann::json::array();
-  for (const auto& d : borderOffsets_) offsets.push_back({d.x(), d.y()});
+  for (const auto& d : borderOffsets_)
+    offsets.push_back({d.x(), d.y()});
   j["operations"] = operations_;
   j["ctSha256"] = ctSha256_;
   j["softwareVersion"] = softwareVersion_;
-  if (!simulation_.is_null()) j["simulation"] = simulation_;
+  if (!simulation_.is_null())
+    j["simulation"] = simulation_;
   j["notes"] = notes_;
   j["rangeMapId"] = rangeMapId_;
 }
 
-void PlanNode::readFields(const nlohmann::json& j) {
+void PlanNode::readFields(const nlohmann::json& j)
+{
   jsonfields::read(j, "procedure", procedure_);
   jsonfields::read(j, "parameters", parameters_);
   const auto readPoints = [&j](const char* key, std::vector<Eigen::Vector2d>& out) {
-    if (const auto* points = jsonfields::find(j, key)) {
+    if (const auto* points = jsonfields::find(j, key))
+    {
       std::vector<Eigen::Vector2d> read;
-      for (const auto& p : jsonfields::list(*points, key)) {
+      for (const auto& p : jsonfields::list(*points, key))
+      {
         if (!p.is_array() || p.size() != 2 || !p[0].is_number() || !p[1].is_number())
           throw SceneError(std::string("a point of ") + key + " must be two numbers, not " + p.dump());
         read.emplace_back(p[0].get<double>(), p[1].get<double>());
@@ -119,16 +141,20 @@ void PlanNode::readFields(const nlohmann::json& j) {
   };
   readPoints("cutPath", cutPath_);
   readPoints("borderOffsets", borderOffsets_);
-  if (const auto* c = jsonfields::find(j, "centre")) {
+  if (const auto* c = jsonfields::find(j, "centre"))
+  {
     if (!c->is_array() || c->size() != 2 || !(*c)[0].is_number() || !(*c)[1].is_number())
       throw SceneError("the plan's centre must be two numbers (theta, z), not " + c->dump());
     centre_ = Eigen::Vector2d((*c)[0].get<double>(), (*c)[1].get<double>());
   }
   jsonfields::read(j, "generator", generator_);
-  if (const auto* given = jsonfields::find(j, "sutures")) {
+  if (const auto* given = jsonfields::find(j, "sutures"))
+  {
     std::vector<std::array<int, 4>> sutures;
-    for (const auto& s : jsonfields::list(*given, "sutures")) {
-      if (jsonfields::list(s, "a suture").size() != 4) throw SceneError("a suture must have 4 numbers, not " + s.dump());
+    for (const auto& s : jsonfields::list(*given, "sutures"))
+    {
+      if (jsonfields::list(s, "a suture").size() != 4)
+        throw SceneError("a suture must have 4 numbers, not " + s.dump());
       sutures.push_back({jsonfields::toInt(s[0], "a suture"), jsonfields::toInt(s[1], "a suture"),
                          jsonfields::toInt(s[2], "a suture"), jsonfields::toInt(s[3], "a suture")});
     }
@@ -138,7 +164,8 @@ void PlanNode::readFields(const nlohmann::json& j) {
     operations_ = jsonfields::list(*operations, "the plan's operations");
   jsonfields::read(j, "ctSha256", ctSha256_);
   jsonfields::read(j, "softwareVersion", softwareVersion_);
-  if (const auto* simulation = jsonfields::find(j, "simulation")) {
+  if (const auto* simulation = jsonfields::find(j, "simulation"))
+  {
     if (!simulation->is_null() && !simulation->is_object())
       throw SceneError("a plan's \"simulation\" must be an object, not " + simulation->dump());
     simulation_ = *simulation;
@@ -147,4 +174,4 @@ void PlanNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "rangeMapId", rangeMapId_);
 }
 
-}  // namespace caps
+} // namespace caps

@@ -12,8 +12,9 @@ namespace caps {
 
 /// @brief A surgical plan: procedure, its parameters and the cut drawn on the
 /// skin. JSON only (no bulk file); edits go through ScopedEdit for undo.
-class PlanNode : public Node {
- public:
+class PlanNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::Plan; }
 
   /// "elliptical-excision", "z-plasty", "multiple-z-plasty", ...
@@ -78,11 +79,11 @@ class PlanNode : public Node {
   const NodeId& rangeMapId() const { return rangeMapId_; }
   void setRangeMapId(NodeId id);
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   std::string procedure_;
   std::map<std::string, double> parameters_;
   std::vector<Eigen::Vector2d> cutPath_;
@@ -98,4 +99,4 @@ class PlanNode : public Node {
   NodeId rangeMapId_;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -14,8 +14,9 @@ namespace caps {
 /// j / (nz - 1) along the axis; NaN where no surface was found. For the
 /// "thickness" role the values are soft-tissue thickness in mm.
 /// Bulk file: 2D float NRRD, θ fastest, NaN preserved.
-class RangeMapNode : public Node {
- public:
+class RangeMapNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::RangeMap; }
 
   /// Rows = θ samples, cols = z samples.
@@ -57,15 +58,15 @@ class RangeMapNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   Eigen::MatrixXf values_;
   std::string role_ = "skin";
   Eigen::Vector3d axisOrigin_ = Eigen::Vector3d::Zero();
-  Eigen::Vector3d axisDirection_ = Eigen::Vector3d::UnitZ();  // patient superior
+  Eigen::Vector3d axisDirection_ = Eigen::Vector3d::UnitZ(); // patient superior
   double zMin_ = 0.0;
   double zMax_ = 0.0;
   NodeId sourceVolumeId_;
@@ -73,4 +74,4 @@ class RangeMapNode : public Node {
   NodeId skinMapId_;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -16,8 +16,9 @@ namespace caps {
 /// @brief The one shared scene: owns every node, gives them stable ids and
 /// tells observers about additions, removals and modifications (the MRML
 /// scene of CAPS). Modules keep node ids, never pointers into each other.
-class Scene {
- public:
+class Scene
+{
+public:
   using Observer = std::function<void(SceneEvent, const Node&)>;
 
   Scene();
@@ -30,18 +31,15 @@ class Scene {
   Node* addNode(std::unique_ptr<Node> node);
 
   /// Creates a T, adds it and returns it: `auto* v = scene.add<VolumeNode>();`.
-  template <class T, class... Args>
-  T* add(Args&&... args) {
+  template <class T, class... Args> T* add(Args&&... args)
+  {
     return static_cast<T*>(addNode(std::make_unique<T>(std::forward<Args>(args)...)));
   }
 
   /// nullptr when there is no such node.
   Node* node(const NodeId& id) const;
   /// nullptr when there is no such node or it is not a T.
-  template <class T>
-  T* nodeAs(const NodeId& id) const {
-    return dynamic_cast<T*>(node(id));
-  }
+  template <class T> T* nodeAs(const NodeId& id) const { return dynamic_cast<T*>(node(id)); }
 
   /// Nodes in insertion order.
   std::vector<Node*> nodes() const;
@@ -71,7 +69,7 @@ class Scene {
   UndoStack& undoStack() { return undo_; }
   const UndoStack& undoStack() const { return undo_; }
 
- private:
+private:
   friend class Node;
   friend class UndoStack;
   /// removeNode() without dropping the node's undo entries: undoing its addition.
@@ -93,4 +91,4 @@ class Scene {
   UndoStack undo_{*this};
 };
 
-}  // namespace caps
+} // namespace caps

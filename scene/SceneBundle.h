@@ -27,8 +27,7 @@ inline constexpr int kSceneBundleFormatVersion = 1;
 /// folders of finished or killed saves are removed first. Refuses to replace
 /// a folder that is not a CAPS bundle. Throws SceneError naming the path, and
 /// only while the previous copy is still in place.
-void saveSceneBundle(const Scene& scene, const std::filesystem::path& bundleDir,
-                     const BundleProgress& progress = {});
+void saveSceneBundle(const Scene& scene, const std::filesystem::path& bundleDir, const BundleProgress& progress = {});
 
 /// @brief Replaces the scene's contents by the bundle's.
 ///
@@ -43,6 +42,6 @@ void loadSceneBundle(Scene& scene, const std::filesystem::path& bundleDir);
 namespace detail {
 /// Tests only: skip RENAME_EXCHANGE and use the rename-aside fallback.
 void setSceneBundleForceRenameFallback(bool force);
-}  // namespace detail
+} // namespace detail
 
-}  // namespace caps
+} // namespace caps

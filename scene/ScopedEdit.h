@@ -17,19 +17,20 @@ class Scene;
 /// @code
 ///   { ScopedEdit edit(scene, planId, "Move point 3"); plan->setCutPoint(3, p); }
 /// @endcode
-class ScopedEdit {
- public:
+class ScopedEdit
+{
+public:
   /// Throws SceneError when the scene has no node @a id.
   ScopedEdit(Scene& scene, NodeId id, std::string label);
   ~ScopedEdit();
   ScopedEdit(const ScopedEdit&) = delete;
   ScopedEdit& operator=(const ScopedEdit&) = delete;
 
- private:
+private:
   Scene& scene_;
   NodeId id_;
   std::string label_;
   nlohmann::json before_;
 };
 
-}  // namespace caps
+} // namespace caps

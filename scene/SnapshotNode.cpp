@@ -9,25 +9,33 @@
 
 namespace caps {
 
-void SnapshotNode::setCaption(std::string caption) {
+void SnapshotNode::setCaption(std::string caption)
+{
   caption_ = std::move(caption);
   modified();
 }
 
-void SnapshotNode::setCamera(const Camera& camera) {
+void SnapshotNode::setCamera(const Camera& camera)
+{
   camera_ = camera;
   modified();
 }
 
-void SnapshotNode::setImage(vtkSmartPointer<vtkImageData> image) {
+void SnapshotNode::setImage(vtkSmartPointer<vtkImageData> image)
+{
   image_ = std::move(image);
   modified();
 }
 
-std::string SnapshotNode::bulkFileExtension() const { return image_ ? ".png" : ""; }
+std::string SnapshotNode::bulkFileExtension() const
+{
+  return image_ ? ".png" : "";
+}
 
-void SnapshotNode::writeBulk(const std::filesystem::path& file) const {
-  if (!image_) throw SceneError("snapshot '" + name() + "' has no image to write to " + file.string());
+void SnapshotNode::writeBulk(const std::filesystem::path& file) const
+{
+  if (!image_)
+    throw SceneError("snapshot '" + name() + "' has no image to write to " + file.string());
   if (image_->GetScalarType() != VTK_UNSIGNED_CHAR && image_->GetScalarType() != VTK_UNSIGNED_SHORT)
     throw SceneError("cannot write " + file.string() + ": a snapshot image must be unsigned char RGB");
   auto writer = vtkSmartPointer<vtkPNGWriter>::New();
@@ -36,12 +44,15 @@ void SnapshotNode::writeBulk(const std::filesystem::path& file) const {
   writer->SetFileName(file.c_str());
   writer->Write();
   if (errors.failed() || writer->GetErrorCode() != 0)
-    throw SceneError("could not write " + file.string() + ": check free disk space and permissions (" + errors.message() + ")");
+    throw SceneError("could not write " + file.string() + ": check free disk space and permissions (" +
+                     errors.message() + ")");
 }
 
-void SnapshotNode::readBulk(const std::filesystem::path& file) {
+void SnapshotNode::readBulk(const std::filesystem::path& file)
+{
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec)) throw SceneError("cannot open " + file.string() + ": the file is missing");
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw SceneError("cannot open " + file.string() + ": the file is missing");
   auto reader = vtkSmartPointer<vtkPNGReader>::New();
   VtkErrorCatcher errors(reader);
   if (!reader->CanReadFile(file.c_str()))
@@ -54,7 +65,8 @@ void SnapshotNode::readBulk(const std::filesystem::path& file) {
   image_->DeepCopy(reader->GetOutput());
 }
 
-void SnapshotNode::writeFields(nlohmann::json& j) const {
+void SnapshotNode::writeFields(nlohmann::json& j) const
+{
   j["caption"] = caption_;
   j["cameraPosition"] = camera_.position;
   j["cameraFocalPoint"] = camera_.focalPoint;
@@ -62,7 +74,8 @@ void SnapshotNode::writeFields(nlohmann::json& j) const {
   j["cameraViewAngle"] = camera_.viewAngle;
 }
 
-void SnapshotNode::readFields(const nlohmann::json& j) {
+void SnapshotNode::readFields(const nlohmann::json& j)
+{
   jsonfields::read(j, "caption", caption_);
   jsonfields::read(j, "cameraPosition", camera_.position);
   jsonfields::read(j, "cameraFocalPoint", camera_.focalPoint);
@@ -70,4 +83,4 @@ void SnapshotNode::readFields(const nlohmann::json& j) {
   jsonfields::read(j, "cameraViewAngle", camera_.viewAngle);
 }
 
-}  // namespace caps
+} // namespace caps

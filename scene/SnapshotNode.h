@@ -13,8 +13,9 @@ namespace caps {
 
 /// @brief A saved view for the report: caption, camera and an RGB picture.
 /// Bulk file: PNG, none while the image is null.
-class SnapshotNode : public Node {
- public:
+class SnapshotNode : public Node
+{
+public:
   /// A camera as vtkCamera describes it (patient LPS, mm; view angle in degrees as VTK).
   using Camera = render::Camera;
 
@@ -34,14 +35,14 @@ class SnapshotNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   std::string caption_;
   Camera camera_;
   vtkSmartPointer<vtkImageData> image_;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -12,8 +12,9 @@ namespace caps {
 /// @brief The result of one load case on an FE mesh: the mesh with
 /// point-data displacement (mm) and cell/point stress arrays (MPa).
 /// Bulk file: VTU.
-class SolutionNode : public Node {
- public:
+class SolutionNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::Solution; }
 
   const NodeId& meshId() const { return meshId_; }
@@ -30,14 +31,14 @@ class SolutionNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   NodeId meshId_;
   vtkSmartPointer<vtkUnstructuredGrid> result_;
   std::string loadCase_;
 };
 
-}  // namespace caps
+} // namespace caps

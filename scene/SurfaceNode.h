@@ -12,8 +12,9 @@ namespace caps {
 
 /// @brief A triangle surface (skin, bone, deformed skin...) with its display
 /// properties. Points in patient LPS, mm. Bulk file: VTU (arrays kept).
-class SurfaceNode : public Node {
- public:
+class SurfaceNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::Surface; }
 
   vtkPolyData* polyData() const { return polyData_; }
@@ -54,11 +55,11 @@ class SurfaceNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   vtkSmartPointer<vtkPolyData> polyData_;
   std::array<double, 3> color_{0.9, 0.75, 0.65};
   double opacity_ = 1.0;
@@ -71,4 +72,4 @@ class SurfaceNode : public Node {
   NodeId sourceLabelMapId_;
 };
 
-}  // namespace caps
+} // namespace caps

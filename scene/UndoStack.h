@@ -18,10 +18,12 @@ class Scene;
 /// Entries are pushed by ScopedEdit. undo()/redo() apply fromJson, which fires
 /// NodeModified. A new entry clears the redo tail; the oldest entries are
 /// dropped beyond depthLimit(); removing a node drops its entries.
-class UndoStack {
- public:
-  struct Entry {
-    std::string label;  ///< shown in the Edit menu: "Undo Move point 3"
+class UndoStack
+{
+public:
+  struct Entry
+  {
+    std::string label; ///< shown in the Edit menu: "Undo Move point 3"
     NodeId nodeId;
     nlohmann::json before;
     nlohmann::json after;
@@ -62,11 +64,11 @@ class UndoStack {
   /// Drops every entry of @a id (called by Scene::removeNode).
   void removeEntriesFor(const NodeId& id);
 
- private:
+private:
   Scene& scene_;
   std::deque<Entry> entries_;
-  std::size_t applied_ = 0;  // entries_[0, applied_) are done, the rest can be redone
+  std::size_t applied_ = 0; // entries_[0, applied_) are done, the rest can be redone
   std::size_t depthLimit_ = kDefaultDepthLimit;
 };
 
-}  // namespace caps
+} // namespace caps

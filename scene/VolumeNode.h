@@ -16,8 +16,9 @@ namespace caps {
 /// vtkImageData) is in the patient frame, DICOM LPS, mm. Scalars are short,
 /// unsigned short, unsigned char, int, float or double. Bulk file: NRRD.
 /// After changing the image's voxels in place, call modified().
-class VolumeNode : public Node {
- public:
+class VolumeNode : public Node
+{
+public:
   NodeType type() const override { return NodeType::Volume; }
 
   vtkImageData* image() const { return image_; }
@@ -39,16 +40,16 @@ class VolumeNode : public Node {
   void writeBulk(const std::filesystem::path& file) const override;
   void readBulk(const std::filesystem::path& file) override;
 
- protected:
+protected:
   void writeFields(nlohmann::json& j) const override;
   void readFields(const nlohmann::json& j) override;
 
- private:
+private:
   vtkSmartPointer<vtkImageData> image_;
   std::map<std::string, std::string> metadata_;
   std::string sourcePath_;
-  double window_ = 400.0;  // a soft-tissue CT window
+  double window_ = 400.0; // a soft-tissue CT window
   double level_ = 40.0;
 };
 
-}  // namespace caps
+} // namespace caps

@@ -13,8 +13,9 @@ namespace caps {
 /// Surfaces are stored as unstructured grids too, so every bulky mesh in a
 /// bundle opens in ParaView the same way. Point and cell data arrays survive
 /// the round trip. Throws SceneError naming the file on failure.
-class VtuIO {
- public:
+class VtuIO
+{
+public:
   static void writeGrid(vtkUnstructuredGrid* grid, const std::filesystem::path& file);
   static vtkSmartPointer<vtkUnstructuredGrid> readGrid(const std::filesystem::path& file);
 
@@ -26,4 +27,4 @@ class VtuIO {
   static vtkSmartPointer<vtkPolyData> readPolyData(const std::filesystem::path& file);
 };
 
-}  // namespace caps
+} // namespace caps

@@ -9,9 +9,15 @@
 
 namespace caps::seg {
 
-double ModelDistance::length() const { return std::hypot(horizontalMm, verticalMm); }
+double ModelDistance::length() const
+{
+  return std::hypot(horizontalMm, verticalMm);
+}
 
-double CalibrationMeasurement::ratio() const { return measuredMm / model.length(); }
+double CalibrationMeasurement::ratio() const
+{
+  return measuredMm / model.length();
+}
 
 ModelDistance modelDistance(const RangeMap& map, const MapLandmark& from, const MapLandmark& to)
 {
@@ -56,7 +62,8 @@ CalibrationResult fitCalibration(const std::vector<CalibrationMeasurement>& meas
   for (const CalibrationMeasurement& m : measurements)
   {
     const double w = 1.0 / (m.measuredMm * m.measuredMm);
-    const Eigen::Vector2d row(m.model.horizontalMm * m.model.horizontalMm * w, m.model.verticalMm * m.model.verticalMm * w);
+    const Eigen::Vector2d row(m.model.horizontalMm * m.model.horizontalMm * w,
+                              m.model.verticalMm * m.model.verticalMm * w);
     ata += row * row.transpose();
     atb += row * (m.measuredMm * m.measuredMm * w);
   }
@@ -64,8 +71,8 @@ CalibrationResult fitCalibration(const std::vector<CalibrationMeasurement>& meas
   const double det = ata.determinant();
   if (!(det > 1e-8 * ata(0, 0) * ata(1, 1)))
     throw std::invalid_argument(
-        "the calibration distances do not determine both scale factors: give at least one mainly horizontal "
-        "distance (e.g. zygion–zygion) and one mainly vertical distance (e.g. nasion–subnasale)");
+      "the calibration distances do not determine both scale factors: give at least one mainly horizontal "
+      "distance (e.g. zygion–zygion) and one mainly vertical distance (e.g. nasion–subnasale)");
   const Eigen::Vector2d ab = ata.ldlt().solve(atb);
   Eigen::Vector2d s(ab(0) > 0.0 ? std::sqrt(ab(0)) : (nH ? result.thesisHorizontalScale : 1.0),
                     ab(1) > 0.0 ? std::sqrt(ab(1)) : (nV ? result.thesisVerticalScale : 1.0));

@@ -30,17 +30,28 @@ struct DicomField
   const char* keyword;
 };
 constexpr DicomField kKeptFields[] = {
-  {"0010|0010", "PatientName"},       {"0010|0020", "PatientID"},
-  {"0010|0030", "PatientBirthDate"},  {"0010|0040", "PatientSex"},
-  {"0010|1010", "PatientAge"},        {"0008|0020", "StudyDate"},
-  {"0008|1030", "StudyDescription"},  {"0020|000d", "StudyInstanceUID"},
-  {"0008|0050", "AccessionNumber"},   {"0008|103e", "SeriesDescription"},
-  {"0020|000e", "SeriesInstanceUID"}, {"0020|0011", "SeriesNumber"},
-  {"0008|0060", "Modality"},          {"0008|0070", "Manufacturer"},
-  {"0008|1090", "ManufacturerModelName"}, {"0008|0080", "InstitutionName"},
-  {"0018|0060", "KVP"},               {"0018|1210", "ConvolutionKernel"},
-  {"0018|0050", "SliceThickness"},    {"0018|5100", "PatientPosition"},
-  {"0018|1120", "GantryDetectorTilt"}, {"0018|0015", "BodyPartExamined"},
+  {"0010|0010", "PatientName"},
+  {"0010|0020", "PatientID"},
+  {"0010|0030", "PatientBirthDate"},
+  {"0010|0040", "PatientSex"},
+  {"0010|1010", "PatientAge"},
+  {"0008|0020", "StudyDate"},
+  {"0008|1030", "StudyDescription"},
+  {"0020|000d", "StudyInstanceUID"},
+  {"0008|0050", "AccessionNumber"},
+  {"0008|103e", "SeriesDescription"},
+  {"0020|000e", "SeriesInstanceUID"},
+  {"0020|0011", "SeriesNumber"},
+  {"0008|0060", "Modality"},
+  {"0008|0070", "Manufacturer"},
+  {"0008|1090", "ManufacturerModelName"},
+  {"0008|0080", "InstitutionName"},
+  {"0018|0060", "KVP"},
+  {"0018|1210", "ConvolutionKernel"},
+  {"0018|0050", "SliceThickness"},
+  {"0018|5100", "PatientPosition"},
+  {"0018|1120", "GantryDetectorTilt"},
+  {"0018|0015", "BodyPartExamined"},
   {"0002|0010", "TransferSyntaxUID"},
 };
 
@@ -75,8 +86,7 @@ bool isRegularFile(const fs::path& p)
 
 // Reports ITK filter progress to our callback and turns a "stop" answer
 // into an abort of the filter.
-void watchProgress(itk::ProcessObject* filter, const ProgressCallback& progress,
-                   const std::string& step)
+void watchProgress(itk::ProcessObject* filter, const ProgressCallback& progress, const std::string& step)
 {
   if (!progress)
     return;
@@ -86,32 +96,33 @@ void watchProgress(itk::ProcessObject* filter, const ProgressCallback& progress,
   });
 }
 
-template <class PixelT>
-vtkSmartPointer<vtkImageData> toVtk(itk::Image<PixelT, 3>* image, int vtkType)
+template <class PixelT> vtkSmartPointer<vtkImageData> toVtk(itk::Image<PixelT, 3>* image, int vtkType)
 {
   const auto region = image->GetLargestPossibleRegion();
   const auto size = region.GetSize();
   auto out = vtkSmartPointer<vtkImageData>::New();
-  out->SetDimensions(static_cast<int>(size[0]), static_cast<int>(size[1]),
-                     static_cast<int>(size[2]));
+  out->SetDimensions(static_cast<int>(size[0]), static_cast<int>(size[1]), static_cast<int>(size[2]));
   out->SetSpacing(image->GetSpacing()[0], image->GetSpacing()[1], image->GetSpacing()[2]);
   out->SetOrigin(image->GetOrigin()[0], image->GetOrigin()[1], image->GetOrigin()[2]);
   const auto& d = image->GetDirection();
-  out->SetDirectionMatrix(d(0, 0), d(0, 1), d(0, 2), d(1, 0), d(1, 1), d(1, 2), d(2, 0), d(2, 1),
-                          d(2, 2));
+  out->SetDirectionMatrix(d(0, 0), d(0, 1), d(0, 2), d(1, 0), d(1, 1), d(1, 2), d(2, 0), d(2, 1), d(2, 2));
   out->AllocateScalars(vtkType, 1);
-  std::memcpy(out->GetScalarPointer(), image->GetBufferPointer(),
-              region.GetNumberOfPixels() * sizeof(PixelT));
+  std::memcpy(out->GetScalarPointer(), image->GetBufferPointer(), region.GetNumberOfPixels() * sizeof(PixelT));
   return out;
 }
 
 template <class PixelT> constexpr int vtkTypeOf();
-template <> constexpr int vtkTypeOf<short>() { return VTK_SHORT; }
-template <> constexpr int vtkTypeOf<float>() { return VTK_FLOAT; }
+template <> constexpr int vtkTypeOf<short>()
+{
+  return VTK_SHORT;
+}
+template <> constexpr int vtkTypeOf<float>()
+{
+  return VTK_FLOAT;
+}
 
 template <class PixelT>
-CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
-                    const CtReadOptions& options)
+CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder, const CtReadOptions& options)
 {
   using Image = itk::Image<PixelT, 3>;
   auto io = itk::GDCMImageIO::New();
@@ -129,8 +140,8 @@ CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
   }
   catch (const itk::ExceptionObject& e)
   {
-    throw CtReadError("Could not read the DICOM series '" + series.seriesDescription + "' in " +
-                      folder.string() + ": a slice is damaged or incomplete (" + itkReason(e) +
+    throw CtReadError("Could not read the DICOM series '" + series.seriesDescription + "' in " + folder.string() +
+                      ": a slice is damaged or incomplete (" + itkReason(e) +
                       "). Remove or replace the damaged file, or export the series again.");
   }
   CtVolume volume;
@@ -148,15 +159,14 @@ CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
   {
     const SliceStackReport report = analyseSliceStack(series.geometry);
     if (!report.refusal.empty())
-      throw CtReadError("The DICOM series '" + series.seriesDescription + "' in " +
-                        folder.string() + " cannot be used: " + report.refusal +
+      throw CtReadError("The DICOM series '" + series.seriesDescription + "' in " + folder.string() +
+                        " cannot be used: " + report.refusal +
                         ". Export the complete series again from the scanner or PACS.");
     if (report.needsResampling)
     {
       double range[2];
       volume.image->GetScalarRange(range);
-      volume.image = resampleSliceStack(volume.image, series.geometry, report,
-                                        std::min(range[0], -1024.0));
+      volume.image = resampleSliceStack(volume.image, series.geometry, report, std::min(range[0], -1024.0));
       std::string text = "The slices were resampled to a regular grid of " +
                          std::to_string(volume.image->GetDimensions()[2]) + " slices because ";
       for (size_t i = 0; i < report.problems.size(); ++i)
@@ -174,8 +184,7 @@ CtVolume readSeries(const DicomSeriesInfo& series, const fs::path& folder,
   return volume;
 }
 
-template <class PixelT>
-CtVolume readFile(const fs::path& path, itk::ImageIOBase* io, const CtReadOptions& options)
+template <class PixelT> CtVolume readFile(const fs::path& path, itk::ImageIOBase* io, const CtReadOptions& options)
 {
   using Image = itk::Image<PixelT, 3>;
   auto reader = itk::ImageFileReader<Image>::New();
@@ -192,8 +201,8 @@ CtVolume readFile(const fs::path& path, itk::ImageIOBase* io, const CtReadOption
   }
   catch (const itk::ExceptionObject& e)
   {
-    throw CtReadError("Could not read " + path.string() + ": the file is damaged or incomplete (" +
-                      itkReason(e) + ").");
+    throw CtReadError("Could not read " + path.string() + ": the file is damaged or incomplete (" + itkReason(e) +
+                      ").");
   }
   CtVolume volume;
   volume.image = toVtk<PixelT>(reader->GetOutput(), vtkTypeOf<PixelT>());
@@ -213,8 +222,7 @@ std::string describeDamage(const std::vector<std::pair<std::string, std::string>
   return out.str();
 }
 
-CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
-                         const CtReadOptions& options)
+CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile, const CtReadOptions& options)
 {
   const DicomFolderScan scan = scanDicomFolder(folder);
   const auto& series = scan.series;
@@ -222,8 +230,9 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   {
     std::string message = "No readable DICOM slices in " + folder.string() + ".";
     if (!scan.damaged.empty())
-      message += " " + describeDamage(scan.damaged) + ". Export the series again from the "
-                                                      "scanner or PACS.";
+      message += " " + describeDamage(scan.damaged) +
+                 ". Export the series again from the "
+                 "scanner or PACS.";
     else
       message += " Choose the folder that holds the CT slices, or a NIfTI (.nii), NRRD (.nrrd) "
                  "or MetaImage (.mha) file.";
@@ -242,8 +251,8 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   else if (options.seriesIndex >= 0)
   {
     if (options.seriesIndex >= static_cast<int>(series.size()))
-      throw CtReadError("Series " + std::to_string(options.seriesIndex + 1) + " asked for, but " +
-                        folder.string() + " holds only " + std::to_string(series.size()) + ".");
+      throw CtReadError("Series " + std::to_string(options.seriesIndex + 1) + " asked for, but " + folder.string() +
+                        " holds only " + std::to_string(series.size()) + ".");
     chosen = &series[options.seriesIndex];
   }
   else if (!requestedFile.empty())
@@ -294,13 +303,10 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
   }
   catch (const itk::ExceptionObject& e)
   {
-    throw CtReadError("Could not read the first slice " + chosen->files.front() + " (" +
-                      itkReason(e) + ").");
+    throw CtReadError("Could not read the first slice " + chosen->files.front() + " (" + itkReason(e) + ").");
   }
-  const bool wholeHu = slope == std::round(slope) && intercept == std::round(intercept) &&
-                       std::abs(slope) <= 1.0;
-  CtVolume volume = wholeHu ? readSeries<short>(*chosen, folder, options)
-                            : readSeries<float>(*chosen, folder, options);
+  const bool wholeHu = slope == std::round(slope) && intercept == std::round(intercept) && std::abs(slope) <= 1.0;
+  CtVolume volume = wholeHu ? readSeries<short>(*chosen, folder, options) : readSeries<float>(*chosen, folder, options);
 
   if (!scan.damaged.empty())
     volume.warnings.push_back(describeDamage(scan.damaged) +
@@ -312,9 +318,8 @@ CtVolume readDicomFolder(const fs::path& folder, const fs::path& requestedFile,
     for (size_t i = 0; i < series.size(); ++i)
       if (&series[i] != chosen)
         others += "\n  " + describeSeries(series[i], static_cast<int>(i) + 1);
-    volume.warnings.push_back("The folder holds " + std::to_string(series.size()) +
-                              " series; loaded '" + chosen->seriesDescription + "' (" +
-                              std::to_string(chosen->sliceCount) +
+    volume.warnings.push_back("The folder holds " + std::to_string(series.size()) + " series; loaded '" +
+                              chosen->seriesDescription + "' (" + std::to_string(chosen->sliceCount) +
                               " slices). The others:" + others);
   }
   if (!chosen->modality.empty() && chosen->modality != "CT")
@@ -350,8 +355,8 @@ public:
 
   SeriesTags(const gdcm::Directory::FilenamesType& files, const fs::path& folder)
   {
-    for (const auto& tag : {seriesUid, orientation, position, instance, rows, columns, spacing, thickness,
-                            patientName, patientId, studyDate, description, modality})
+    for (const auto& tag : {seriesUid, orientation, position, instance, rows, columns, spacing, thickness, patientName,
+                            patientId, studyDate, description, modality})
       scanner_.AddTag(tag);
     if (!scanner_.Scan(files))
       throw CtReadError("Could not scan " + folder.string() + " for DICOM files.");
@@ -383,8 +388,7 @@ private:
 
 /// Groups like ITK's "series details": same UID, orientation and matrix, in
 /// the order first met; files GDCM cannot parse go to @a damaged.
-std::vector<std::vector<std::string>> groupBySeries(const gdcm::Directory::FilenamesType& sound,
-                                                    const SeriesTags& tags,
+std::vector<std::vector<std::string>> groupBySeries(const gdcm::Directory::FilenamesType& sound, const SeriesTags& tags,
                                                     std::vector<std::pair<std::string, std::string>>& damaged)
 {
   std::map<std::string, std::vector<std::string>> groups;
@@ -396,9 +400,8 @@ std::vector<std::vector<std::string>> groupBySeries(const gdcm::Directory::Filen
       damaged.emplace_back(fs::path(file).filename().string(), "GDCM cannot parse it");
       continue;
     }
-    const std::string key = tags.value(file, SeriesTags::seriesUid) + "|" +
-                            tags.value(file, SeriesTags::orientation) + "|" + tags.value(file, SeriesTags::rows) +
-                            "x" + tags.value(file, SeriesTags::columns);
+    const std::string key = tags.value(file, SeriesTags::seriesUid) + "|" + tags.value(file, SeriesTags::orientation) +
+                            "|" + tags.value(file, SeriesTags::rows) + "x" + tags.value(file, SeriesTags::columns);
     if (!groups.count(key))
       order.push_back(key);
     groups[key].push_back(file);
@@ -495,9 +498,8 @@ DicomFolderScan scanDicomFolder(const fs::path& folder)
   for (auto& group : groupBySeries(sound, tags, scan.damaged))
     scan.series.push_back(seriesInfoOf(std::move(group), tags));
   // The largest series first.
-  std::stable_sort(scan.series.begin(), scan.series.end(), [](const auto& a, const auto& b) {
-    return a.sliceCount > b.sliceCount;
-  });
+  std::stable_sort(scan.series.begin(), scan.series.end(),
+                   [](const auto& a, const auto& b) { return a.sliceCount > b.sliceCount; });
   return scan;
 }
 
@@ -509,14 +511,12 @@ std::vector<DicomSeriesInfo> listDicomSeries(const fs::path& folder)
 std::string describeSeries(const DicomSeriesInfo& s, int index)
 {
   std::ostringstream out;
-  out << index << ": " << (s.modality.empty() ? "?" : s.modality) << " '" << s.seriesDescription
-      << "' " << s.sliceCount << " slice" << (s.sliceCount == 1 ? "" : "s") << ", "
-      << s.pixelSpacing[1] << " x " << s.pixelSpacing[0] << " mm pixels, " << s.sliceThickness
-      << " mm thick";
+  out << index << ": " << (s.modality.empty() ? "?" : s.modality) << " '" << s.seriesDescription << "' " << s.sliceCount
+      << " slice" << (s.sliceCount == 1 ? "" : "s") << ", " << s.pixelSpacing[1] << " x " << s.pixelSpacing[0]
+      << " mm pixels, " << s.sliceThickness << " mm thick";
   if (s.sliceSpacing > 0)
     out << " every " << s.sliceSpacing << " mm";
-  out << ", patient " << s.patientName << ", study date " << s.studyDate
-      << ", UID " << s.seriesUid;
+  out << ", patient " << s.patientName << ", study date " << s.studyDate << ", UID " << s.seriesUid;
   return out.str();
 }
 
@@ -543,15 +543,12 @@ static CtVolume readCtVolumeAsStored(const fs::path& path, const CtReadOptions& 
     throw CtReadError(path.string() + " is a damaged DICOM file: " + check.problem +
                       ". Export it again from the scanner or PACS.");
   if (check.kind == DicomFileKind::Sound)
-    return readDicomFolder(path.parent_path().empty() ? fs::path(".") : path.parent_path(), path,
-                           options);
+    return readDicomFolder(path.parent_path().empty() ? fs::path(".") : path.parent_path(), path, options);
 
-  auto io = itk::ImageIOFactory::CreateImageIO(path.string().c_str(),
-                                               itk::IOFileModeEnum::ReadMode);
+  auto io = itk::ImageIOFactory::CreateImageIO(path.string().c_str(), itk::IOFileModeEnum::ReadMode);
   if (!io)
-    throw CtReadError(path.string() +
-                      " is not an image CAPS can read. Choose a DICOM series folder, or a NIfTI "
-                      "(.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file.");
+    throw CtReadError(path.string() + " is not an image CAPS can read. Choose a DICOM series folder, or a NIfTI "
+                                      "(.nii, .nii.gz), NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file.");
   try
   {
     io->SetFileName(path.string());
@@ -576,9 +573,9 @@ static CtVolume readCtVolumeAsStored(const fs::path& path, const CtReadOptions& 
 
 const std::vector<std::string>& identifyingFields()
 {
-  static const std::vector<std::string> fields = {
-    "PatientName", "PatientID", "PatientBirthDate", "AccessionNumber", "InstitutionName",
-    "StudyInstanceUID", "SeriesInstanceUID", "StudyDate"};
+  static const std::vector<std::string> fields = {"PatientName",       "PatientID",       "PatientBirthDate",
+                                                  "AccessionNumber",   "InstitutionName", "StudyInstanceUID",
+                                                  "SeriesInstanceUID", "StudyDate"};
   return fields;
 }
 

@@ -15,19 +15,18 @@ constexpr double pi = std::numbers::pi;
 
 CylindricalFrame::CylindricalFrame()
   : CylindricalFrame(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), -100.0, 100.0)
-{
-}
+{}
 
-CylindricalFrame::CylindricalFrame(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                                   double zMin, double zMax, int nTheta, int nZ)
+CylindricalFrame::CylindricalFrame(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double zMin,
+                                   double zMax, int nTheta, int nZ)
   : origin_(origin), zMin_(zMin), zMax_(zMax), nTheta_(nTheta), nZ_(nZ)
 {
   const double length = direction.norm();
   if (!(length > 1e-12) || !std::isfinite(length))
     throw std::invalid_argument("The cylinder axis needs a non-zero direction.");
   if (!(zMax > zMin))
-    throw std::invalid_argument("The cylinder's z range is empty (zMin " + std::to_string(zMin) +
-                                " mm, zMax " + std::to_string(zMax) + " mm).");
+    throw std::invalid_argument("The cylinder's z range is empty (zMin " + std::to_string(zMin) + " mm, zMax " +
+                                std::to_string(zMax) + " mm).");
   if (nTheta < 4 || nZ < 2)
     throw std::invalid_argument("A range map needs at least 4 samples around and 2 along the axis.");
   axis_ = direction / length;
@@ -48,8 +47,14 @@ CylindricalFrame::CylindricalFrame(const Eigen::Vector3d& origin, const Eigen::V
   }
 }
 
-double CylindricalFrame::thetaStep() const { return 2.0 * pi / nTheta_; }
-double CylindricalFrame::zStep() const { return (zMax_ - zMin_) / (nZ_ - 1); }
+double CylindricalFrame::thetaStep() const
+{
+  return 2.0 * pi / nTheta_;
+}
+double CylindricalFrame::zStep() const
+{
+  return (zMax_ - zMin_) / (nZ_ - 1);
+}
 
 CylindricalFrame CylindricalFrame::withRange(double zMin, double zMax) const
 {
@@ -84,7 +89,10 @@ Eigen::Vector3d CylindricalFrame::radialDirection(double theta) const
   return std::cos(theta) * xAxis_ + std::sin(theta) * yAxis_;
 }
 
-Eigen::Vector3d CylindricalFrame::axisPoint(double z) const { return origin_ + z * axis_; }
+Eigen::Vector3d CylindricalFrame::axisPoint(double z) const
+{
+  return origin_ + z * axis_;
+}
 
 NormalizedCylindricalPoint CylindricalFrame::toNormalized(const CylindricalPoint& p) const
 {
@@ -102,9 +110,18 @@ double CylindricalFrame::thetaToIndex(double theta) const
   return u >= nTheta_ ? u - nTheta_ : u; // rounding at θ just below π
 }
 
-double CylindricalFrame::zToIndex(double z) const { return (z - zMin_) / zStep(); }
-double CylindricalFrame::indexToTheta(double u) const { return wrapTheta(-pi + u * thetaStep()); }
-double CylindricalFrame::indexToZ(double v) const { return zMin_ + v * zStep(); }
+double CylindricalFrame::zToIndex(double z) const
+{
+  return (z - zMin_) / zStep();
+}
+double CylindricalFrame::indexToTheta(double u) const
+{
+  return wrapTheta(-pi + u * thetaStep());
+}
+double CylindricalFrame::indexToZ(double v) const
+{
+  return zMin_ + v * zStep();
+}
 
 double CylindricalFrame::wrapTheta(double theta)
 {
@@ -119,8 +136,8 @@ double CylindricalFrame::wrapTheta(double theta)
 
 bool CylindricalFrame::operator==(const CylindricalFrame& o) const
 {
-  return origin_ == o.origin_ && axis_ == o.axis_ && zMin_ == o.zMin_ && zMax_ == o.zMax_ &&
-         nTheta_ == o.nTheta_ && nZ_ == o.nZ_;
+  return origin_ == o.origin_ && axis_ == o.axis_ && zMin_ == o.zMin_ && zMax_ == o.zMax_ && nTheta_ == o.nTheta_ &&
+         nZ_ == o.nZ_;
 }
 
 } // namespace caps::seg

@@ -49,8 +49,8 @@ public:
   /// Axis through the world origin along +z (superior), z in [-100, 100] mm, 512 × 256.
   CylindricalFrame();
   /// @throws std::invalid_argument if direction is zero, zMax <= zMin, nTheta < 4 or nZ < 2.
-  CylindricalFrame(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double zMin,
-                   double zMax, int nTheta = 512, int nZ = 256);
+  CylindricalFrame(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double zMin, double zMax,
+                   int nTheta = 512, int nZ = 256);
 
   const Eigen::Vector3d& origin() const { return origin_; }
   const Eigen::Vector3d& direction() const { return axis_; }

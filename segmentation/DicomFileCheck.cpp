@@ -54,13 +54,11 @@ public:
     if (explicitVr && !itemTag)
     {
       vr = {static_cast<char>(bytes_[pos_]), static_cast<char>(bytes_[pos_ + 1])};
-      if (!(std::isupper(static_cast<unsigned char>(vr[0])) &&
-            std::isupper(static_cast<unsigned char>(vr[1]))))
+      if (!(std::isupper(static_cast<unsigned char>(vr[0])) && std::isupper(static_cast<unsigned char>(vr[1]))))
         throw Damage{"element " + tagText(group, elem) + " at byte " + std::to_string(pos_ - 4) +
                      " has no valid value representation"};
       pos_ += 2;
-      static const char* longForms[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ",
-                                        "SV", "UC", "UN", "UR", "UT", "UV"};
+      static const char* longForms[] = {"OB", "OD", "OF", "OL", "OV", "OW", "SQ", "SV", "UC", "UN", "UR", "UT", "UV"};
       bool longForm = false;
       for (const char* l : longForms)
         longForm = longForm || vr == l;
@@ -88,9 +86,9 @@ public:
       return;
     }
     if (length > bytes_.size() - pos_)
-      throw Damage{"the file is cut short: element " + tagText(group, elem) + " at byte " +
-                   std::to_string(pos_) + " needs " + std::to_string(length) + " bytes but only " +
-                   std::to_string(bytes_.size() - pos_) + " remain"};
+      throw Damage{"the file is cut short: element " + tagText(group, elem) + " at byte " + std::to_string(pos_) +
+                   " needs " + std::to_string(length) + " bytes but only " + std::to_string(bytes_.size() - pos_) +
+                   " remain"};
     if (vr == "SQ" || (!explicitVr && length > 0 && looksLikeItem()))
     {
       // A defined-length sequence: walk its items inside their bounds.
@@ -126,8 +124,7 @@ private:
   void need(size_t n, const std::string& what) const
   {
     if (bytes_.size() - pos_ < n)
-      throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) +
-                   ", inside " + what};
+      throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) + ", inside " + what};
   }
   uint16_t read16()
   {
@@ -138,15 +135,12 @@ private:
   uint32_t read32()
   {
     need(4, "an element length");
-    const uint32_t v = static_cast<uint32_t>(bytes_[pos_]) | bytes_[pos_ + 1] << 8 |
-                       bytes_[pos_ + 2] << 16 | static_cast<uint32_t>(bytes_[pos_ + 3]) << 24;
+    const uint32_t v = static_cast<uint32_t>(bytes_[pos_]) | bytes_[pos_ + 1] << 8 | bytes_[pos_ + 2] << 16 |
+                       static_cast<uint32_t>(bytes_[pos_ + 3]) << 24;
     pos_ += 4;
     return v;
   }
-  bool looksLikeItem() const
-  {
-    return bytes_.size() - pos_ >= 4 && peek16(0) == 0xFFFE && peek16(2) == 0xE000;
-  }
+  bool looksLikeItem() const { return bytes_.size() - pos_ >= 4 && peek16(0) == 0xFFFE && peek16(2) == 0xE000; }
   // Items of an undefined-length sequence (or pixel data fragments), up to
   // the sequence delimiter.
   void items(bool explicitVr, int depth, uint16_t group, uint16_t elem)
@@ -154,26 +148,25 @@ private:
     while (true)
     {
       if (bytes_.size() - pos_ < 8)
-        throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) +
-                     ", inside the sequence " + tagText(group, elem)};
+        throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) + ", inside the sequence " +
+                     tagText(group, elem)};
       const uint16_t g = read16(), e = read16();
       const uint32_t length = read32();
       if (g != 0xFFFE)
-        throw Damage{"sequence " + tagText(group, elem) + " holds a non-item element " +
-                     tagText(g, e) + " at byte " + std::to_string(pos_ - 8)};
+        throw Damage{"sequence " + tagText(group, elem) + " holds a non-item element " + tagText(g, e) + " at byte " +
+                     std::to_string(pos_ - 8)};
       if (e == 0xE0DD) // sequence delimiter
         return;
       if (e != 0xE000)
-        throw Damage{"unexpected delimiter " + tagText(g, e) + " at byte " +
-                     std::to_string(pos_ - 8)};
+        throw Damage{"unexpected delimiter " + tagText(g, e) + " at byte " + std::to_string(pos_ - 8)};
       if (length == kUndefinedLength)
         itemDataSet(explicitVr, depth, group, elem);
       else
       {
         if (length > bytes_.size() - pos_)
-          throw Damage{"the file is cut short: an item of " + tagText(group, elem) +
-                       " at byte " + std::to_string(pos_) + " needs " + std::to_string(length) +
-                       " bytes but only " + std::to_string(bytes_.size() - pos_) + " remain"};
+          throw Damage{"the file is cut short: an item of " + tagText(group, elem) + " at byte " +
+                       std::to_string(pos_) + " needs " + std::to_string(length) + " bytes but only " +
+                       std::to_string(bytes_.size() - pos_) + " remain"};
         // Pixel data fragments are opaque; sequence items are data sets.
         if (!(group == 0x7FE0 && elem == 0x0010))
         {
@@ -197,8 +190,8 @@ private:
     while (true)
     {
       if (bytes_.size() - pos_ < 8)
-        throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) +
-                     ", inside an item of " + tagText(group, elem)};
+        throw Damage{"the file is cut short at byte " + std::to_string(bytes_.size()) + ", inside an item of " +
+                     tagText(group, elem)};
       if (peek16(0) == 0xFFFE && peek16(2) == 0xE00D)
       {
         pos_ += 8;
@@ -228,8 +221,7 @@ DicomFileCheck checkDicomFile(const std::filesystem::path& file)
   std::ifstream in(file, std::ios::binary);
   if (!in)
     return {DicomFileKind::NotDicom, "cannot be opened"};
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   Walker walker(bytes);
   const bool part10 = bytes.size() >= 132 && std::memcmp(&bytes[128], "DICM", 4) == 0;
   std::string transferSyntax;
@@ -240,8 +232,7 @@ DicomFileCheck checkDicomFile(const std::filesystem::path& file)
     {
       walker.seek(132);
       // The meta group is always explicit VR little endian.
-      while (!walker.atEnd() && walker.size() - walker.position() >= 2 &&
-             walker.peek16(0) == 0x0002)
+      while (!walker.atEnd() && walker.size() - walker.position() >= 2 && walker.peek16(0) == 0x0002)
       {
         uint16_t g, e;
         std::string value;
@@ -274,8 +265,8 @@ DicomFileCheck checkDicomFile(const std::filesystem::path& file)
     // A file cut exactly between two elements walks cleanly: only the
     // missing pixel data gives it away.
     if (!pixelData)
-      throw Damage{"it holds no pixel data: it is cut short after byte " +
-                   std::to_string(bytes.size()) + ", or is not an image slice"};
+      throw Damage{"it holds no pixel data: it is cut short after byte " + std::to_string(bytes.size()) +
+                   ", or is not an image slice"};
   }
   catch (const Damage& damage)
   {

@@ -30,8 +30,8 @@ struct Line
 };
 
 /// Weighted least squares of c(s) = p + s b; false if fewer than two distinct positions carry weight.
-bool fitLine(const std::vector<Eigen::Vector3d>& c, const std::vector<double>& s,
-             const std::vector<double>& w, Line& line)
+bool fitLine(const std::vector<Eigen::Vector3d>& c, const std::vector<double>& s, const std::vector<double>& w,
+             Line& line)
 {
   double sw = 0.0, ss = 0.0;
   Eigen::Vector3d sc = Eigen::Vector3d::Zero();
@@ -77,7 +77,7 @@ struct SlicedMask
   int sliceAxis = 0;
   int inPlane[2] = {1, 2};
   Eigen::Vector3d sliceNormal = Eigen::Vector3d::UnitZ(); ///< pointing superior
-  std::vector<SliceSums> sums;                           ///< per index along sliceAxis
+  std::vector<SliceSums> sums;                            ///< per index along sliceAxis
 
   /// The world position of index @a idx.
   Eigen::Vector3d world(const Eigen::Vector3d& idx) const
@@ -245,8 +245,7 @@ std::pair<double, double> zRangeOnAxis(const SlicedMask& m, const std::vector<Sl
 
 HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
 {
-  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
-      bodyMask->GetNumberOfScalarComponents() != 1)
+  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR || bodyMask->GetNumberOfScalarComponents() != 1)
     throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
   const SlicedMask sliced = sliceTheMask(bodyMask);
   const std::vector<Slice> slices = slicesFromBelow(sliced);
@@ -287,15 +286,14 @@ HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options)
   return fit;
 }
 
-HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point,
-                            const Eigen::Vector3d& direction, const HeadAxisOptions& options)
+HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
+                            const HeadAxisOptions& options)
 {
-  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR ||
-      bodyMask->GetNumberOfScalarComponents() != 1 || !bodyMask->GetScalarPointer())
+  if (!bodyMask || bodyMask->GetScalarType() != VTK_UNSIGNED_CHAR || bodyMask->GetNumberOfScalarComponents() != 1 ||
+      !bodyMask->GetScalarPointer())
     throw std::invalid_argument("The head axis needs a body mask of one unsigned char component.");
   if (!point.allFinite() || !direction.allFinite() || direction.norm() < 1e-9)
-    throw std::invalid_argument(
-      "The axis needs a finite point and a non-zero direction (e.g. 0,0,0 and 0,0,1).");
+    throw std::invalid_argument("The axis needs a finite point and a non-zero direction (e.g. 0,0,0 and 0,0,1).");
   Eigen::Vector3d d = direction.normalized();
   if (d.z() < 0.0)
     d = -d;

@@ -78,7 +78,7 @@ HeadAxisFit fitHeadAxis(vtkImageData* bodyMask, const HeadAxisOptions& options =
 /// (options.nTheta × options.nZ). The result has userDefined set and no centroids.
 /// @throws std::invalid_argument if the mask is missing or empty, or the point
 /// or direction is not finite or the direction is zero.
-HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point,
-                            const Eigen::Vector3d& direction, const HeadAxisOptions& options = {});
+HeadAxisFit axisThroughBody(vtkImageData* bodyMask, const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
+                            const HeadAxisOptions& options = {});
 
 } // namespace caps::seg

@@ -61,8 +61,7 @@ private:
 
 /// Runs an ITK filter, forwarding its progress into [begin, end] and aborting
 /// it when the user cancels. Only events of the calling thread are forwarded.
-void runFilter(itk::ProcessObject* filter, const Reporter& reporter, double begin, double end,
-               const std::string& step)
+void runFilter(itk::ProcessObject* filter, const Reporter& reporter, double begin, double end, const std::string& step)
 {
   reporter.report(begin, step);
   bool cancelled = false;
@@ -134,21 +133,18 @@ Kernel ballKernel(double radiusMm, const double spacing[3])
 {
   Kernel::RadiusType radius;
   for (int a = 0; a < 3; ++a)
-    radius[a] = static_cast<itk::SizeValueType>(
-      std::max(1.0, std::round(radiusMm / std::abs(spacing[a]))));
+    radius[a] = static_cast<itk::SizeValueType>(std::max(1.0, std::round(radiusMm / std::abs(spacing[a]))));
   return Kernel::Ball(radius);
 }
 
-template <typename T>
-void thresholdBuffer(const T* ct, std::size_t count, double threshold, unsigned char* out)
+template <typename T> void thresholdBuffer(const T* ct, std::size_t count, double threshold, unsigned char* out)
 {
   for (std::size_t i = 0; i < count; ++i)
     out[i] = static_cast<double>(ct[i]) > threshold ? 1 : 0;
 }
 
 template <typename T>
-void thresholdInside(const T* ct, const unsigned char* inside, std::size_t count, double threshold,
-                     unsigned char* out)
+void thresholdInside(const T* ct, const unsigned char* inside, std::size_t count, double threshold, unsigned char* out)
 {
   for (std::size_t i = 0; i < count; ++i)
     out[i] = inside[i] && static_cast<double>(ct[i]) > threshold ? 1 : 0;
@@ -163,8 +159,7 @@ std::size_t countOnes(const unsigned char* data, std::size_t count)
 }
 
 /// Keeps the largest 6-connected component (by voxel count) of a 0/1 mask.
-Mask::Pointer largestComponent(Mask* mask, const Reporter& reporter, double begin, double end,
-                               const std::string& step)
+Mask::Pointer largestComponent(Mask* mask, const Reporter& reporter, double begin, double end, const std::string& step)
 {
   using Filter = itk::BinaryShapeKeepNObjectsImageFilter<Mask>;
   auto filter = Filter::New();
@@ -199,13 +194,12 @@ SliceLayout sliceLayout(const int dims[3], int axis)
 
 /// Fills, in every slice normal to `axis`, the background not 4-connected to
 /// the slice border. Returns the number of voxels filled.
-std::size_t fillHolesInSlices(unsigned char* mask, const int dims[3], int axis,
-                              const Reporter& reporter, double begin, double end)
+std::size_t fillHolesInSlices(unsigned char* mask, const int dims[3], int axis, const Reporter& reporter, double begin,
+                              double end)
 {
   const SliceLayout layout = sliceLayout(dims, axis);
   const int nu = dims[layout.u], nv = dims[layout.v], ns = dims[axis];
-  const std::int64_t su = layout.stride[layout.u], sv = layout.stride[layout.v],
-                     ss = layout.stride[axis];
+  const std::int64_t su = layout.stride[layout.u], sv = layout.stride[layout.v], ss = layout.stride[axis];
   std::vector<unsigned char> outside(static_cast<std::size_t>(nu) * nv);
   std::vector<int> stack;
   std::size_t filled = 0;
@@ -214,9 +208,7 @@ std::size_t fillHolesInSlices(unsigned char* mask, const int dims[3], int axis,
     if (s % 16 == 0)
       reporter.report(begin + (end - begin) * s / ns, "Filling internal air (slices)");
     unsigned char* slice = mask + s * ss;
-    auto at = [&](int p) -> unsigned char& {
-      return slice[(p % nu) * su + (p / nu) * sv];
-    };
+    auto at = [&](int p) -> unsigned char& { return slice[(p % nu) * su + (p / nu) * sv]; };
     std::fill(outside.begin(), outside.end(), 0);
     stack.clear();
     auto seed = [&](int p) {
@@ -241,10 +233,14 @@ std::size_t fillHolesInSlices(unsigned char* mask, const int dims[3], int axis,
       const int p = stack.back();
       stack.pop_back();
       const int i = p % nu, j = p / nu;
-      if (i > 0) seed(p - 1);
-      if (i < nu - 1) seed(p + 1);
-      if (j > 0) seed(p - nu);
-      if (j < nv - 1) seed(p + nu);
+      if (i > 0)
+        seed(p - 1);
+      if (i < nu - 1)
+        seed(p + 1);
+      if (j > 0)
+        seed(p - nu);
+      if (j < nv - 1)
+        seed(p + nu);
     }
     for (int p = 0; p < nu * nv; ++p)
       if (!outside[p] && at(p) == 0)
@@ -258,8 +254,7 @@ std::size_t fillHolesInSlices(unsigned char* mask, const int dims[3], int axis,
 
 /// Fills every 6-connected background component that does not touch the
 /// image border. Returns the number of voxels filled and of cavities.
-std::pair<std::size_t, std::size_t> fillCavities3d(Mask* mask, const Reporter& reporter,
-                                                   double begin, double end)
+std::pair<std::size_t, std::size_t> fillCavities3d(Mask* mask, const Reporter& reporter, double begin, double end)
 {
   using LabelMap = itk::LabelMap<itk::LabelObject<std::uint32_t, 3>>;
   using Filter = itk::BinaryImageToLabelMapFilter<Mask, LabelMap>;
@@ -270,8 +265,7 @@ std::pair<std::size_t, std::size_t> fillCavities3d(Mask* mask, const Reporter& r
   runFilter(filter, reporter, begin, end, "Filling internal air (3D)");
   LabelMap* labels = filter->GetOutput();
   const auto size = mask->GetLargestPossibleRegion().GetSize();
-  const auto nx = static_cast<itk::IndexValueType>(size[0]),
-             ny = static_cast<itk::IndexValueType>(size[1]),
+  const auto nx = static_cast<itk::IndexValueType>(size[0]), ny = static_cast<itk::IndexValueType>(size[1]),
              nz = static_cast<itk::IndexValueType>(size[2]);
   std::size_t filled = 0, cavities = 0;
   for (std::size_t n = 0; n < labels->GetNumberOfLabelObjects(); ++n)
@@ -283,8 +277,8 @@ std::pair<std::size_t, std::size_t> fillCavities3d(Mask* mask, const Reporter& r
       const auto& line = object->GetLine(l);
       const auto& idx = line.GetIndex();
       const auto length = static_cast<itk::IndexValueType>(line.GetLength());
-      touchesBorder = idx[0] == 0 || idx[0] + length >= nx || idx[1] == 0 || idx[1] == ny - 1 ||
-                      idx[2] == 0 || idx[2] == nz - 1;
+      touchesBorder =
+        idx[0] == 0 || idx[0] + length >= nx || idx[1] == 0 || idx[1] == ny - 1 || idx[2] == 0 || idx[2] == nz - 1;
     }
     if (touchesBorder)
       continue;
@@ -330,12 +324,10 @@ void checkSegmentationInputs(vtkImageData* ct, const SegmentationParameters& par
   if (!ct || ct->GetNumberOfPoints() == 0 || !ct->GetPointData()->GetScalars())
     throw std::invalid_argument("The CT volume is empty: there is nothing to segment.");
   if (ct->GetNumberOfScalarComponents() != 1)
-    throw std::invalid_argument("The CT volume has " +
-                                std::to_string(ct->GetNumberOfScalarComponents()) +
+    throw std::invalid_argument("The CT volume has " + std::to_string(ct->GetNumberOfScalarComponents()) +
                                 " components per voxel; segmentation needs one (HU).");
-  if (parameters.openingRadiusMm < 0 || parameters.reconstructionMarginMm < 0 ||
-      parameters.minBoneIslandMm3 < 0 || parameters.maxBoneHoleMm3 < 0 ||
-      parameters.maxReattachedPieceMm3 < 0)
+  if (parameters.openingRadiusMm < 0 || parameters.reconstructionMarginMm < 0 || parameters.minBoneIslandMm3 < 0 ||
+      parameters.maxBoneHoleMm3 < 0 || parameters.maxReattachedPieceMm3 < 0)
     throw std::invalid_argument("Segmentation radii and volumes must not be negative.");
 }
 
@@ -374,8 +366,7 @@ struct WorkingGrid
   /// The working voxel holding CT voxel (i, j, k).
   std::int64_t index(int i, int j, int k) const
   {
-    return (k / factor[2]) * (std::int64_t{dims[0]} * dims[1]) + std::int64_t{j / factor[1]} * dims[0] +
-           i / factor[0];
+    return (k / factor[2]) * (std::int64_t{dims[0]} * dims[1]) + std::int64_t{j / factor[1]} * dims[0] + i / factor[0];
   }
   int factor[3], dims[3];
   double spacing[3];
@@ -387,8 +378,8 @@ Mask::Pointer thresholdAboveAir(const CtGrid& ct, double thresholdHu)
   Mask::Pointer threshold = newMask(ct.dims, ct.spacing);
   switch (ct.scalarType)
   {
-    vtkTemplateMacro(thresholdBuffer(static_cast<const VTK_TT*>(ct.data), ct.count, thresholdHu,
-                                     threshold->GetBufferPointer()));
+    vtkTemplateMacro(
+      thresholdBuffer(static_cast<const VTK_TT*>(ct.data), ct.count, thresholdHu, threshold->GetBufferPointer()));
   default:
     throw std::invalid_argument("The CT volume has an unsupported voxel type.");
   }
@@ -503,10 +494,10 @@ std::size_t separateTheBodyFromTheTable(Mask* threshold, const CtGrid& ct, const
           t[n] = g[work.index(i, j, k)] ? 1 : 2;
   grown = nullptr;
 
-  const std::size_t reattached = parameters.maxReattachedPieceMm3 > 0
-                                   ? reattachSmallPieces(threshold, ct.voxelMm3, parameters.maxReattachedPieceMm3,
-                                                         reporter)
-                                   : 0;
+  const std::size_t reattached =
+    parameters.maxReattachedPieceMm3 > 0
+      ? reattachSmallPieces(threshold, ct.voxelMm3, parameters.maxReattachedPieceMm3, reporter)
+      : 0;
   for (std::size_t i = 0; i < ct.count; ++i)
     t[i] = t[i] == 1 ? 1 : 0;
   return reattached;
@@ -572,8 +563,7 @@ Mask::Pointer withSmallCavitiesFilled(Mask* bone, std::size_t count, double maxH
 
 } // namespace
 
-HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters,
-                      const ProgressCallback& progress)
+HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters, const ProgressCallback& progress)
 {
   checkSegmentationInputs(ct, parameters);
   const Reporter reporter(progress);
@@ -633,9 +623,8 @@ HeadMasks segmentHead(vtkImageData* ct, const SegmentationParameters& parameters
     std::ostringstream note;
     note << "Bone: above " << parameters.boneThresholdHu << " HU inside the body, "
          << formatVolume(boneCount * grid.voxelMm3) << "; removed "
-         << formatVolume((boneRaw - boneKept) * grid.voxelMm3) << " in islands under "
-         << parameters.minBoneIslandMm3 << " mm³, filled "
-         << formatVolume((boneCount - boneKept) * grid.voxelMm3) << " of small cavities. "
+         << formatVolume((boneRaw - boneKept) * grid.voxelMm3) << " in islands under " << parameters.minBoneIslandMm3
+         << " mm³, filled " << formatVolume((boneCount - boneKept) * grid.voxelMm3) << " of small cavities. "
          << "In a contrast CT, large contrast-filled vessels can exceed the bone "
             "threshold and count as bone.";
     result.notes.push_back(note.str());

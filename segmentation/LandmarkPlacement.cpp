@@ -23,8 +23,7 @@ int rowOf(const CylindricalFrame& frame, double z)
 
 /// Row of the largest (sign +1) or smallest (sign -1) finite p among the rows
 /// nearest z in [zLow, zHigh]; -1 if none.
-int extremum(const std::vector<double>& p, const CylindricalFrame& frame, double zLow, double zHigh,
-             double sign)
+int extremum(const std::vector<double>& p, const CylindricalFrame& frame, double zLow, double zHigh, double sign)
 {
   if (!(zHigh >= zLow))
     return -1;
@@ -64,8 +63,7 @@ struct LateralPoint
 /// The sample of @a map with the largest lateral extent r·|cos θ| for z in
 /// [zLow, zHigh] and θ between @a fromFront and @a toFront (radians) from the
 /// front, on the side @a side (+1 left: θ > -π/2, -1 right).
-LateralPoint widest(const RangeMap& map, double zLow, double zHigh, double fromFront,
-                    double toFront, int side)
+LateralPoint widest(const RangeMap& map, double zLow, double zHigh, double fromFront, double toFront, int side)
 {
   LateralPoint best;
   if (!(zHigh >= zLow))
@@ -233,8 +231,7 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
     {front, zLs, "no subnasale or pogonion"},
     {front, z(f.labraleInferius), "no subnasale or pogonion"},
     {front, z(f.pogonion), noJaw},
-    {front, f.mentonZ,
-     "no pogonion, or the profile does not cross half-way from it to the jaw underside"},
+    {front, f.mentonZ, "no pogonion, or the profile does not cross half-way from it to the jaw underside"},
     {zyL.theta, zyL.z, "no finite sample beside the face between the nose tip and the nasion"},
     {zyR.theta, zyR.z, "no finite sample beside the face between the nose tip and the nasion"},
     {goL.theta, goL.z, "no menton, or no finite sample beside the jaw"},
@@ -249,8 +246,7 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   for (std::size_t k = 0; k < definitions.size(); ++k)
   {
     const Candidate& c = candidates[k];
-    const bool inside = std::isfinite(c.theta) && std::isfinite(c.z) && c.z >= frame.zMin() &&
-                        c.z <= frame.zMax();
+    const bool inside = std::isfinite(c.theta) && std::isfinite(c.z) && c.z >= frame.zMin() && c.z <= frame.zMax();
     if (inside)
       result.landmarks.push_back({definitions[k].name, CylindricalFrame::wrapTheta(c.theta), c.z});
     else

@@ -60,8 +60,7 @@ inline constexpr double kFrontTheta = -1.5707963267948966;
 
 /// p(z): per row j, the median of the finite skin samples in the columns
 /// nearest θ within ±halfColumns (NaN if none).
-std::vector<double> midlineProfile(const RangeMap& skin, double theta = kFrontTheta,
-                                   int halfColumns = 3);
+std::vector<double> midlineProfile(const RangeMap& skin, double theta = kFrontTheta, int halfColumns = 3);
 
 /// Rows of the midline profile features (-1 where not found) and the profile.
 struct ProfileFeatures

@@ -18,8 +18,7 @@ constexpr const char* kHeader = "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm";
 void checkFrame(const RangeMap& reference, const RangeMap& map, const char* what)
 {
   if (!map.empty() && !reference.empty() && map.frame() != reference.frame())
-    throw std::invalid_argument(std::string("The ") + what +
-                                " map is on another cylinder or grid than the skin map.");
+    throw std::invalid_argument(std::string("The ") + what + " map is on another cylinder or grid than the skin map.");
 }
 
 double sampleOrNaN(const RangeMap& map, double theta, double z)
@@ -90,9 +89,8 @@ std::string landmarkDescription(std::string_view name)
   return {};
 }
 
-std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& landmarks,
-                                                 const RangeMap& skin, const RangeMap& radial,
-                                                 const RangeMap& normal)
+std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& landmarks, const RangeMap& skin,
+                                                 const RangeMap& radial, const RangeMap& normal)
 {
   checkFrame(skin, radial, "radial thickness");
   checkFrame(skin, normal, "normal thickness");
@@ -124,10 +122,9 @@ void writeLandmarkCsv(const std::filesystem::path& path, const std::vector<Landm
       throw std::invalid_argument("The landmark name \"" + name +
                                   "\" cannot be written to CSV: it must be non-empty and hold no "
                                   "comma, quote or line break.");
-    out << name << ',' << number(row.landmark.theta / kDegree) << ',' << number(row.landmark.z)
-        << ',' << number(row.position.x()) << ',' << number(row.position.y()) << ','
-        << number(row.position.z()) << ',' << number(row.radial) << ',' << number(row.normal)
-        << '\n';
+    out << name << ',' << number(row.landmark.theta / kDegree) << ',' << number(row.landmark.z) << ','
+        << number(row.position.x()) << ',' << number(row.position.y()) << ',' << number(row.position.z()) << ','
+        << number(row.radial) << ',' << number(row.normal) << '\n';
   }
   std::filesystem::path temporary = path;
   temporary += ".tmp";

@@ -58,9 +58,8 @@ struct LandmarkThickness
 /// NaN next to holes and outside the z range). Any map may be empty (0 × 0):
 /// its column is NaN.
 /// @throws std::invalid_argument if two non-empty maps are on different frames.
-std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& landmarks,
-                                                 const RangeMap& skin, const RangeMap& radial,
-                                                 const RangeMap& normal);
+std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& landmarks, const RangeMap& skin,
+                                                 const RangeMap& radial, const RangeMap& normal);
 
 /// Writes the table as CSV with the header
 /// `name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm` (x, y, z in LPS mm), one

@@ -5,15 +5,16 @@
 
 namespace caps::seg {
 
-float RangeMap::quietNaN() { return std::numeric_limits<float>::quiet_NaN(); }
+float RangeMap::quietNaN()
+{
+  return std::numeric_limits<float>::quiet_NaN();
+}
 
 RangeMap::RangeMap() : frame_() {}
 
 RangeMap::RangeMap(const CylindricalFrame& frame, float value)
-  : frame_(frame),
-    values_(static_cast<std::size_t>(frame.nTheta()) * static_cast<std::size_t>(frame.nZ()), value)
-{
-}
+  : frame_(frame), values_(static_cast<std::size_t>(frame.nTheta()) * static_cast<std::size_t>(frame.nZ()), value)
+{}
 
 std::size_t RangeMap::validCount() const
 {

@@ -26,8 +26,7 @@ struct Grid
   std::ptrdiff_t sy, sz;
 };
 
-template <typename T>
-struct Volume
+template <typename T> struct Volume
 {
   const T* data;
   Grid g;
@@ -41,8 +40,7 @@ struct Volume
     const int i = std::min(static_cast<int>(x), g.nx - 2);
     const int j = std::min(static_cast<int>(y), g.ny - 2);
     const int k = std::min(static_cast<int>(z), g.nz - 2);
-    const float fx = static_cast<float>(x - i), fy = static_cast<float>(y - j),
-                fz = static_cast<float>(z - k);
+    const float fx = static_cast<float>(x - i), fy = static_cast<float>(y - j), fz = static_cast<float>(z - k);
     const T* c = data + i + j * g.sy + k * g.sz;
     const float c00 = c[0] + fx * (float(c[1]) - float(c[0]));
     const float c10 = c[g.sy] + fx * (float(c[g.sy + 1]) - float(c[g.sy]));
@@ -75,8 +73,7 @@ struct Mask
     for (int k = k0; k <= k0 + 1; ++k)
       for (int j = j0; j <= j0 + 1; ++j)
         for (int i = i0; i <= i0 + 1; ++i)
-          if (i >= 0 && j >= 0 && k >= 0 && i < g.nx && j < g.ny && k < g.nz &&
-              data[i + j * g.sy + k * g.sz])
+          if (i >= 0 && j >= 0 && k >= 0 && i < g.nx && j < g.ny && k < g.nz && data[i + j * g.sy + k * g.sz])
             return true;
     return false;
   }
@@ -111,8 +108,8 @@ double maskEdge(const Mask& mask, const Ray& ray, double rOut, double rIn)
 /// The first rise through threshold, going inward from rOuter to rInner, whose
 /// cell touches the mask; NaN if none.
 template <typename T>
-double findCrossing(const Volume<T>& volume, const Mask& mask, const Ray& ray, float threshold,
-                    double rOuter, double rInner, double step)
+double findCrossing(const Volume<T>& volume, const Mask& mask, const Ray& ray, float threshold, double rOuter,
+                    double rInner, double step)
 {
   double rPrev = rOuter;
   float vPrev = volume(ray.at(rPrev));
@@ -140,8 +137,8 @@ double findCrossing(const Volume<T>& volume, const Mask& mask, const Ray& ray, f
 /// Outermost crossing inward from rStart (mask march, then HU search); sets
 /// fromEdge when the mask edge had to be used.
 template <typename T>
-double outermostCrossing(const Volume<T>& volume, const Mask& mask, const Ray& ray, float threshold,
-                         double rStart, const Steps& steps, bool& fromEdge)
+double outermostCrossing(const Volume<T>& volume, const Mask& mask, const Ray& ray, float threshold, double rStart,
+                         const Steps& steps, bool& fromEdge)
 {
   fromEdge = false;
   double r = rStart;
@@ -186,8 +183,7 @@ void checkMask(vtkImageData* mask, const ImageGeometry& ctGeometry, const char* 
   if (!mask)
     throw std::invalid_argument(std::string("The range maps need the ") + what + " mask.");
   if (mask->GetScalarType() != VTK_UNSIGNED_CHAR || mask->GetNumberOfScalarComponents() != 1)
-    throw std::invalid_argument(std::string("The ") + what +
-                                " mask must hold one unsigned char component per voxel.");
+    throw std::invalid_argument(std::string("The ") + what + " mask must hold one unsigned char component per voxel.");
   if (!ImageGeometry::of(mask).sameGrid(ctGeometry))
     throw std::invalid_argument(std::string("The ") + what +
                                 " mask does not lie on the CT's voxel grid (origin, spacing, "
@@ -195,13 +191,11 @@ void checkMask(vtkImageData* mask, const ImageGeometry& ctGeometry, const char* 
 }
 
 template <typename T>
-SkinBoneRangeMaps build(const T* ctData, vtkImageData* bodyMask, vtkImageData* boneMask,
-                        const ImageGeometry& geometry, const CylindricalFrame& frame,
-                        const RangeMapBuildOptions& options)
+SkinBoneRangeMaps build(const T* ctData, vtkImageData* bodyMask, vtkImageData* boneMask, const ImageGeometry& geometry,
+                        const CylindricalFrame& frame, const RangeMapBuildOptions& options)
 {
   const auto dims = geometry.dimensions();
-  const Grid grid{dims[0], dims[1], dims[2], dims[0],
-                  static_cast<std::ptrdiff_t>(dims[0]) * dims[1]};
+  const Grid grid{dims[0], dims[1], dims[2], dims[0], static_cast<std::ptrdiff_t>(dims[0]) * dims[1]};
   const Volume<T> volume{ctData, grid};
   const Mask body{static_cast<const unsigned char*>(bodyMask->GetScalarPointer()), grid};
   const Mask bone{static_cast<const unsigned char*>(boneMask->GetScalarPointer()), grid};
@@ -302,10 +296,10 @@ SkinBoneRangeMaps buildRangeMaps(vtkImageData* ct, vtkImageData* bodyMask, vtkIm
 
   switch (ct->GetScalarType())
   {
-    vtkTemplateMacro(return build(static_cast<const VTK_TT*>(ct->GetScalarPointer()), bodyMask,
-                                  boneMask, geometry, frame, options));
-    default:
-      throw std::invalid_argument("The CT's voxel type is not supported for range maps.");
+    vtkTemplateMacro(
+      return build(static_cast<const VTK_TT*>(ct->GetScalarPointer()), bodyMask, boneMask, geometry, frame, options));
+  default:
+    throw std::invalid_argument("The CT's voxel type is not supported for range maps.");
   }
 }
 

@@ -62,7 +62,6 @@ struct SkinBoneRangeMaps
 /// @param bodyMask, boneMask unsigned char, non-zero inside, same grid as ct.
 /// @throws std::invalid_argument for missing images, other grids or mask types; Cancelled.
 SkinBoneRangeMaps buildRangeMaps(vtkImageData* ct, vtkImageData* bodyMask, vtkImageData* boneMask,
-                                 const CylindricalFrame& frame,
-                                 const RangeMapBuildOptions& options = {});
+                                 const CylindricalFrame& frame, const RangeMapBuildOptions& options = {});
 
 } // namespace caps::seg

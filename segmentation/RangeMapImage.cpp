@@ -32,7 +32,10 @@ std::string number(double x)
   return buffer;
 }
 
-std::string vector3(const Eigen::Vector3d& v) { return number(v.x()) + " " + number(v.y()) + " " + number(v.z()); }
+std::string vector3(const Eigen::Vector3d& v)
+{
+  return number(v.x()) + " " + number(v.y()) + " " + number(v.z());
+}
 
 void writePng(vtkImageData* image, const std::string& path, const std::map<std::string, std::string>& text)
 {
@@ -77,10 +80,9 @@ void checkSize(vtkImageData* image, const CylindricalFrame& frame, const std::st
   int dims[3];
   image->GetDimensions(dims);
   if (dims[0] != frame.nTheta() || dims[1] != frame.nZ() || dims[2] != 1)
-    throw std::runtime_error("the image " + path + " is " + std::to_string(dims[0]) + " x " +
-                             std::to_string(dims[1]) + " pixels, but the map needs " +
-                             std::to_string(frame.nTheta()) + " x " + std::to_string(frame.nZ()) +
-                             " (was it resized in the image editor?)");
+    throw std::runtime_error("the image " + path + " is " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) +
+                             " pixels, but the map needs " + std::to_string(frame.nTheta()) + " x " +
+                             std::to_string(frame.nZ()) + " (was it resized in the image editor?)");
 }
 
 double parseNumber(const std::map<std::string, std::string>& text, const char* key, const std::string& path)
@@ -136,8 +138,8 @@ void writeRangeMapPng(const RangeMap& map, const std::string& path, const RangeM
   for (std::size_t k = 0; k < map.values().size(); ++k)
   {
     const float r = map.values()[k];
-    g[k] = std::isfinite(r) ? static_cast<std::uint16_t>(std::clamp(
-                                  std::llround((r - encoding.offsetMm) / encoding.stepMm) + 1, 1LL, 65535LL))
+    g[k] = std::isfinite(r) ? static_cast<std::uint16_t>(
+                                std::clamp(std::llround((r - encoding.offsetMm) / encoding.stepMm) + 1, 1LL, 65535LL))
                             : std::uint16_t{0};
   }
   const CylindricalFrame& f = map.frame();
@@ -173,7 +175,7 @@ RangeMap decodeRange(const PngContents& png, const CylindricalFrame& frame, cons
   {
     const double g = scalars->GetComponent(k, 0);
     map.values()[static_cast<std::size_t>(k)] =
-        g > 0.0 ? static_cast<float>(e.offsetMm + e.stepMm * (g - 1.0)) : RangeMap::quietNaN();
+      g > 0.0 ? static_cast<float>(e.offsetMm + e.stepMm * (g - 1.0)) : RangeMap::quietNaN();
   }
   return map;
 }
@@ -227,7 +229,7 @@ ColourMap readColourMapPng(const std::string& path, const CylindricalFrame& fram
     {
       const double v = scalars->GetComponent(k, nc >= 3 ? c : 0) * scale;
       map.values()[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)] =
-          static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+        static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
     }
   return map;
 }

@@ -40,8 +40,7 @@ void writeRangeMapPng(const RangeMap& map, const std::string& path, const RangeM
 RangeMap readRangeMapPng(const std::string& path);
 /// Read with a known frame and encoding (for images whose text chunks an
 /// editor dropped). @throws std::runtime_error if the size is not nθ × nz.
-RangeMap readRangeMapPng(const std::string& path, const CylindricalFrame& frame,
-                         const RangeMapImageEncoding& encoding);
+RangeMap readRangeMapPng(const std::string& path, const CylindricalFrame& frame, const RangeMapImageEncoding& encoding);
 /// The encoding stored in a PNG's text chunks. @throws std::runtime_error if absent.
 RangeMapImageEncoding readRangeMapImageEncoding(const std::string& path);
 

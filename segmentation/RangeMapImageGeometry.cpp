@@ -67,9 +67,8 @@ void ImageGeometry::applyTo(vtkImageData* image) const
   image->SetExtent(const_cast<int*>(extent.data()));
   image->SetOrigin(origin.data());
   image->SetSpacing(spacing.data());
-  image->SetDirectionMatrix(direction(0, 0), direction(0, 1), direction(0, 2), direction(1, 0),
-                            direction(1, 1), direction(1, 2), direction(2, 0), direction(2, 1),
-                            direction(2, 2));
+  image->SetDirectionMatrix(direction(0, 0), direction(0, 1), direction(0, 2), direction(1, 0), direction(1, 1),
+                            direction(1, 2), direction(2, 0), direction(2, 1), direction(2, 2));
 }
 
 } // namespace caps::seg

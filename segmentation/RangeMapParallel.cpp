@@ -8,8 +8,8 @@
 
 namespace caps::seg::internal {
 
-void parallelRows(int rows, int threads, const std::function<void(int)>& work,
-                  const ProgressCallback& progress, const std::string& step, double from, double to)
+void parallelRows(int rows, int threads, const std::function<void(int)>& work, const ProgressCallback& progress,
+                  const std::string& step, double from, double to)
 {
   if (threads < 1)
     threads = 1;
@@ -26,8 +26,7 @@ void parallelRows(int rows, int threads, const std::function<void(int)>& work,
       {
         work(row);
         const int finished = ++done;
-        if (reportProgress && progress &&
-            !progress(from + (to - from) * finished / rows, step))
+        if (reportProgress && progress && !progress(from + (to - from) * finished / rows, step))
           stop = true;
       }
     }

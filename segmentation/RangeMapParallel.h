@@ -17,7 +17,7 @@ namespace caps::seg::internal {
 /// fractions from `from` to `to`; returning false stops the work and throws
 /// Cancelled. An exception thrown by work is rethrown here after all threads end.
 void parallelRows(int rows, int threads, const std::function<void(int row)>& work,
-                  const ProgressCallback& progress = {}, const std::string& step = {},
-                  double from = 0.0, double to = 1.0);
+                  const ProgressCallback& progress = {}, const std::string& step = {}, double from = 0.0,
+                  double to = 1.0);
 
 } // namespace caps::seg::internal

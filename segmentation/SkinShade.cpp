@@ -104,10 +104,9 @@ ColourMap skinShadeFromCt(vtkImageData* ct, const RangeMap& skin, const SkinShad
       int count = 0;
       for (int k = 0; k < options.samples; ++k)
       {
-        const double depth =
-          options.samples == 1
-            ? 0.5 * (options.depthBegin + options.depthEnd)
-            : options.depthBegin + (options.depthEnd - options.depthBegin) * k / (options.samples - 1);
+        const double depth = options.samples == 1 ? 0.5 * (options.depthBegin + options.depthEnd)
+                                                  : options.depthBegin + (options.depthEnd - options.depthBegin) * k /
+                                                                           (options.samples - 1);
         const double hu = sample(frame.toWorld(r - depth, theta, z));
         if (std::isfinite(hu))
         {

@@ -31,12 +31,10 @@ std::string mm(double v)
 }
 
 template <class T>
-void resampleInto(const T* in, T* out, int nx, int ny, int nzIn, int nzOut,
-                  const SliceStackGeometry& g, const std::vector<double>& along, double spacing,
-                  double padding)
+void resampleInto(const T* in, T* out, int nx, int ny, int nzIn, int nzOut, const SliceStackGeometry& g,
+                  const std::vector<double>& along, double spacing, double padding)
 {
-  const Eigen::Vector3d normal = normalOf(g), row = vec(g.row).normalized(),
-                        column = vec(g.column).normalized();
+  const Eigen::Vector3d normal = normalOf(g), row = vec(g.row).normalized(), column = vec(g.column).normalized();
   const Eigen::Vector3d origin = vec(g.positions.front());
   const double sx = g.pixelSpacing[0], sy = g.pixelSpacing[1];
   // Bilinear sample of input slice n at the point p (outside: padding).
@@ -52,8 +50,7 @@ void resampleInto(const T* in, T* out, int nx, int ny, int nzIn, int nzOut,
     const double fu = uc - i0, fv = vc - j0;
     const T* slice = in + static_cast<size_t>(n) * nx * ny;
     const auto at = [&](int i, int j) { return static_cast<double>(slice[static_cast<size_t>(j) * nx + i]); };
-    return (1 - fv) * ((1 - fu) * at(i0, j0) + fu * at(i1, j0)) +
-           fv * ((1 - fu) * at(i0, j1) + fu * at(i1, j1));
+    return (1 - fv) * ((1 - fu) * at(i0, j0) + fu * at(i1, j0)) + fv * ((1 - fu) * at(i0, j1) + fu * at(i1, j1));
   };
   for (int k = 0; k < nzOut; ++k)
   {
@@ -66,8 +63,7 @@ void resampleInto(const T* in, T* out, int nx, int ny, int nzIn, int nzOut,
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i)
       {
-        const Eigen::Vector3d p =
-          origin + (i * sx) * row + (j * sy) * column + (s - along.front()) * normal;
+        const Eigen::Vector3d p = origin + (i * sx) * row + (j * sy) * column + (s - along.front()) * normal;
         double value = sample(a, p);
         if (b != a && t > 0)
           value = (1 - t) * value + t * sample(b, p);
@@ -123,8 +119,8 @@ SliceStackReport analyseSliceStack(const SliceStackGeometry& g)
     if (missing >= 1 && std::abs(ratio - std::round(ratio)) < 0.1)
     {
       report.missingSlices += missing;
-      text << missing << " slice" << (missing > 1 ? "s" : "") << " missing between z = "
-           << mm(along[k]) << " and z = " << mm(along[k + 1]) << " mm";
+      text << missing << " slice" << (missing > 1 ? "s" : "") << " missing between z = " << mm(along[k])
+           << " and z = " << mm(along[k + 1]) << " mm";
     }
     else
       text << "uneven slice spacing: " << mm(gaps[k]) << " mm instead of " << mm(report.spacing)
@@ -132,8 +128,7 @@ SliceStackReport analyseSliceStack(const SliceStackGeometry& g)
     report.problems.push_back(text.str());
     if (ratio > kLargestInterpolatedGap)
     {
-      report.refusal = "a gap of " + mm(gaps[k]) + " mm between z = " + mm(along[k]) +
-                       " and z = " + mm(along[k + 1]) +
+      report.refusal = "a gap of " + mm(gaps[k]) + " mm between z = " + mm(along[k]) + " and z = " + mm(along[k + 1]) +
                        " mm is too large to interpolate: the series is incomplete";
       return report;
     }
@@ -143,20 +138,17 @@ SliceStackReport analyseSliceStack(const SliceStackGeometry& g)
   const double cosine = std::clamp(std::abs(stacking.normalized().dot(normal)), 0.0, 1.0);
   report.tiltDegrees = std::acos(cosine) * 180.0 / M_PI;
   if (report.tiltDegrees > 0.1)
-    report.problems.push_back("the slices are sheared by a gantry tilt of " +
-                              mm(report.tiltDegrees) + " degrees");
+    report.problems.push_back("the slices are sheared by a gantry tilt of " + mm(report.tiltDegrees) + " degrees");
   report.needsResampling = report.uneven || report.tiltDegrees > 0.1;
   return report;
 }
 
-vtkSmartPointer<vtkImageData> resampleSliceStack(vtkImageData* stack,
-                                                 const SliceStackGeometry& g,
+vtkSmartPointer<vtkImageData> resampleSliceStack(vtkImageData* stack, const SliceStackGeometry& g,
                                                  const SliceStackReport& report, double padding)
 {
   const int* dims = stack->GetDimensions();
   const int nx = dims[0], ny = dims[1], nzIn = dims[2];
-  const Eigen::Vector3d normal = normalOf(g), row = vec(g.row).normalized(),
-                        column = vec(g.column).normalized();
+  const Eigen::Vector3d normal = normalOf(g), row = vec(g.row).normalized(), column = vec(g.column).normalized();
   std::vector<double> along(g.positions.size());
   for (size_t k = 0; k < along.size(); ++k)
     along[k] = vec(g.positions[k]).dot(normal);
@@ -167,17 +159,15 @@ vtkSmartPointer<vtkImageData> resampleSliceStack(vtkImageData* stack,
   out->SetSpacing(g.pixelSpacing[0], g.pixelSpacing[1], report.spacing);
   const auto& o = g.positions.front();
   out->SetOrigin(o[0], o[1], o[2]);
-  out->SetDirectionMatrix(row.x(), column.x(), normal.x(), row.y(), column.y(), normal.y(),
-                          row.z(), column.z(), normal.z());
+  out->SetDirectionMatrix(row.x(), column.x(), normal.x(), row.y(), column.y(), normal.y(), row.z(), column.z(),
+                          normal.z());
   out->AllocateScalars(stack->GetScalarType(), 1);
   if (stack->GetScalarType() == VTK_SHORT)
-    resampleInto(static_cast<const short*>(stack->GetScalarPointer()),
-                 static_cast<short*>(out->GetScalarPointer()), nx, ny, nzIn, nzOut, g, along,
-                 report.spacing, padding);
+    resampleInto(static_cast<const short*>(stack->GetScalarPointer()), static_cast<short*>(out->GetScalarPointer()), nx,
+                 ny, nzIn, nzOut, g, along, report.spacing, padding);
   else
-    resampleInto(static_cast<const float*>(stack->GetScalarPointer()),
-                 static_cast<float*>(out->GetScalarPointer()), nx, ny, nzIn, nzOut, g, along,
-                 report.spacing, padding);
+    resampleInto(static_cast<const float*>(stack->GetScalarPointer()), static_cast<float*>(out->GetScalarPointer()), nx,
+                 ny, nzIn, nzOut, g, along, report.spacing, padding);
   return out;
 }
 

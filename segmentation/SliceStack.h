@@ -23,20 +23,20 @@ namespace caps::seg {
 struct SliceStackGeometry
 {
   using Vector = std::array<double, 3>;
-  Vector row{1, 0, 0};    ///< direction of increasing column index (first IOP triplet)
-  Vector column{0, 1, 0}; ///< direction of increasing row index (second IOP triplet)
+  Vector row{1, 0, 0};             ///< direction of increasing column index (first IOP triplet)
+  Vector column{0, 1, 0};          ///< direction of increasing row index (second IOP triplet)
   double pixelSpacing[2] = {1, 1}; ///< along row, along column (mm)
-  std::vector<Vector> positions; ///< top-left voxel of each slice, in stack order
+  std::vector<Vector> positions;   ///< top-left voxel of each slice, in stack order
 };
 
 /// What is wrong with a stack, if anything.
 struct SliceStackReport
 {
-  double spacing = 0;        ///< median distance between neighbouring slices (mm)
-  double largestGap = 0;     ///< mm
-  int missingSlices = 0;     ///< estimated from gaps of about whole multiples of the spacing
-  double tiltDegrees = 0;    ///< angle between the stacking direction and the slice normal
-  bool uneven = false;       ///< some gap differs from the spacing by more than 5 %
+  double spacing = 0;     ///< median distance between neighbouring slices (mm)
+  double largestGap = 0;  ///< mm
+  int missingSlices = 0;  ///< estimated from gaps of about whole multiples of the spacing
+  double tiltDegrees = 0; ///< angle between the stacking direction and the slice normal
+  bool uneven = false;    ///< some gap differs from the spacing by more than 5 %
   bool needsResampling = false;
   /// Set when the stack cannot be made regular honestly (duplicate
   /// positions, a gap too large to interpolate); the text says where.
@@ -56,8 +56,7 @@ SliceStackReport analyseSliceStack(const SliceStackGeometry& geometry);
 /// is interpolated bilinearly in the two slices around it (shifted in plane
 /// by the tilt) and linearly between them; outside a slice it is @a padding.
 /// Returns an image of the same scalar type (short or float).
-vtkSmartPointer<vtkImageData> resampleSliceStack(vtkImageData* stack,
-                                                 const SliceStackGeometry& geometry,
+vtkSmartPointer<vtkImageData> resampleSliceStack(vtkImageData* stack, const SliceStackGeometry& geometry,
                                                  const SliceStackReport& report, double padding);
 
 } // namespace caps::seg

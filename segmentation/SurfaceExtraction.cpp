@@ -26,24 +26,22 @@ namespace {
 /// Copies the voxels of `mask` inside [lo, hi] (inclusive, 0-based indices)
 /// into a 0/1 image with one voxel of background on every side.
 template <typename T>
-void copyPadded(const T* mask, const int dims[3], const std::array<int, 3>& lo,
-                const std::array<int, 3>& hi, unsigned char* out)
+void copyPadded(const T* mask, const int dims[3], const std::array<int, 3>& lo, const std::array<int, 3>& hi,
+                unsigned char* out)
 {
   const int px = hi[0] - lo[0] + 3, py = hi[1] - lo[1] + 3;
   for (int k = lo[2]; k <= hi[2]; ++k)
     for (int j = lo[1]; j <= hi[1]; ++j)
     {
       const T* row = mask + (static_cast<std::int64_t>(k) * dims[1] + j) * dims[0];
-      unsigned char* outRow =
-        out + (static_cast<std::int64_t>(k - lo[2] + 1) * py + (j - lo[1] + 1)) * px + 1;
+      unsigned char* outRow = out + (static_cast<std::int64_t>(k - lo[2] + 1) * py + (j - lo[1] + 1)) * px + 1;
       for (int i = lo[0]; i <= hi[0]; ++i)
         outRow[i - lo[0]] = row[i] != 0 ? 1 : 0;
     }
 }
 
 /// Bounding box (0-based indices) of the non-zero voxels; false when none.
-template <typename T>
-bool boundingBox(const T* mask, const int dims[3], std::array<int, 3>& lo, std::array<int, 3>& hi)
+template <typename T> bool boundingBox(const T* mask, const int dims[3], std::array<int, 3>& lo, std::array<int, 3>& hi)
 {
   lo = {dims[0], dims[1], dims[2]};
   hi = {-1, -1, -1};
@@ -83,8 +81,7 @@ double signedVolume6(vtkPolyData* surface)
     points->GetPoint(ids[0], a);
     points->GetPoint(ids[1], b);
     points->GetPoint(ids[2], c);
-    sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-           a[2] * (b[0] * c[1] - b[1] * c[0]);
+    sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
   return sum;
 }
@@ -100,8 +97,7 @@ vtkSmartPointer<vtkImageData> paddedMask(vtkImageData* mask)
   bool any = false;
   switch (mask->GetScalarType())
   {
-    vtkTemplateMacro(any = boundingBox(static_cast<const VTK_TT*>(mask->GetScalarPointer()), dims,
-                                       lo, hi));
+    vtkTemplateMacro(any = boundingBox(static_cast<const VTK_TT*>(mask->GetScalarPointer()), dims, lo, hi));
   default:
     throw std::invalid_argument("extractSurface: unsupported voxel type.");
   }
@@ -117,8 +113,8 @@ vtkSmartPointer<vtkImageData> paddedMask(vtkImageData* mask)
               static_cast<unsigned char>(0));
   switch (mask->GetScalarType())
   {
-    vtkTemplateMacro(copyPadded(static_cast<const VTK_TT*>(mask->GetScalarPointer()), dims, lo,
-                                hi, static_cast<unsigned char*>(padded->GetScalarPointer())));
+    vtkTemplateMacro(copyPadded(static_cast<const VTK_TT*>(mask->GetScalarPointer()), dims, lo, hi,
+                                static_cast<unsigned char*>(padded->GetScalarPointer())));
   }
   return padded;
 }

@@ -31,7 +31,8 @@ namespace {
 std::string lowerExtension(const std::string& path)
 {
   std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
@@ -89,8 +90,8 @@ void addObjColours(const std::string& path, vtkPolyData* mesh)
   rgb->SetNumberOfTuples(mesh->GetNumberOfPoints());
   for (vtkIdType k = 0; k < mesh->GetNumberOfPoints(); ++k)
     for (int c = 0; c < 3; ++c)
-      rgb->SetValue(3 * k + c, static_cast<unsigned char>(std::clamp(
-                                   std::lround(colours[static_cast<std::size_t>(k)][c] * scale), 0L, 255L)));
+      rgb->SetValue(3 * k + c, static_cast<unsigned char>(
+                                 std::clamp(std::lround(colours[static_cast<std::size_t>(k)][c] * scale), 0L, 255L)));
   mesh->GetPointData()->SetScalars(rgb);
 }
 
@@ -229,8 +230,7 @@ void rayCast(const CylindricalFrame& frame, vtkPolyData* mesh, vtkUnsignedCharAr
 }
 
 /// The §3.2.7 rule on the vertices, with the colour of the vertex that gave the maximum.
-void bucketVertices(const CylindricalFrame& frame, vtkPolyData* mesh, vtkUnsignedCharArray* colours,
-                    SurfaceScan& scan)
+void bucketVertices(const CylindricalFrame& frame, vtkPolyData* mesh, vtkUnsignedCharArray* colours, SurfaceScan& scan)
 {
   std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(mesh->GetNumberOfPoints()));
   for (vtkIdType k = 0; k < mesh->GetNumberOfPoints(); ++k)

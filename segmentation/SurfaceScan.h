@@ -35,8 +35,8 @@ enum class SurfaceScanSampling
 /// The result of unwrapping a surface scan.
 struct SurfaceScan
 {
-  RangeMap range;   ///< r in mm, NaN where the ray misses the mesh (or the bucket is empty).
-  ColourMap colour; ///< RGB of the point that gave r; black where r is NaN (and if the mesh has no colours).
+  RangeMap range;          ///< r in mm, NaN where the ray misses the mesh (or the bucket is empty).
+  ColourMap colour;        ///< RGB of the point that gave r; black where r is NaN (and if the mesh has no colours).
   bool hasColours = false; ///< The mesh carried vertex colours.
 };
 

@@ -25,8 +25,7 @@ public:
   ColourMap() = default;
   explicit ColourMap(const CylindricalFrame& frame, Rgb8 value = {0, 0, 0})
     : frame_(frame), values_(static_cast<std::size_t>(frame.nTheta()) * frame.nZ(), value)
-  {
-  }
+  {}
 
   const CylindricalFrame& frame() const { return frame_; }
   /// Replace the frame by one with the same grid (calibration rescales z, §4.3).

@@ -59,8 +59,7 @@ RangeMap radialThickness(const RangeMap& skin, const RangeMap& bone)
   return out;
 }
 
-RangeMap normalThickness(const RangeMap& skin, const RangeMap& bone,
-                         const NormalThicknessOptions& options)
+RangeMap normalThickness(const RangeMap& skin, const RangeMap& bone, const NormalThicknessOptions& options)
 {
   checkSameFrame(skin, bone);
   RangeMap out(skin.frame());

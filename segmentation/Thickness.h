@@ -40,8 +40,7 @@ struct NormalThicknessOptions
 /// NaN where the skin or its normal is NaN, or the line reaches a hole of the
 /// bone map, the ends of the z range, the axis or maxDistance first.
 /// @throws std::invalid_argument if the maps are on different frames; Cancelled.
-RangeMap normalThickness(const RangeMap& skin, const RangeMap& bone,
-                         const NormalThicknessOptions& options = {});
+RangeMap normalThickness(const RangeMap& skin, const RangeMap& bone, const NormalThicknessOptions& options = {});
 
 /// Summary of a thickness (or any range) map, over its finite samples only.
 struct ThicknessStatistics

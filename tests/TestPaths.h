@@ -22,8 +22,8 @@ inline std::filesystem::path artifacts()
 inline std::filesystem::path scratchFolder()
 {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto folder = std::filesystem::temp_directory_path() / "caps-tests" /
-                      (std::string(info->test_suite_name()) + "." + info->name());
+  const auto folder =
+    std::filesystem::temp_directory_path() / "caps-tests" / (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(folder);
   std::filesystem::create_directories(folder);
   return folder;

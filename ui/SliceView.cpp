@@ -79,9 +79,12 @@ const char* orientationName(SliceOrientation o)
 {
   switch (o)
   {
-    case SliceOrientation::Axial: return "Axial";
-    case SliceOrientation::Coronal: return "Coronal";
-    case SliceOrientation::Sagittal: return "Sagittal";
+  case SliceOrientation::Axial:
+    return "Axial";
+  case SliceOrientation::Coronal:
+    return "Coronal";
+  case SliceOrientation::Sagittal:
+    return "Sagittal";
   }
   return "";
 }
@@ -175,9 +178,12 @@ int SliceView::sliceAxis() const
 {
   switch (orientation_)
   {
-    case SliceOrientation::Axial: return 2;
-    case SliceOrientation::Coronal: return 1;
-    case SliceOrientation::Sagittal: return 0;
+  case SliceOrientation::Axial:
+    return 2;
+  case SliceOrientation::Coronal:
+    return 1;
+  case SliceOrientation::Sagittal:
+    return 0;
   }
   return 2;
 }
@@ -289,8 +295,8 @@ void SliceView::setCursorPosition(const std::array<double, 3>& position)
   if (!image_)
     return;
   const int axis = sliceAxis();
-  const int slice = static_cast<int>(
-    std::lround((position[axis] - image_->GetOrigin()[axis]) / image_->GetSpacing()[axis]));
+  const int slice =
+    static_cast<int>(std::lround((position[axis] - image_->GetOrigin()[axis]) / image_->GetSpacing()[axis]));
   const int clamped = std::clamp(slice, 0, sliceCount() - 1);
   const bool changed = clamped != slice_;
   slice_ = clamped;
@@ -372,8 +378,7 @@ void SliceView::resetCamera()
   }
   double bounds[6];
   image_->GetBounds(bounds);
-  const double centre[3] = {(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2,
-                            (bounds[4] + bounds[5]) / 2};
+  const double centre[3] = {(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2};
   const double distance = 1000.0;
   camera->SetFocalPoint(centre);
   camera->SetPosition(centre[0] - direction[0] * distance, centre[1] - direction[1] * distance,

@@ -20,7 +20,12 @@ class vtkTextActor;
 
 namespace caps::ui {
 
-enum class SliceOrientation { Axial, Coronal, Sagittal };
+enum class SliceOrientation
+{
+  Axial,
+  Coronal,
+  Sagittal
+};
 
 /// A slice through a volume in radiological convention (patient left on the
 /// right of the screen, anterior up in axial views, face to the left in

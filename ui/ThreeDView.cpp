@@ -146,8 +146,7 @@ void ThreeDView::setCursorPosition(const std::array<double, 3>& position)
   const int* dims = image_->GetDimensions();
   for (int axis = 0; axis < 3; ++axis)
   {
-    const long index =
-      std::lround((position[axis] - image_->GetOrigin()[axis]) / image_->GetSpacing()[axis]);
+    const long index = std::lround((position[axis] - image_->GetOrigin()[axis]) / image_->GetSpacing()[axis]);
     mappers_[axis]->SetSliceNumber(static_cast<int>(std::clamp<long>(index, 0, dims[axis] - 1)));
   }
   requestRender();
@@ -427,8 +426,8 @@ bool ThreeDView::event(QEvent* event)
       type == QEvent::MouseButtonDblClick)
   {
     auto* mouse = static_cast<QMouseEvent*>(event);
-    const bool grab = type == QEvent::MouseButtonPress && mouse->button() == Qt::LeftButton &&
-                      handleNear(mouse->pos()) >= 0;
+    const bool grab =
+      type == QEvent::MouseButtonPress && mouse->button() == Qt::LeftButton && handleNear(mouse->pos()) >= 0;
     if (dragging_ >= 0 || grab)
     {
       if (type == QEvent::MouseButtonPress)

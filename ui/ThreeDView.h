@@ -126,7 +126,7 @@ private:
   vtkSmartPointer<vtkPoints> handle_points_;
   vtkSmartPointer<vtkActor> handle_actor_;
   bool handles_grabbable_ = true;
-  int dragging_ = -1;                 ///< the handle being dragged, or -1
+  int dragging_ = -1; ///< the handle being dragged, or -1
   bool drag_over_surface_ = false;
   std::string drag_key_;
   std::array<double, 3> drag_position_{};
@@ -134,7 +134,7 @@ private:
   QPoint press_position_;
   bool press_valid_ = false;
   bool moved_since_press_ = false; ///< a button was down while the mouse moved (the camera turned)
-  bool render_pending_ = false; ///< a render was asked for and none has started since
+  bool render_pending_ = false;    ///< a render was asked for and none has started since
   unsigned long render_observer_ = 0;
   vtkSmartPointer<vtkImageData> image_;
   vtkSmartPointer<vtkImageProperty> image_property_;

@@ -203,8 +203,8 @@ int main(int argc, char** argv)
               long(responses.muscleCount()), long(surface.vertexCount()), updateMs.size(), median, worst);
   std::printf("  + surface normals for shading: %.3f ms -> %.3f ms per update (target 16 ms: %.1f %% of it)\n",
               normalsMs, median + normalsMs, 100.0 * (median + normalsMs) / 16.0);
-  std::printf("  reference, the same load solved by the FE model (factor kept): %.1f ms = %.0fx the update\n",
-              directMs, directMs / (median + normalsMs));
+  std::printf("  reference, the same load solved by the FE model (factor kept): %.1f ms = %.0fx the update\n", directMs,
+              directMs / (median + normalsMs));
 
   // A fingertip pushing the cheek below the demo's Z-plasty (§5.4): three
   // unit pushes solved once, then a point of the path is their weighted sum
@@ -242,8 +242,9 @@ int main(int argc, char** argv)
   fresh.displacement = path.travelAt(0.5);
   const double freshMs = 1e3 * bench::secondsOf([&] { expression::pushedDisplacement(prediction, fresh); }, 2);
   const Eigen::VectorXd half = push.displacement(path.travelAt(0.5));
-  const double bumpsMs = 1e3 * bench::secondsOf(
-                                 [&] { expression::compareContours(prediction, maps.skin.frame(), prediction.displacements, half); }, 3);
+  const double bumpsMs =
+    1e3 * bench::secondsOf(
+            [&] { expression::compareContours(prediction, maps.skin.frame(), prediction.displacements, half); }, 3);
   std::printf("\nFingertip on the Z-plasty's model (%ld DOF, %zu skin nodes held, radius %.0f mm):\n",
               long(prediction.continuum.mesh.dofCount()), push.pushedNodes().size(), path.radius);
   std::printf("  once: three unit pushes (one factorisation) %.3f s\n", pushSeconds);

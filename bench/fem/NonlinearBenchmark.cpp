@@ -43,21 +43,27 @@ using caps::bench::skinPatchMaterials;
 using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 
-double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds(Clock::time_point t0)
+{
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
-}  // namespace
+} // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv)
+{
   useBestBlasKernels(argv);
   bool runCcx = true;
   std::vector<long> targets;
-  for (int a = 1; a < argc; ++a) {
+  for (int a = 1; a < argc; ++a)
+  {
     if (std::string(argv[a]) == "--no-ccx")
       runCcx = false;
     else
       targets.push_back(std::atol(argv[a]));
   }
-  if (targets.empty()) targets = {10000, 50000, 100000};
+  if (targets.empty())
+    targets = {10000, 50000, 100000};
   const int layers = 3;
   const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
   std::printf("ours on %u threads; ccx with OMP_NUM_THREADS=%u; both to a residual of 1e-8\n", cores, cores);
@@ -65,18 +71,23 @@ int main(int argc, char** argv) {
   const std::vector<std::pair<TangentUpdate, const char*>> modes{{TangentUpdate::EveryIteration, "full"},
                                                                  {TangentUpdate::WhenSlow, "modified"}};
   std::printf("%8s %7s %-8s %5s %5s %5s %5s %9s %9s %9s %9s %9s %5s %9s %9s %9s %10s\n", "DOF", "elems", "newton",
-              "incs", "its", "facts", "evals", "read s", "solve s", "assem s", "factor s", "s/it", "ccxIt", "ccx s", "ccx s/it", "ccx/ours",
-              "max rel du");
-  for (long target : targets) {
+              "incs", "its", "facts", "evals", "read s", "solve s", "assem s", "factor s", "s/it", "ccxIt", "ccx s",
+              "ccx s/it", "ccx/ours", "max rel du");
+  for (long target : targets)
+  {
     const Mesh mesh = skinPatchOfSize(target, layers);
     const MaterialTable linear = skinPatchMaterials();
     HyperelasticTable hyperelastic;
-    for (const auto& [region, m] : linear) hyperelastic[region] = HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, m);
+    for (const auto& [region, m] : linear)
+      hyperelastic[region] = HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, m);
     Constraints c;
-    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+    {
       const Eigen::Vector3d x = mesh.nodes.col(i);
-      if (x[2] < 1e-9) c.fixNode(int(i));
-      if (x[2] > 8.0 - 1e-9 && std::hypot(x[0] - 40.0, x[1] - 40.0) <= 10.0) {
+      if (x[2] < 1e-9)
+        c.fixNode(int(i));
+      if (x[2] > 8.0 - 1e-9 && std::hypot(x[0] - 40.0, x[1] - 40.0) <= 10.0)
+      {
         c.prescribe(int(i), 0, 4.0);
         c.prescribe(int(i), 1, 0.0);
         c.prescribe(int(i), 2, -3.0);
@@ -99,20 +110,26 @@ int main(int argc, char** argv) {
     double ccxSeconds = 0.0;
     int ccxIterations = 0;
     Eigen::Matrix3Xd theirs;
-    if (runCcx) {
+    if (runCcx)
+    {
       const auto t0 = Clock::now();
       const std::string cmd = "cd '" + dir.string() + "' && env OMP_NUM_THREADS=" + std::to_string(cores) +
                               " CCX_NPROC_EQUATION_SOLVER=" + std::to_string(cores) + " ccx -i job > ccx.log 2>&1";
       const bool ok = std::system(cmd.c_str()) == 0;
       ccxSeconds = seconds(t0);
-      if (!ok) {
+      if (!ok)
+      {
         std::printf("ccx failed, see %s/ccx.log\n", dir.c_str());
-      } else {
+      }
+      else
+      {
         // ccx's log has a line " iteration N" per Newton iteration.
         const std::string count = "cd '" + dir.string() + "' && grep -c '^ iteration' ccx.log > its.txt";
-        (void)std::system(count.c_str());  // grep -c exits 1 on no match, which leaves 0 in the file
-        if (FILE* f = std::fopen((dir / "its.txt").c_str(), "r")) {
-          if (std::fscanf(f, "%d", &ccxIterations) != 1) ccxIterations = 0;
+        (void)std::system(count.c_str()); // grep -c exits 1 on no match, which leaves 0 in the file
+        if (FILE* f = std::fopen((dir / "its.txt").c_str(), "r"))
+        {
+          if (std::fscanf(f, "%d", &ccxIterations) != 1)
+            ccxIterations = 0;
           std::fclose(f);
         }
         theirs = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
@@ -120,7 +137,8 @@ int main(int argc, char** argv) {
     }
 
     // Ours, in each tangent update: read the deck, solve.
-    for (const auto& [mode, modeName] : modes) {
+    for (const auto& [mode, modeName] : modes)
+    {
       auto t0 = Clock::now();
       const CalculixModel model = readCalculixInput((dir / "job.inp").string());
       const double read = seconds(t0);
@@ -136,18 +154,21 @@ int main(int argc, char** argv) {
       newton.tangentUpdate = mode;
       const NonlinearResult r = analysis.solve(model.load, control, newton);
       const double solve = seconds(t0);
-      if (r.status != NonlinearStatus::Converged) {
+      if (r.status != NonlinearStatus::Converged)
+      {
         std::printf("%8ld %-8s: ours did not converge: %s\n", long(mesh.dofCount()), modeName, r.message.c_str());
         continue;
       }
       int increments = 0;
-      for (const auto& i : r.increments) increments += i.accepted;
+      for (const auto& i : r.increments)
+        increments += i.accepted;
       const int iterations = int(r.iterations.size());
       double difference = NAN;
-      if (theirs.cols() > 0) {
+      if (theirs.cols() > 0)
+      {
         const Eigen::Map<const Eigen::VectorXd> flat(theirs.data(), theirs.size());
-        difference = (flat - r.displacements.head(flat.size())).cwiseAbs().maxCoeff() /
-                     r.displacements.cwiseAbs().maxCoeff();
+        difference =
+          (flat - r.displacements.head(flat.size())).cwiseAbs().maxCoeff() / r.displacements.cwiseAbs().maxCoeff();
       }
       std::printf("%8ld %7zu %-8s %5d %5d %5d %5d %9.3f %9.3f %9.3f %9.3f %9.4f %5d %9.3f %9.4f %9.2f %10.2e\n",
                   long(mesh.dofCount()), mesh.elements.size(), modeName, increments, iterations, r.factorizations,

@@ -39,35 +39,43 @@ using caps::bench::skinPatchMaterials;
 using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 
-double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds(Clock::time_point t0)
+{
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
-}  // namespace
+} // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv)
+{
   caps::fem::useBestBlasKernels(argv);
   bool runCcx = false;
   std::vector<long> targets;
-  for (int a = 1; a < argc; ++a) {
+  for (int a = 1; a < argc; ++a)
+  {
     if (std::string(argv[a]) == "--ccx")
       runCcx = true;
     else
       targets.push_back(std::atol(argv[a]));
   }
-  if (targets.empty()) targets = {10000, 50000, 100000};
+  if (targets.empty())
+    targets = {10000, 50000, 100000};
   const int layers = 3;
   const std::string blas = blasCoreName();
   std::printf("BLAS kernels: %s\n", blas.empty() ? "not OpenBLAS" : blas.c_str());
   const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
   std::printf("ours on %u cores; ccx as installed (1 core), then with OMP_NUM_THREADS=%u\n", cores, cores);
   std::printf("%8s %7s %9s %9s %9s %9s %9s %9s %9s %8s %7s %8s %8s %9s %9s %9s %9s\n", "DOF", "elems", "assemble",
-              "constrain", "analyse", "factor", "solve", "2nd case", "total", "GFlop", "GFlop/s", "L MB",
-              "peak MB", "ccx s", "ccx/ours", "ccxN s", "ccxN/ours");
-  for (long target : targets) {
+              "constrain", "analyse", "factor", "solve", "2nd case", "total", "GFlop", "GFlop/s", "L MB", "peak MB",
+              "ccx s", "ccx/ours", "ccxN s", "ccxN/ours");
+  for (long target : targets)
+  {
     const Mesh mesh = skinPatchOfSize(target, layers);
     MaterialTable materials = skinPatchMaterials();
     Constraints c;
     for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
-      if (mesh.nodes(2, i) < 1e-9) c.fixNode(int(i));
+      if (mesh.nodes(2, i) < 1e-9)
+        c.fixNode(int(i));
     LoadCase gravity;
     gravity.gravity = Eigen::Vector3d(0, -9810.0, -9810.0);
     LoadCase push;
@@ -75,7 +83,8 @@ int main(int argc, char** argv) {
 
     const auto t0 = Clock::now();
     LinearStaticAnalysis analysis(mesh, materials, c);
-    if (analysis.prepare() != SolverStatus::Success) {
+    if (analysis.prepare() != SolverStatus::Success)
+    {
       std::printf("failed: %s\n", analysis.message().c_str());
       return 1;
     }
@@ -89,7 +98,8 @@ int main(int argc, char** argv) {
     // (OMP_NUM_THREADS), and both ratios are printed.
     double ccxSeconds = 0.0, ccxAllCoresSeconds = 0.0;
     const unsigned cores = std::max(1U, std::thread::hardware_concurrency());
-    if (runCcx) {
+    if (runCcx)
+    {
       const auto dir = std::filesystem::temp_directory_path() / "caps_bench_fem_ccx";
       std::filesystem::create_directories(dir);
       writeCalculixInput((dir / "job.inp").string(), mesh, materials, c, gravity);
@@ -97,7 +107,8 @@ int main(int argc, char** argv) {
         const auto t1 = Clock::now();
         const std::string cmd = "cd '" + dir.string() + "' && env -u OMP_NUM_THREADS -u CCX_NPROC_EQUATION_SOLVER " +
                                 environment + " ccx -i job > ccx.log 2>&1";
-        if (std::system(cmd.c_str()) != 0) std::printf("ccx failed, see %s/ccx.log\n", dir.c_str());
+        if (std::system(cmd.c_str()) != 0)
+          std::printf("ccx failed, see %s/ccx.log\n", dir.c_str());
         return seconds(t1);
       };
       ccxSeconds = runCcxWith("");

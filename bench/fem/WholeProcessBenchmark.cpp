@@ -44,10 +44,14 @@ using caps::bench::skinPatchOfSize;
 using Clock = std::chrono::steady_clock;
 namespace fs = std::filesystem;
 
-double seconds(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double seconds(Clock::time_point t0)
+{
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 /// Wall seconds of @a command run by the shell; negative when it failed.
-double timed(const std::string& command) {
+double timed(const std::string& command)
+{
   const auto t0 = Clock::now();
   const int status = std::system(command.c_str());
   const double s = seconds(t0);
@@ -55,39 +59,48 @@ double timed(const std::string& command) {
 }
 
 /// displacements.csv of caps fem (node, x, y, z, ux, uy, uz; deck nodes 1..n).
-Eigen::Matrix3Xd readDisplacementsCsv(const fs::path& path, Eigen::Index nodes) {
+Eigen::Matrix3Xd readDisplacementsCsv(const fs::path& path, Eigen::Index nodes)
+{
   std::ifstream f(path);
-  if (!f) throw std::runtime_error("cannot read " + path.string());
+  if (!f)
+    throw std::runtime_error("cannot read " + path.string());
   Eigen::Matrix3Xd u = Eigen::Matrix3Xd::Constant(3, nodes, NAN);
   std::string line;
-  std::getline(f, line);  // header
-  while (std::getline(f, line)) {
+  std::getline(f, line); // header
+  while (std::getline(f, line))
+  {
     std::replace(line.begin(), line.end(), ',', ' ');
     std::istringstream s(line);
     long node = 0;
     double x, y, z, ux, uy, uz;
-    if (!(s >> node >> x >> y >> z >> ux >> uy >> uz)) continue;
-    if (node >= 1 && node <= nodes) u.col(node - 1) = Eigen::Vector3d(ux, uy, uz);
+    if (!(s >> node >> x >> y >> z >> ux >> uy >> uz))
+      continue;
+    if (node >= 1 && node <= nodes)
+      u.col(node - 1) = Eigen::Vector3d(ux, uy, uz);
   }
   return u;
 }
 
 /// The line of caps fem's output that starts with @a prefix, or "".
-std::string lineStarting(const fs::path& log, const std::string& prefix) {
+std::string lineStarting(const fs::path& log, const std::string& prefix)
+{
   std::ifstream f(log);
   std::string line;
   while (std::getline(f, line))
-    if (line.rfind(prefix, 0) == 0) return line;
+    if (line.rfind(prefix, 0) == 0)
+      return line;
   return {};
 }
 
-}  // namespace
+} // namespace
 
-int main(int argc, char** argv) {
+int main(int argc, char** argv)
+{
   int threads = 2, runs = 1;
   bool keep = false;
   std::vector<long> targets;
-  for (int a = 1; a < argc; ++a) {
+  for (int a = 1; a < argc; ++a)
+  {
     const std::string arg = argv[a];
     if ((arg == "--threads" || arg == "--runs") && a + 1 < argc)
       (arg == "--threads" ? threads : runs) = std::max(1, std::atoi(argv[++a]));
@@ -96,9 +109,11 @@ int main(int argc, char** argv) {
     else
       targets.push_back(std::atol(argv[a]));
   }
-  if (targets.empty()) targets = {10000, 50000, 107000};
+  if (targets.empty())
+    targets = {10000, 50000, 107000};
   const fs::path caps = fs::read_symlink("/proc/self/exe").parent_path() / "caps";
-  if (!fs::exists(caps)) {
+  if (!fs::exists(caps))
+  {
     std::printf("no caps binary beside this benchmark (%s): build the target caps\n", caps.c_str());
     return 1;
   }
@@ -108,14 +123,18 @@ int main(int argc, char** argv) {
               threads, threads, threads, runs);
   std::printf("%8s %7s %9s %9s %9s %10s  %s\n", "DOF", "elems", "ccx s", "caps s", "ccx/caps", "max |du|",
               "caps fem's phases");
-  for (long target : targets) {
+  for (long target : targets)
+  {
     const Mesh mesh = skinPatchOfSize(target, layers);
     MaterialTable materials = skinPatchMaterials();
     Constraints c;
     const double top = mesh.nodes.row(2).maxCoeff();
-    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-      if (mesh.nodes(2, i) < 1e-9) c.fixNode(int(i));
-      if (std::abs(mesh.nodes(2, i) - top) < 1e-9 && std::hypot(mesh.nodes(0, i) - 40.0, mesh.nodes(1, i) - 40.0) < 10.0)
+    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+    {
+      if (mesh.nodes(2, i) < 1e-9)
+        c.fixNode(int(i));
+      if (std::abs(mesh.nodes(2, i) - top) < 1e-9 &&
+          std::hypot(mesh.nodes(0, i) - 40.0, mesh.nodes(1, i) - 40.0) < 10.0)
         c.prescribe(int(i), 2, -0.5);
     }
     LoadCase load;
@@ -132,9 +151,11 @@ int main(int argc, char** argv) {
     const std::string capsCommand = "cd '" + dir.string() + "' && env OMP_NUM_THREADS=" + t + " '" + caps.string() +
                                     "' fem job.inp --out out --threads " + t + " > caps.log 2>&1";
     double ccxSeconds = INFINITY, capsSeconds = INFINITY;
-    for (int r = 0; r < runs; ++r) {
+    for (int r = 0; r < runs; ++r)
+    {
       const double a = timed(ccxCommand), b = timed(capsCommand);
-      if (a < 0 || b < 0) {
+      if (a < 0 || b < 0)
+      {
         std::printf("%8ld: %s failed, see %s\n", long(mesh.dofCount()), a < 0 ? "ccx" : "caps fem",
                     (dir / (a < 0 ? "ccx.log" : "caps.log")).c_str());
         return 1;
@@ -146,12 +167,15 @@ int main(int argc, char** argv) {
     const Eigen::Matrix3Xd ours = readDisplacementsCsv(dir / "out" / "displacements.csv", mesh.nodeCount());
     const double difference = (theirs - ours).cwiseAbs().maxCoeff() / ours.cwiseAbs().maxCoeff();
     std::string phases = lineStarting(dir / "caps.log", "time (s): ");
-    if (!phases.empty()) phases = phases.substr(10);
+    if (!phases.empty())
+      phases = phases.substr(10);
     std::printf("%8ld %7zu %9.2f %9.2f %9.2f %10.1e  %s\n", long(mesh.dofCount()), mesh.elements.size(), ccxSeconds,
                 capsSeconds, ccxSeconds / capsSeconds, difference, phases.c_str());
-    if (!(difference < 1e-4)) std::printf("         the displacements differ (see %s)\n", dir.c_str());
+    if (!(difference < 1e-4))
+      std::printf("         the displacements differ (see %s)\n", dir.c_str());
     std::fflush(stdout);
-    if (!keep && difference < 1e-4) fs::remove_all(dir);
+    if (!keep && difference < 1e-4)
+      fs::remove_all(dir);
   }
   return 0;
 }

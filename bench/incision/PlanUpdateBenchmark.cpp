@@ -82,7 +82,8 @@ int main(int argc, char** argv)
       repeats = std::max(1, std::atoi(argv[++a]));
     else
     {
-      std::fprintf(stderr, "usage: caps_bench_plan [--ccx] [--at THETA,Z] [--element-size MM] [--region MM] [--repeats N]\n");
+      std::fprintf(stderr,
+                   "usage: caps_bench_plan [--ccx] [--at THETA,Z] [--element-size MM] [--region MM] [--repeats N]\n");
       return 2;
     }
   }
@@ -134,10 +135,11 @@ int main(int argc, char** argv)
     last = std::move(p);
   }
   const double phases = best.mesh + best.assemble + best.factor + best.solve;
-  std::printf("Z-plasty (defaults) at theta %.0f deg, z %.0f mm, element size %.1f mm, region %.0f mm: %lld nodes, %zu elements, "
-              "%lld DOF (%lld free)\n",
-              thetaDeg, zMm, elementSize, regionRadius, (long long)last.continuum.mesh.nodeCount(),
-              last.continuum.mesh.elements.size(), (long long)last.dofCount, (long long)last.reducedDofCount);
+  std::printf(
+    "Z-plasty (defaults) at theta %.0f deg, z %.0f mm, element size %.1f mm, region %.0f mm: %lld nodes, %zu elements, "
+    "%lld DOF (%lld free)\n",
+    thetaDeg, zMm, elementSize, regionRadius, (long long)last.continuum.mesh.nodeCount(),
+    last.continuum.mesh.elements.size(), (long long)last.dofCount, (long long)last.reducedDofCount);
   if (last.zPlasty)
     std::printf("predicted gain %.1f %% (Fig. 2.2 table %.0f %%), wound %.1f mm closed to %.1e mm\n",
                 100 * last.zPlasty->predicted.fraction, 100 * last.zPlasty->theoretical, last.maxSutureGapBefore,

@@ -54,8 +54,7 @@ vtkSmartPointer<vtkImageData> topSlices(vtkImageData* ct, int slices)
   return out;
 }
 
-template <typename T>
-void makeMasks(const T* hu, const int dims[3], unsigned char* body, unsigned char* bone)
+template <typename T> void makeMasks(const T* hu, const int dims[3], unsigned char* body, unsigned char* bone)
 {
   const std::size_t n = static_cast<std::size_t>(dims[0]) * dims[1] * dims[2];
   std::vector<int> label(n, 0);
@@ -78,7 +77,7 @@ void makeMasks(const T* hu, const int dims[3], unsigned char* body, unsigned cha
       const int i = static_cast<int>(o % dims[0]), j = static_cast<int>((o / dims[0]) % dims[1]),
                 k = static_cast<int>(o / sz);
       const std::ptrdiff_t step[6] = {-1, 1, -sy, sy, -sz, sz};
-      const bool ok[6] = {i > 0, i < dims[0] - 1, j > 0, j < dims[1] - 1, k > 0, k < dims[2] - 1};
+      const bool ok[6] = {i > 0, i<dims[0] - 1, j> 0, j<dims[1] - 1, k> 0, k < dims[2] - 1};
       for (int d = 0; d < 6; ++d)
         if (ok[d])
         {
@@ -111,8 +110,8 @@ int main(int argc, char** argv)
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 3;
   const int threads = argc > 3 ? std::atoi(argv[3]) : 2;
 
-  std::printf("Range map benchmark on %s (best of %d, %d threads, %u cores seen)\n", folder.c_str(), repeats,
-              threads, std::thread::hardware_concurrency());
+  std::printf("Range map benchmark on %s (best of %d, %d threads, %u cores seen)\n", folder.c_str(), repeats, threads,
+              std::thread::hardware_concurrency());
   const CtVolume volume = readCtVolume(folder);
   vtkSmartPointer<vtkImageData> ct = topSlices(volume.image, 200);
   int dims[3];
@@ -142,36 +141,40 @@ int main(int argc, char** argv)
   NormalThicknessOptions thicknessOptions;
   thicknessOptions.threads = threads;
   double tFit = 0, tMaps = 0, tThickness = 0;
-  const double total = secondsOf([&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    fit = fitHeadAxis(body);
-    const auto t1 = std::chrono::steady_clock::now();
-    maps = buildRangeMaps(ct, body, bone, fit.frame, buildOptions);
-    const auto t2 = std::chrono::steady_clock::now();
-    radial = radialThickness(maps.skin, maps.bone);
-    normal = normalThickness(maps.skin, maps.bone, thicknessOptions);
-    const auto t3 = std::chrono::steady_clock::now();
-    tFit = std::chrono::duration<double>(t1 - t0).count();
-    tMaps = std::chrono::duration<double>(t2 - t1).count();
-    tThickness = std::chrono::duration<double>(t3 - t2).count();
-  }, repeats);
+  const double total = secondsOf(
+    [&] {
+      const auto t0 = std::chrono::steady_clock::now();
+      fit = fitHeadAxis(body);
+      const auto t1 = std::chrono::steady_clock::now();
+      maps = buildRangeMaps(ct, body, bone, fit.frame, buildOptions);
+      const auto t2 = std::chrono::steady_clock::now();
+      radial = radialThickness(maps.skin, maps.bone);
+      normal = normalThickness(maps.skin, maps.bone, thicknessOptions);
+      const auto t3 = std::chrono::steady_clock::now();
+      tFit = std::chrono::duration<double>(t1 - t0).count();
+      tMaps = std::chrono::duration<double>(t2 - t1).count();
+      tThickness = std::chrono::duration<double>(t3 - t2).count();
+    },
+    repeats);
 
   vtkIdType triangles = 0;
-  const double flyingEdges = secondsOf([&] {
-    auto fe = vtkSmartPointer<vtkFlyingEdges3D>::New();
-    fe->SetInputData(ct);
-    fe->SetValue(0, -400.0);
-    fe->ComputeNormalsOff();
-    fe->ComputeGradientsOff();
-    fe->ComputeScalarsOff();
-    fe->Update();
-    triangles = fe->GetOutput()->GetNumberOfPolys();
-  }, repeats);
+  const double flyingEdges = secondsOf(
+    [&] {
+      auto fe = vtkSmartPointer<vtkFlyingEdges3D>::New();
+      fe->SetInputData(ct);
+      fe->SetValue(0, -400.0);
+      fe->ComputeNormalsOff();
+      fe->ComputeGradientsOff();
+      fe->ComputeScalarsOff();
+      fe->Update();
+      triangles = fe->GetOutput()->GetNumberOfPolys();
+    },
+    repeats);
 
   const auto& f = fit.frame;
   std::printf("axis through (%.1f, %.1f, %.1f) along (%.3f, %.3f, %.3f), z %.1f..%.1f mm, %d slices, rms %.2f mm\n",
-              f.origin().x(), f.origin().y(), f.origin().z(), f.direction().x(), f.direction().y(),
-              f.direction().z(), f.zMin(), f.zMax(), fit.slicesUsed, fit.rmsResidual);
+              f.origin().x(), f.origin().y(), f.origin().z(), f.direction().x(), f.direction().y(), f.direction().z(),
+              f.zMin(), f.zMax(), fit.slicesUsed, fit.rmsResidual);
   std::printf("maps %d x %d: skin %zu finite (%zu at the mask edge), bone %zu finite (%zu at the mask edge)\n",
               f.nTheta(), f.nZ(), maps.skin.validCount(), maps.skinFromMaskEdge, maps.bone.validCount(),
               maps.boneFromMaskEdge);
@@ -185,8 +188,8 @@ int main(int argc, char** argv)
   std::printf("skin + bone maps   %8.3f s\n", tMaps);
   std::printf("thickness (both)   %8.3f s\n", tThickness);
   std::printf("total              %8.3f s   (target < 2 s on 2 cores)\n", total);
-  std::printf("vtkFlyingEdges3D   %8.3f s   (skin isosurface at -400 HU, %lld triangles)\n",
-              flyingEdges, static_cast<long long>(triangles));
+  std::printf("vtkFlyingEdges3D   %8.3f s   (skin isosurface at -400 HU, %lld triangles)\n", flyingEdges,
+              static_cast<long long>(triangles));
   std::printf("ratio total / flying edges: %.2f\n", total / flyingEdges);
   return 0;
 }

@@ -27,19 +27,23 @@ int main(int argc, char** argv)
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 3;
   std::printf("CT reading benchmark on %s (best of %d)\n", folder.c_str(), repeats);
 
-  const double plainItk = secondsOf([&] {
-    auto names = itk::GDCMSeriesFileNames::New();
-    names->SetDirectory(folder.string());
-    auto reader = itk::ImageSeriesReader<itk::Image<short, 3>>::New();
-    reader->SetImageIO(itk::GDCMImageIO::New());
-    reader->SetFileNames(names->GetFileNames(names->GetSeriesUIDs().front()));
-    reader->Update();
-  }, repeats);
+  const double plainItk = secondsOf(
+    [&] {
+      auto names = itk::GDCMSeriesFileNames::New();
+      names->SetDirectory(folder.string());
+      auto reader = itk::ImageSeriesReader<itk::Image<short, 3>>::New();
+      reader->SetImageIO(itk::GDCMImageIO::New());
+      reader->SetFileNames(names->GetFileNames(names->GetSeriesUIDs().front()));
+      reader->Update();
+    },
+    repeats);
 
-  const double check = secondsOf([&] {
-    for (const auto& entry : fs::directory_iterator(folder))
-      caps::seg::checkDicomFile(entry.path());
-  }, repeats);
+  const double check = secondsOf(
+    [&] {
+      for (const auto& entry : fs::directory_iterator(folder))
+        caps::seg::checkDicomFile(entry.path());
+    },
+    repeats);
 
   const double scan = secondsOf([&] { caps::seg::scanDicomFolder(folder); }, repeats);
   const double caps = secondsOf([&] { caps::seg::readCtVolume(folder); }, repeats);

@@ -62,8 +62,7 @@ struct ModuleCommand
   std::string usage;   ///< full text for `caps NAME --help`
   /// Runs the command; returns the process exit code (0 = success). Messages
   /// for the user go to err; results to out.
-  std::function<int(ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out,
-                    std::ostream& err)>
+  std::function<int(ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out, std::ostream& err)>
     run;
 };
 
@@ -187,16 +186,16 @@ public:
 } // namespace caps
 
 /// Exports a module class from its plugin library.
-#define CAPS_DECLARE_MODULE(ModuleClass)                                                          \
-  extern "C" __attribute__((visibility("default"))) int caps_module_api_version()                  \
-  {                                                                                                \
-    return ::caps::kModuleApiVersion;                                                              \
-  }                                                                                                \
-  extern "C" __attribute__((visibility("default"))) const char* caps_module_build_stamp()          \
-  {                                                                                                \
-    return ::caps::buildStamp();                                                                   \
-  }                                                                                                \
-  extern "C" __attribute__((visibility("default"))) ::caps::Module* caps_create_module()           \
-  {                                                                                                \
-    return new ModuleClass();                                                                      \
+#define CAPS_DECLARE_MODULE(ModuleClass)                                                                               \
+  extern "C" __attribute__((visibility("default"))) int caps_module_api_version()                                      \
+  {                                                                                                                    \
+    return ::caps::kModuleApiVersion;                                                                                  \
+  }                                                                                                                    \
+  extern "C" __attribute__((visibility("default"))) const char* caps_module_build_stamp()                              \
+  {                                                                                                                    \
+    return ::caps::buildStamp();                                                                                       \
+  }                                                                                                                    \
+  extern "C" __attribute__((visibility("default"))) ::caps::Module* caps_create_module()                               \
+  {                                                                                                                    \
+    return new ModuleClass();                                                                                          \
   }

@@ -224,7 +224,9 @@ void printComparison(std::ostream& out, const char* what, const expression::Cont
                 "%s: %d skin vertices within 20 mm of the cut; largest bump %.2f mm at rest, %.2f mm %s (%+.2f mm, "
                 "%s); the skin's height changes by up to %.2f mm at (%.1f, %.1f, %.1f)\n",
                 what, c.rest.vertices, c.rest.largest, c.loaded.largest, what, c.bumpChange(),
-                c.bumpChange() > 0.05 ? "the bumps get worse" : c.bumpChange() < -0.05 ? "the bumps ease" : "about the same",
+                c.bumpChange() > 0.05    ? "the bumps get worse"
+                : c.bumpChange() < -0.05 ? "the bumps ease"
+                                         : "about the same",
                 c.largestHeightChange, c.where.x(), c.where.y(), c.where.z());
   out << line;
 }
@@ -283,9 +285,9 @@ void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionMo
     underPush.positions(a.push->travelAt(double(along) / (a.frames - 1)), display.rangeDetail, x);
     frames.push_back(movedTo(atRest, x));
   }
-  printAnimation(render::writeSurfaceAnimation(frames, "plan-push", toCamera, up, a.animate, options,
-                                               cli::consoleProgress(err)),
-                 out, err);
+  printAnimation(
+    render::writeSurfaceAnimation(frames, "plan-push", toCamera, up, a.animate, options, cli::consoleProgress(err)),
+    out, err);
 }
 
 int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
@@ -353,9 +355,9 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
       const expression::PlanExpressionResponses onPlan(prediction, model->face.continuum.mesh, model->responses,
                                                        functions);
       const seg::CylindricalFrame& frame = input.skin.frame();
-      printComparison(out, "under the expression",
-                      expression::compareContours(prediction, frame, prediction.displacements,
-                                                  onPlan.displacement(activations)));
+      printComparison(
+        out, "under the expression",
+        expression::compareContours(prediction, frame, prediction.displacements, onPlan.displacement(activations)));
       std::optional<expression::PushResponses> pushed;
       if (a.push)
       {
@@ -395,9 +397,9 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
       options.width = a.width;
       options.height = a.height;
       const seg::CylindricalFrame& frame = input.skin.frame();
-      const auto result = render::writeMorphAnimation(
-        rest, full, "expression-" + a.expression, frame.radialDirection(-0.5 * std::numbers::pi), frame.direction(),
-        a.animate, a.frames, true, options, cli::consoleProgress(err));
+      const auto result = render::writeMorphAnimation(rest, full, "expression-" + a.expression,
+                                                      frame.radialDirection(-0.5 * std::numbers::pi), frame.direction(),
+                                                      a.animate, a.frames, true, options, cli::consoleProgress(err));
       printAnimation(result, out, err);
     }
     return 0;
@@ -413,8 +415,8 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
 
 std::vector<ModuleCommand> expressionCommands()
 {
-  return {{"expression", "the face under an expression; a plan under it or under a push (§5.3, §5.4)",
-           kExpressionUsage, runExpression}};
+  return {{"expression", "the face under an expression; a plan under it or under a push (§5.3, §5.4)", kExpressionUsage,
+           runExpression}};
 }
 
 } // namespace caps

@@ -32,22 +32,34 @@ const std::vector<ExpressionDefinition>& builtInExpressions()
   // Muscle ids of data/muscles/default.muscles; a definition id means both
   // sides. Activations: 1 is the file's strong contraction.
   static const std::vector<ExpressionDefinition> expressions{
-    {"smile", "Smile",
+    {"smile",
+     "Smile",
      "Zygomaticus major and risorius pull the mouth corners up and out; levator labii lifts the upper lip a little",
      {{"zygomaticus_major", 1.0}, {"risorius", 0.6}, {"levator_labii_superioris", 0.3}}},
-    {"frown", "Frown",
+    {"frown",
+     "Frown",
      "Corrugator draws the brows together and down; depressor labii pulls the lower lip down",
      {{"corrugator_supercilii", 1.0}, {"depressor_labii_inferioris", 0.8}}},
-    {"pucker", "Pucker", "Orbicularis oris, upper and lower lip, purses the mouth",
+    {"pucker",
+     "Pucker",
+     "Orbicularis oris, upper and lower lip, purses the mouth",
      {{"orbicularis_oris_upper", 1.0}, {"orbicularis_oris_lower", 1.0}}},
-    {"sneer", "Sneer", "Levator labii superioris alaeque nasi lifts the upper lip and the nose's wing",
+    {"sneer",
+     "Sneer",
+     "Levator labii superioris alaeque nasi lifts the upper lip and the nose's wing",
      {{"levator_labii_superioris_alaeque_nasi", 1.0}}},
-    {"fig_5_15", "Fig. 5.15", "Thesis Fig. 5.15: levator labii and temporalis",
+    {"fig_5_15",
+     "Fig. 5.15",
+     "Thesis Fig. 5.15: levator labii and temporalis",
      {{"levator_labii_superioris", 1.0}, {"temporalis", 1.0}}},
-    {"fig_5_16", "Fig. 5.16", "Thesis Fig. 5.16: risorius, alaeque nasi and corrugator",
+    {"fig_5_16",
+     "Fig. 5.16",
+     "Thesis Fig. 5.16: risorius, alaeque nasi and corrugator",
      {{"risorius", 1.0}, {"levator_labii_superioris_alaeque_nasi", 1.0}, {"corrugator_supercilii", 1.0}}},
     {"fig_5_17", "Fig. 5.17", "Thesis Fig. 5.17: depressor labii", {{"depressor_labii_inferioris", 1.0}}},
-    {"fig_5_18", "Fig. 5.18", "Thesis Fig. 5.18: orbicularis oris",
+    {"fig_5_18",
+     "Fig. 5.18",
+     "Thesis Fig. 5.18: orbicularis oris",
      {{"orbicularis_oris_upper", 1.0}, {"orbicularis_oris_lower", 1.0}}},
   };
   return expressions;
@@ -110,8 +122,7 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 
 } // namespace
 
-std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput& input,
-                                                      const TaskProgress& progress)
+std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput& input, const TaskProgress& progress)
 {
   const auto start = std::chrono::steady_clock::now();
   const auto step = [&progress](double fraction, const std::string& what) {
@@ -240,9 +251,7 @@ double applyActivations(const ExpressionModel& model, const Eigen::VectorXd& act
 
 } // namespace expression
 
-namespace {
-
-} // namespace
+namespace {} // namespace
 
 expression::ExpressionModelInput ExpressionLogic::modelInput() const
 {

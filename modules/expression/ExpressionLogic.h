@@ -63,8 +63,7 @@ const std::vector<ExpressionDefinition>& builtInExpressions();
 /// @a expression: a muscle named by its definition id applies to every
 /// fitted muscle of that definition, a fitted id to that muscle only (the
 /// later entry wins). Names no fitted muscle matches are ignored.
-Eigen::VectorXd expressionActivations(const ExpressionDefinition& expression,
-                                      const std::vector<FittedMuscle>& muscles);
+Eigen::VectorXd expressionActivations(const ExpressionDefinition& expression, const std::vector<FittedMuscle>& muscles);
 
 /// The same for a saved expression (muscle id → activation); ids the model
 /// does not have are returned in @a unknown when given.
@@ -99,7 +98,7 @@ struct ExpressionModelInput
 /// The face model of one patient, ready for sliders.
 struct ExpressionModel
 {
-  std::string muscleSetId; ///< "default"
+  std::string muscleSetId;     ///< "default"
   seg::CylindricalFrame frame; ///< the skin map's (the camera faces θ = -π/2)
   FaceMesh face;
   std::vector<FittedMuscle> muscles;
@@ -108,7 +107,7 @@ struct ExpressionModel
   ExpressionSurface surface;
   /// Source colour per display vertex (the CT's skin shade, grey without).
   std::vector<seg::Rgb8> shade;
-  std::string shadeNote;   ///< why the skin is grey, when it is
+  std::string shadeNote; ///< why the skin is grey, when it is
   std::string landmarkSource;
   double meshSeconds = 0.0, factorSeconds = 0.0, responseSeconds = 0.0, totalSeconds = 0.0;
 

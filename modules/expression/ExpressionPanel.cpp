@@ -132,7 +132,6 @@ void ExpressionPanel::addModelControls(QVBoxLayout* layout)
   status_->setObjectName("expression.status");
   status_->setWordWrap(true);
   layout->addWidget(status_);
-
 }
 
 void ExpressionPanel::addExpressionSliders(QVBoxLayout* layout)
@@ -157,7 +156,6 @@ void ExpressionPanel::addExpressionSliders(QVBoxLayout* layout)
   }
   expressionBox_ = expressions;
   layout->addWidget(expressions);
-
 }
 
 void ExpressionPanel::addMuscleSliders(QVBoxLayout* layout)
@@ -175,7 +173,6 @@ void ExpressionPanel::addMuscleSliders(QVBoxLayout* layout)
   scroll->setMinimumHeight(6 * (fontMetrics().height() + 8));
   muscleLayout->addWidget(scroll);
   layout->addWidget(muscles, 1);
-
 }
 
 /// Play, Rest, Export and what they report.
@@ -184,8 +181,8 @@ void ExpressionPanel::addPlaybackControls(QVBoxLayout* layout)
   auto* buttons = new QHBoxLayout;
   play_ = new QPushButton(tr("Play"), this);
   play_->setObjectName("expression.play");
-  play_->setToolTip(tr("Animate from rest to the expression the sliders give and back to rest in %1 s")
-                      .arg(kPlaySeconds));
+  play_->setToolTip(
+    tr("Animate from rest to the expression the sliders give and back to rest in %1 s").arg(kPlaySeconds));
   rest_ = new QPushButton(tr("Rest"), this);
   rest_->setObjectName("expression.rest");
   rest_->setToolTip(tr("Every slider to 0: the face at rest"));
@@ -201,7 +198,6 @@ void ExpressionPanel::addPlaybackControls(QVBoxLayout* layout)
   info_->setObjectName("expression.info");
   info_->setWordWrap(true);
   layout->addWidget(info_);
-
 }
 
 /// The group of the plan under expression; returns its layout.
@@ -258,8 +254,8 @@ void ExpressionPanel::addFingertip(QVBoxLayout* planLayout)
   tipRow->addWidget(new QLabel(tr("radius"), planBox_));
   tipRow->addWidget(radius_);
   pushForm->addRow(tipRow);
-  up_ = millimetres(planBox_, "expression.push.up", -20.0, 20.0, 6.0,
-                    tr("Travel up the head's axis (mm); negative: down"));
+  up_ =
+    millimetres(planBox_, "expression.push.up", -20.0, 20.0, 6.0, tr("Travel up the head's axis (mm); negative: down"));
   across_ = millimetres(planBox_, "expression.push.across", -20.0, 20.0, 0.0,
                         tr("Travel across the face, around the head's axis (mm)"));
   in_ = millimetres(planBox_, "expression.push.in", -20.0, 20.0, 0.0,
@@ -290,7 +286,6 @@ void ExpressionPanel::addFingertip(QVBoxLayout* planLayout)
   pathInfo_->setObjectName("expression.push.info");
   pathInfo_->setWordWrap(true);
   planLayout->addWidget(pathInfo_);
-
 }
 
 void ExpressionPanel::addSavedExpressions(QVBoxLayout* layout)
@@ -312,7 +307,6 @@ void ExpressionPanel::addSavedExpressions(QVBoxLayout* layout)
   saved_->setToolTip(tr("Choose a saved expression to set the muscle sliders to it"));
   storeForm->addRow(tr("Recall:"), saved_);
   layout->addWidget(store);
-
 }
 
 void ExpressionPanel::connectControls()
@@ -352,7 +346,6 @@ void ExpressionPanel::connectControls()
         std::abs(planStudy_->currentFingertip().radius - radius_->value()) > 1e-9)
       buildFingertip(planStudy_->currentFingertip().centre);
   });
-
 }
 
 /// Follows the scene: the face removed by someone else, a leftover face of a
@@ -367,9 +360,7 @@ void ExpressionPanel::observeTheScene()
       // perhaps), so the model goes with its face.
       faceId_.clear();
       hidden_.clear(); // their ids may name the new scene's nodes
-      QTimer::singleShot(0, this, [this]() {
-        dropModel("The scene changed: build the face model again.");
-      });
+      QTimer::singleShot(0, this, [this]() { dropModel("The scene changed: build the face model again."); });
     }
     if (event == SceneEvent::NodeAdded && node.type() == NodeType::Surface && node.name() == kFaceName &&
         node.id() != faceId_ && !leftoverPending_)
@@ -595,10 +586,10 @@ void ExpressionPanel::exportAnimation()
     const render::AnimationResult result =
       onPlan ? render::writeSurfaceAnimation(frames, name, toCamera, model_->frame.direction(), folder.toStdString(),
                                              options, progress)
-             : render::writeMorphAnimation(rest, full, name, toCamera, model_->frame.direction(),
-                                           folder.toStdString(), 24, true, options, progress);
-    std::string message = "Wrote " + std::to_string(result.prePost.frames) + " frames to " +
-                          result.prePost.folder.string();
+             : render::writeMorphAnimation(rest, full, name, toCamera, model_->frame.direction(), folder.toStdString(),
+                                           24, true, options, progress);
+    std::string message =
+      "Wrote " + std::to_string(result.prePost.frames) + " frames to " + result.prePost.folder.string();
     if (!result.prePost.video.empty())
       message += " and " + result.prePost.video.string();
     host_.showStatus(message);
@@ -647,7 +638,8 @@ void ExpressionPanel::rebuildMuscleSliders()
   {
     QSlider* slider = percentSlider(muscleBox_, QString::fromStdString("expression.muscle." + m.id),
                                     tr("Contraction of %1 added to the expressions: 100 % is the muscle file's "
-                                       "strong contraction").arg(QString::fromStdString(m.title)));
+                                       "strong contraction")
+                                      .arg(QString::fromStdString(m.title)));
     auto* value = new QLabel(muscleBox_);
     value->setObjectName(QString::fromStdString("expression.muscleValue." + m.id));
     value->setMinimumWidth(fontMetrics().horizontalAdvance("100 %") + 4);
@@ -754,7 +746,8 @@ void ExpressionPanel::takeBackLeftoverFaces()
       leftovers.push_back(n->id());
     // A plan's skin saved while it showed over a face.
     const auto* surface = static_cast<const SurfaceNode*>(n);
-    if (n->id() != planSkinId_ && surface->polyData() && surface->polyData()->GetFieldData()->GetAbstractArray(kStudyArray))
+    if (n->id() != planSkinId_ && surface->polyData() &&
+        surface->polyData()->GetFieldData()->GetAbstractArray(kStudyArray))
       leftovers.push_back(n->id());
   }
   for (const NodeId& id : leftovers)
@@ -837,7 +830,8 @@ void ExpressionPanel::saveExpression()
     if (a[Eigen::Index(k)] > 0.0)
     {
       values[model_->muscles[k].id] = a[Eigen::Index(k)];
-      description += " " + model_->muscles[k].title + " " + std::to_string(std::lround(100.0 * a[Eigen::Index(k)])) + " %;";
+      description +=
+        " " + model_->muscles[k].title + " " + std::to_string(std::lround(100.0 * a[Eigen::Index(k)])) + " %;";
     }
   try
   {
@@ -887,8 +881,10 @@ void ExpressionPanel::recallExpression(int index)
     std::string list;
     for (const std::string& id : unknown)
       list += (list.empty() ? "" : ", ") + id;
-    host_.showWarning("Recall expression", "Expression '" + node->name() + "' names muscles the face model does not "
-                                             "have (" + list + "); they are left at rest.");
+    host_.showWarning("Recall expression", "Expression '" + node->name() +
+                                             "' names muscles the face model does not "
+                                             "have (" +
+                                             list + "); they are left at rest.");
   }
 }
 
@@ -977,7 +973,6 @@ void ExpressionPanel::hideEvent(QHideEvent* event)
   playScale_ = 1.0;
   releaseFace();
 }
-
 
 void ExpressionPanel::refreshPlans()
 {
@@ -1071,12 +1066,12 @@ void ExpressionPanel::studyPlan()
         if (study && self->model_ == model)
           self->setStudy(study);
         else if (study)
-          self->planStatus_->setText(tr("The face model changed while %1 was predicted: study it again.")
-                                       .arg(QString::fromStdString(name)));
+          self->planStatus_->setText(
+            tr("The face model changed while %1 was predicted: study it again.").arg(QString::fromStdString(name)));
         else if (!error.empty())
         {
-          self->planStatus_->setText(tr("%1 could not be studied: %2")
-                                       .arg(QString::fromStdString(name), QString::fromStdString(error)));
+          self->planStatus_->setText(
+            tr("%1 could not be studied: %2").arg(QString::fromStdString(name), QString::fromStdString(error)));
           self->host_.showError("Study plan", "Plan '" + name + "' could not be studied in the face: " + error);
         }
         else
@@ -1228,8 +1223,7 @@ void ExpressionPanel::planOnCamera()
   const Eigen::Vector3d up = frame.direction();
   const Eigen::Vector3d across = up.cross(outward).normalized();
   const Eigen::RowVectorXd heights = up.transpose() * x, widths = across.transpose() * x;
-  const double half =
-    0.55 * std::max(heights.maxCoeff() - heights.minCoeff(), widths.maxCoeff() - widths.minCoeff());
+  const double half = 0.55 * std::max(heights.maxCoeff() - heights.minCoeff(), widths.maxCoeff() - widths.minCoeff());
   // The middle of the skin as seen, not its mean.
   centre += up * (0.5 * (heights.maxCoeff() + heights.minCoeff()) - up.dot(centre)) +
             across * (0.5 * (widths.maxCoeff() + widths.minCoeff()) - across.dot(centre));
@@ -1252,9 +1246,8 @@ void ExpressionPanel::updateBumps()
   expression::ContourComparison c;
   try
   {
-    c = pushing_ && planStudy_->hasFingertip()
-          ? planStudy_->comparePush(pushPath().travelAt(travel_->value() / 100.0))
-          : planStudy_->compare(activations());
+    c = pushing_ && planStudy_->hasFingertip() ? planStudy_->comparePush(pushPath().travelAt(travel_->value() / 100.0))
+                                               : planStudy_->compare(activations());
   }
   catch (const std::exception& e)
   {
@@ -1263,8 +1256,9 @@ void ExpressionPanel::updateBumps()
   }
   lastCompareMs_ = clock.nsecsElapsed() / 1e6;
   const double change = c.bumpChange();
-  const QString verdict = change > 0.05 ? tr("the bumps get worse") : change < -0.05 ? tr("the bumps ease")
-                                                                                      : tr("about the same");
+  const QString verdict = change > 0.05    ? tr("the bumps get worse")
+                          : change < -0.05 ? tr("the bumps ease")
+                                           : tr("about the same");
   bumps_->setText(tr("Largest bump within %1 mm of the cut: %2 mm at rest, %3 mm now (%4 mm, %5). The skin's "
                      "height changes by up to %6 mm. (%7 vertices; measured in %8 ms)")
                     .arg(planStudy_->window(), 0, 'f', 0)
@@ -1307,8 +1301,9 @@ void ExpressionPanel::placeFingertip()
     const Eigen::Index v = expression::PlanStudy::nearestVertex(shown, at, 5.0);
     if (v < 0)
     {
-      self->host_.showError("Fingertip", "No vertex of " + plan + "'s skin is near that click: press "
-                                         "'Fingertip...' again and click on the skin itself.");
+      self->host_.showError("Fingertip", "No vertex of " + plan +
+                                           "'s skin is near that click: press "
+                                           "'Fingertip...' again and click on the skin itself.");
       return;
     }
     self->buildFingertip(self->planStudy_->restSkinPoint(v));

@@ -36,7 +36,8 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   if (!input.model)
     throw std::invalid_argument("build the face model first: the plan is studied inside it");
   if (input.skin.frame() != input.model->frame)
-    throw std::invalid_argument("plan \"" + input.planName + "\" lies on another skin map than the face model: "
+    throw std::invalid_argument("plan \"" + input.planName +
+                                "\" lies on another skin map than the face model: "
                                 "build the face model again from the plan's range maps");
   std::unique_ptr<PlanStudy> study(new PlanStudy());
   study->planName_ = input.planName;
@@ -72,8 +73,8 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   std::vector<std::vector<fem::Muscle>> functions;
   for (const FittedMuscle& m : input.model->muscles)
     functions.push_back(m.functions);
-  study->responses_ = std::make_unique<PlanExpressionResponses>(
-    study->prediction_, input.model->face.continuum.mesh, input.model->responses, functions);
+  study->responses_ = std::make_unique<PlanExpressionResponses>(study->prediction_, input.model->face.continuum.mesh,
+                                                                input.model->responses, functions);
   study->responseSeconds = secondsSince(t);
 
   // The display skin (§4.7) with the scan's detail, shaded as the face is.
@@ -122,8 +123,8 @@ Fingertip PlanStudy::fingertip(const Eigen::Vector3d& centre, double radius) con
   out.centre = centre;
   out.radius = radius;
   out.push = std::make_shared<PushResponses>(prediction_, centre, radius);
-  out.surface = ExpressionSurface(prediction_.continuum.mesh, surface_.surface(), out.push->responses(),
-                                  out.push->closure());
+  out.surface =
+    ExpressionSurface(prediction_.continuum.mesh, surface_.surface(), out.push->responses(), out.push->closure());
   // The surgeon's frame at the fingertip: up the head, across the face
   // (θ growing), into the face.
   const seg::CylindricalPoint c = frame_.toCylindrical(centre);
@@ -165,8 +166,7 @@ ContourComparison PlanStudy::comparePush(const Eigen::Vector3d& travel) const
   return compareContours(prediction_, frame_, prediction_.displacements, pushedDisplacement(travel), window_);
 }
 
-Eigen::Index PlanStudy::nearestVertex(const Eigen::Matrix3Xd& positions, const Eigen::Vector3d& point,
-                                      double tolerance)
+Eigen::Index PlanStudy::nearestVertex(const Eigen::Matrix3Xd& positions, const Eigen::Vector3d& point, double tolerance)
 {
   if (positions.cols() == 0)
     return -1;
@@ -217,8 +217,8 @@ std::vector<Eigen::Vector2d> PlanStudy::rimOnSkin() const
   const seg::CylindricalPoint origin = frame_.toCylindrical(first);
   std::vector<Eigen::Vector2d> ring;
   for (int v : border)
-    ring.push_back(onCylinder(frame_, c.mesh.nodes.col(c.vertexColumns[std::size_t(v)].front()), origin.theta,
-                              origin.r));
+    ring.push_back(
+      onCylinder(frame_, c.mesh.nodes.col(c.vertexColumns[std::size_t(v)].front()), origin.theta, origin.r));
   return ring;
 }
 

@@ -36,10 +36,10 @@ namespace caps::expression {
 /// build may run on a worker thread while the scene changes.
 struct PlanStudyInput
 {
-  std::string planName;               ///< "Z-plasty 1"
-  incision::IncisionPlan plan;        ///< IncisionLogic::readPlan()
+  std::string planName;                ///< "Z-plasty 1"
+  incision::IncisionPlan plan;         ///< IncisionLogic::readPlan()
   incision::SimulationOptions options; ///< IncisionLogic::simulationOptions(): predicted as it was
-  seg::RangeMap skin;                 ///< the plan's skin map
+  seg::RangeMap skin;                  ///< the plan's skin map
   seg::RangeMap bone;
   /// The CT the skin's shade is read from (seg::skinShadeFromCt); null: grey.
   vtkSmartPointer<vtkImageData> ct;
@@ -133,8 +133,7 @@ public:
 
   /// The display vertex nearest @a point among @a positions (3 × V); -1 when
   /// none lies within @a tolerance (mm). For a pick on the shown skin.
-  static Eigen::Index nearestVertex(const Eigen::Matrix3Xd& positions, const Eigen::Vector3d& point,
-                                    double tolerance);
+  static Eigen::Index nearestVertex(const Eigen::Matrix3Xd& positions, const Eigen::Vector3d& point, double tolerance);
   /// Where display vertex @a v lies on the model's skin after the operation
   /// (no range detail, no load): a fingertip's centre.
   Eigen::Vector3d restSkinPoint(Eigen::Index v) const;

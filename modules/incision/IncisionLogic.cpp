@@ -74,7 +74,7 @@ incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
   std::vector<incision::SutureEdges> written;
   for (const auto& s : node.sutures())
     written.push_back({{s[0], s[1]}, {s[2], s[3]}});
-  plan.setSutures(std::move(written));  // throws SutureError (an invalid_argument) naming the pair
+  plan.setSutures(std::move(written)); // throws SutureError (an invalid_argument) naming the pair
   // The undermined regions as the node's recipe leaves them (placing a
   // procedure starts afresh, "clear-undermining" empties them).
   const nlohmann::json& operations = node.operations();
@@ -157,8 +157,7 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
                                                             const NodeId& skinMapId)
 {
   // Everything built first, so a failure leaves the scene as it was.
-  const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3,
-                                             prediction.displacements.size() / 3);
+  const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3, prediction.displacements.size() / 3);
   vtkSmartPointer<vtkUnstructuredGrid> meshGrid = gridOf(prediction.continuum.mesh, {});
   vtkSmartPointer<vtkUnstructuredGrid> resultGrid =
     gridOf(prediction.continuum.mesh, {{"displacement_mm", Eigen::MatrixXd(u)}});
@@ -227,8 +226,8 @@ incision::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
     for (const auto& m : *materials)
     {
       complete = complete && m.is_object() && m.contains("layer") && m["layer"].is_number_integer() &&
-                 m.contains("youngsModulusMPa") && m["youngsModulusMPa"].is_number() &&
-                 m.contains("poissonRatio") && m["poissonRatio"].is_number();
+                 m.contains("youngsModulusMPa") && m["youngsModulusMPa"].is_number() && m.contains("poissonRatio") &&
+                 m["poissonRatio"].is_number();
       if (!complete)
         break;
       const double e = m["youngsModulusMPa"].get<double>(), nu = m["poissonRatio"].get<double>();
@@ -258,6 +257,5 @@ nlohmann::json IncisionLogic::simulationRecord(const incision::SimulationOptions
   j["materials"] = std::move(list);
   return j;
 }
-
 
 } // namespace caps

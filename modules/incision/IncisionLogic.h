@@ -41,8 +41,7 @@ public:
   /// parameter values (API units; the rest default).
   /// @throws std::invalid_argument for an unknown procedure, bad values, or
   /// a cut that does not fit on the measured skin.
-  incision::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin,
-                                        const incision::SkinPoint& at,
+  incision::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin, const incision::SkinPoint& at,
                                         const std::map<std::string, double>& values = {});
 
   /// @name The plan in the scene (a PlanNode holds everything a plan is)

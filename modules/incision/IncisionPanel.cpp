@@ -92,9 +92,12 @@ QString unitSuffix(incision::ParameterUnit unit)
 {
   switch (unit)
   {
-  case incision::ParameterUnit::Millimetre: return " mm";
-  case incision::ParameterUnit::Degree: return QString::fromUtf8(" °");
-  case incision::ParameterUnit::Ratio: return "";
+  case incision::ParameterUnit::Millimetre:
+    return " mm";
+  case incision::ParameterUnit::Degree:
+    return QString::fromUtf8(" °");
+  case incision::ParameterUnit::Ratio:
+    return "";
   }
   return "";
 }
@@ -129,8 +132,8 @@ IncisionPanel::IncisionPanel(IncisionLogic& logic, ModuleHost& host, QWidget* pa
   addPlanEditing(layout);
   addGuidesAndMeasurements(layout);
   connectControls();
-  observer_ = logic_.scene().addObserver(
-    [this](SceneEvent event, const Node& node) { sceneChanged(int(event), node); });
+  observer_ =
+    logic_.scene().addObserver([this](SceneEvent event, const Node& node) { sceneChanged(int(event), node); });
 
   fillProcedures();
   refresh();
@@ -169,7 +172,6 @@ void IncisionPanel::addNewPlanControls(QVBoxLayout* layout)
   layout->addWidget(drawStatus_);
   connect(draw_, &QPushButton::clicked, this, &IncisionPanel::armDraw);
   connect(finishDraw_, &QPushButton::clicked, this, &IncisionPanel::finishDraw);
-
 }
 
 /// The scene's plans and Move, Undo, Redo, Delete.
@@ -195,7 +197,6 @@ void IncisionPanel::addPlanList(QVBoxLayout* layout)
   redo_ = button(tr("Redo"), "incision.redo", tr("Redo the edit undone (Ctrl+Shift+Z)"));
   delete_ = button(tr("Delete"), "incision.delete", tr("Remove the selected plan and its lines"));
   layout->addLayout(buttons);
-
 }
 
 void IncisionPanel::addPlanEditing(QVBoxLayout* layout)
@@ -256,7 +257,6 @@ void IncisionPanel::addPlanEditing(QVBoxLayout* layout)
   connect(undermine_, &QPushButton::clicked, this, &IncisionPanel::armUndermine);
   connect(finishRegion_, &QPushButton::clicked, this, &IncisionPanel::finishUndermining);
   connect(clearRegions_, &QPushButton::clicked, this, &IncisionPanel::clearUndermining);
-
 }
 
 /// The tension lines, what the prediction says of the plan, and the
@@ -339,8 +339,8 @@ void IncisionPanel::fillProcedures()
   }
   catch (const std::exception& e)
   {
-    host_.showError("Procedures", std::string(e.what()) +
-                                    "\nSet CAPS_DATA_DIR to the folder holding procedures/ and restart.");
+    host_.showError("Procedures",
+                    std::string(e.what()) + "\nSet CAPS_DATA_DIR to the folder holding procedures/ and restart.");
   }
   procedure_->blockSignals(false);
   place_->setEnabled(procedure_->count() > 0);
@@ -360,8 +360,7 @@ const incision::ProcedureTemplate* IncisionPanel::currentProcedure()
   }
 }
 
-void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure,
-                              const std::map<std::string, double>* values)
+void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure, const std::map<std::string, double>* values)
 {
   while (form_->rowCount() > 0)
     form_->removeRow(0);
@@ -386,8 +385,7 @@ void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure,
         value = given->second;
     spin->setValue(toUi(p.unit, value));
     const std::string name = p.name;
-    connect(spin, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this,
-            [this, name] { parameterChanged(name); });
+    connect(spin, QOverload<double>::of(&QDoubleSpinBox::valueChanged), this, [this, name] { parameterChanged(name); });
     auto* label = new QLabel(readable(p.name) + ":", formBox_);
     label->setToolTip(QString::fromStdString(p.label));
     form_->addRow(label, spin);
@@ -469,9 +467,8 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
   }
   catch (const std::exception& e)
   {
-    host_.showError("Place on the skin",
-                    "The " + procedure->title() + " does not fit there: " + e.what() +
-                      "\nClick nearer the middle of the measured skin, or make the cut smaller.");
+    host_.showError("Place on the skin", "The " + procedure->title() + " does not fit there: " + e.what() +
+                                           "\nClick nearer the middle of the measured skin, or make the cut smaller.");
     return;
   }
   const std::string name = addPlan(procedure->title(), plan, recipe, skinId);
@@ -621,11 +618,10 @@ void IncisionPanel::parameterChanged(const std::string& name)
   const auto old = node->parameters().find(name);
   if (value == values.end() || (old != node->parameters().end() && old->second == value->second))
     return;
-  const bool done =
-    recordOperation(node->id(), "Set " + readable(name).toLower().toStdString() + " of " + node->name(),
-                    [&](const incision::IncisionPlan&, const seg::RangeMap&) {
-                      return incision::PlanOperation(incision::SetParameter{name, value->second});
-                    });
+  const bool done = recordOperation(node->id(), "Set " + readable(name).toLower().toStdString() + " of " + node->name(),
+                                    [&](const incision::IncisionPlan&, const seg::RangeMap&) {
+                                      return incision::PlanOperation(incision::SetParameter{name, value->second});
+                                    });
   if (!done)
     showSelection(); // the form shows the plan as it stayed
 }
@@ -651,11 +647,11 @@ void IncisionPanel::movePointTo(const NodeId& planId, int point, const SurfacePi
   auto* node = logic_.scene().nodeAs<PlanNode>(planId);
   if (!node)
     return;
-  const bool moved = recordOperation(
-    planId, "Move point p" + std::to_string(point) + " of " + node->name(),
-    [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
-      return incision::PlanOperation(incision::MoveCutPoint{point, normalizedOf(skin, pick)});
-    });
+  const bool moved =
+    recordOperation(planId, "Move point p" + std::to_string(point) + " of " + node->name(),
+                    [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
+                      return incision::PlanOperation(incision::MoveCutPoint{point, normalizedOf(skin, pick)});
+                    });
   if (!moved)
     updateHandles(); // refused: the handle goes back to the point
 }
@@ -742,12 +738,12 @@ void IncisionPanel::armUndermine()
       return;
     const Eigen::Vector2d n = normalizedOf(self->rangeMap(*skin), pick);
     self->region_.push_back({n.x(), n.y()});
-    self->regionStatus_->setText(
-      tr("%1 corners: click the next, or Finish (at least 3).").arg(self->region_.size()));
+    self->regionStatus_->setText(tr("%1 corners: click the next, or Finish (at least 3).").arg(self->region_.size()));
     self->armUndermine();
   };
-  regionStatus_->setText(region_.empty() ? tr("Click the first corner of the region on the skin.")
-                                         : tr("%1 corners: click the next, or Finish (at least 3).").arg(region_.size()));
+  regionStatus_->setText(region_.empty()
+                           ? tr("Click the first corner of the region on the skin.")
+                           : tr("%1 corners: click the next, or Finish (at least 3).").arg(region_.size()));
   host_.pickInThreeDView("Click a corner of the region to undermine (Finish in the panel when done)", corner);
 }
 
@@ -790,11 +786,12 @@ bool IncisionPanel::recordOperation(
   const NodeId& planId, const std::string& label,
   const std::function<incision::PlanOperation(const incision::IncisionPlan&, const seg::RangeMap&)>& operation)
 {
-  return editPlan(planId, label, [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-    const incision::PlanOperation op = operation(plan, skin);
-    plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
-    recipe.operations.push_back(op);
-  });
+  return editPlan(
+    planId, label, [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
+      const incision::PlanOperation op = operation(plan, skin);
+      plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
+      recipe.operations.push_back(op);
+    });
 }
 
 bool IncisionPanel::editPlan(
@@ -1088,8 +1085,7 @@ void IncisionPanel::showSelection()
     procedure = plan ? logic_.procedures().find(plan->procedure()) : currentProcedure();
   }
   catch (const std::exception&)
-  {
-  }
+  {}
   // Rebuilt only when the procedure changes, else updated in place (a
   // spin box being typed into keeps its focus).
   if (procedure && procedure->id() != formProcedure_)
@@ -1185,8 +1181,7 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
             "%");
       }
       catch (const std::invalid_argument&)
-      {
-      }
+      {}
       row(tr("Geometric gain in length"), 100.0 * incision::zPlastyGeometricGain(angle->second), 0, "%");
     }
   }
@@ -1209,8 +1204,8 @@ const incision::SkinTensionLines* IncisionPanel::tensionLines(const RangeMapNode
     try
     {
       const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
-      entry.lines = std::make_unique<incision::SkinTensionLines>(
-        skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
+      entry.lines =
+        std::make_unique<incision::SkinTensionLines>(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
     }
     catch (const std::exception& e)
     {

@@ -159,7 +159,7 @@ private:
   IncisionLogic& logic_;
   ModuleHost& host_;
   int observer_ = -1;
-  bool writing_ = false;       ///< our own edits in progress: their events are not ours to redraw
+  bool writing_ = false; ///< our own edits in progress: their events are not ours to redraw
   bool refreshPending_ = false;
   std::set<NodeId> redraw_;    ///< plans whose lines follow a change made elsewhere (undo)
   std::set<NodeId> dropLines_; ///< line nodes of plans removed
@@ -170,7 +170,7 @@ private:
   {
     std::shared_ptr<seg::RangeMap> map; ///< the map they were placed on (they point into it)
     std::unique_ptr<incision::SkinTensionLines> lines;
-    std::string why;                    ///< why there are none
+    std::string why; ///< why there are none
   };
   std::map<NodeId, TensionLinesOnMap> tension_;
   QCheckBox* showTension_ = nullptr;
@@ -205,7 +205,7 @@ private:
   QPushButton* finishRegion_ = nullptr;
   QPushButton* clearRegions_ = nullptr;
   QLabel* regionStatus_ = nullptr;
-  NodeId regionPlan_;                     ///< the plan the region being clicked is for
+  NodeId regionPlan_;                         ///< the plan the region being clicked is for
   std::vector<std::array<double, 2>> region_; ///< its corners so far (θn, zn)
   QTableWidget* table_ = nullptr;
 };

@@ -113,8 +113,8 @@ struct PlanArgs : cli::CtCommandArgs
   std::vector<std::vector<std::pair<double, double>>> undermineRegions; ///< degrees, mm
   std::optional<fs::path> replay;
   bool otherCt = false;
-  std::optional<double> elementSize; ///< mm; default 2, or the replayed plan's
-  std::optional<int> cutLayers;      ///< --cut-depth; default all layers, or the replayed plan's
+  std::optional<double> elementSize;   ///< mm; default 2, or the replayed plan's
+  std::optional<int> cutLayers;        ///< --cut-depth; default all layers, or the replayed plan's
   std::vector<double> undermineWidths; ///< mm, the --undermine study; empty: none
 };
 
@@ -186,8 +186,8 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
       {
         double theta = 0.0, z = 0.0;
         char tail = 0;
-        if (!hasValue || std::sscanf(args[++i].c_str(), "%lf,%lf%c", &theta, &z, &tail) != 2 ||
-            !std::isfinite(theta) || !std::isfinite(z))
+        if (!hasValue || std::sscanf(args[++i].c_str(), "%lf,%lf%c", &theta, &z, &tail) != 2 || !std::isfinite(theta) ||
+            !std::isfinite(z))
           return "--at needs THETA,Z: degrees around the head axis and mm along it, e.g. -90,-40";
         parsed.at = std::pair{theta, z};
       }
@@ -286,8 +286,7 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
       std::string known;
       for (const auto& q : t.parameters())
         known += (known.empty() ? "" : ", ") + q.name;
-      throw std::invalid_argument("procedure " + t.id() + " has no parameter '" + name + "' (it has " +
-                                  known + ")");
+      throw std::invalid_argument("procedure " + t.id() + " has no parameter '" + name + "' (it has " + known + ")");
     }
     values[name] = p->unit == incision::ParameterUnit::Degree ? value * kDegree : value;
   }
@@ -297,9 +296,9 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
 /// Radius (mm on the skin) of the band around the wound where the peak skin stress is taken.
 constexpr double kWoundStressRadius = 10.0;
 
-void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m,
-                       const incision::PlanPrediction& p, double excisedVolumeToBone,
-                       const incision::WoundStress& stress, const seg::CylindricalPoint& peakAt)
+void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m, const incision::PlanPrediction& p,
+                       double excisedVolumeToBone, const incision::WoundStress& stress,
+                       const seg::CylindricalPoint& peakAt)
 {
   std::ofstream out(file);
   out << std::setprecision(10) << "quantity,where,chart,skin,unit\n";
@@ -310,8 +309,8 @@ void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m
   out << "excised area,hole,," << m.excisedArea << ",mm2\n";
   // From the elements of the excised tissue, to the cut's depth, and as a
   // second method the range maps' integral down to the bone.
-  out << "excised volume (elements; cut through " << p.cutLayers << " of "
-      << p.layerCount << " layers),hole,," << p.excisedVolume << ",mm3\n";
+  out << "excised volume (elements; cut through " << p.cutLayers << " of " << p.layerCount << " layers),hole,,"
+      << p.excisedVolume << ",mm3\n";
   out << "excised volume to the bone (range maps),hole,," << excisedVolumeToBone << ",mm3\n";
   out << "wound width before closure,sutures,," << p.maxSutureGapBefore << ",mm\n";
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
@@ -340,8 +339,7 @@ class PlanRun
 public:
   PlanRun(IncisionLogic& logic, PlanArgs args, std::ostream& out, std::ostream& err)
     : logic_(logic), args_(std::move(args)), out_(out), err_(err)
-  {
-  }
+  {}
 
   void run()
   {
@@ -389,8 +387,8 @@ private:
     const std::string file = args_.replay->string();
     if (replay_->ctSha256 != ctHash_)
     {
-      const std::string made = replay_->ctSha256.empty() ? std::string("a CT it does not name")
-                                                         : "a CT of SHA-256 " + replay_->ctSha256;
+      const std::string made =
+        replay_->ctSha256.empty() ? std::string("a CT it does not name") : "a CT of SHA-256 " + replay_->ctSha256;
       if (!args_.otherCt)
         throw std::invalid_argument(file + " was made on " + made + ", not on this CT (SHA-256 " + ctHash_ +
                                     "): another scan or another patient. Replay it on the CT it was made on, "
@@ -442,8 +440,9 @@ private:
       }
     }
     else
-      recorded_->apply(incision::PlaceProcedure{args_.procedure, {args_.at->first * kDegree, args_.at->second}, values_},
-                       skin, logic_.procedures());
+      recorded_->apply(
+        incision::PlaceProcedure{args_.procedure, {args_.at->first * kDegree, args_.at->second}, values_}, skin,
+        logic_.procedures());
     for (const PlanEdit& e : args_.edits)
       if (e.move)
         recorded_->apply(
@@ -511,22 +510,22 @@ private:
     for (const auto& a : measured_.limbAngles)
       out_ << "  angle at p" << a.point << ": " << a.skin / kDegree << " deg on the skin\n";
     if (measured_.excisedArea > 0.0)
-      out_ << "  excised area: " << measured_.excisedArea << " mm2, volume " << p.excisedVolume
-           << " mm3 (elements; " << excisedVolume_ << " mm3 to the bone by the range maps)\n";
+      out_ << "  excised area: " << measured_.excisedArea << " mm2, volume " << p.excisedVolume << " mm3 (elements; "
+           << excisedVolume_ << " mm3 to the bone by the range maps)\n";
     if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
       out_ << "  cut through " << options_.cutLayers << " of " << options_.layerCount
            << " tissue layers: the tissue below stays whole\n";
-    out_ << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size()
-         << " elements, " << p.dofCount << " DOF (" << p.reducedDofCount << " free); mesh " << std::setprecision(3)
-         << p.times.mesh << " s, assemble " << p.times.assemble << " s, factor " << p.times.factor << " s, solve "
-         << p.times.solve << " s\n";
+    out_ << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
+         << p.dofCount << " DOF (" << p.reducedDofCount << " free); mesh " << std::setprecision(3) << p.times.mesh
+         << " s, assemble " << p.times.assemble << " s, factor " << p.times.factor << " s, solve " << p.times.solve
+         << " s\n";
     if (!plan.underminedRegions().empty())
-      out_ << "Undermined: " << plan.underminedRegions().size() << " region(s), "
-           << p.continuum.underminedNodes.size() << " bone nodes released\n";
+      out_ << "Undermined: " << plan.underminedRegions().size() << " region(s), " << p.continuum.underminedNodes.size()
+           << " bone nodes released\n";
     out_ << std::setprecision(2) << "Wound " << p.maxSutureGapBefore << " mm wide before, sutures within "
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
-    out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum << " N over all sutures, largest suture "
-         << p.closure.largest << " N\n";
+    out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum
+         << " N over all sutures, largest suture " << p.closure.largest << " N\n";
     const incision::WoundStress& w = woundStress_;
     out_ << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
          << 1e3 * w.peakVonMises << " kPa at theta " << peakAt_.theta / kDegree << " deg, z " << peakAt_.z << " mm ("
@@ -579,11 +578,11 @@ private:
              "largest suture force (N),suture gap after closure (mm),peak skin von Mises near wound (kPa),"
              "mean skin von Mises near wound (kPa)\n";
     render::PlotSeries force{"closure force, sum over sutures (N)", {}, {}, 0x1f4e9c};
-    render::PlotSeries stress{
-      "peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) + " mm of the wound (kPa)",
-      {},
-      {},
-      0xc0392b};
+    render::PlotSeries stress{"peak skin von Mises within " + std::to_string(std::lround(kWoundStressRadius)) +
+                                " mm of the wound (kPa)",
+                              {},
+                              {},
+                              0xc0392b};
     for (const incision::UnderminingStudyRow& row : study.rows)
     {
       table << row.width << "," << row.releasedBoneNodes << "," << row.closureForce << "," << row.largestSutureForce
@@ -632,8 +631,7 @@ private:
   seg::CylindricalPoint peakAt_;
 };
 
-int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out,
-            std::ostream& err)
+int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
   return cli::runCommand<PlanArgs>("plan", kPlanUsage, argv, out, err, parse, [&](PlanArgs& args) {
     try
@@ -654,8 +652,8 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
 
 std::vector<ModuleCommand> planCommands()
 {
-  return {{"plan", "place a procedure on the skin of a CT and predict the result (measurements, VTP, VTU)",
-           kPlanUsage, runPlan}};
+  return {{"plan", "place a procedure on the skin of a CT and predict the result (measurements, VTP, VTU)", kPlanUsage,
+           runPlan}};
 }
 
 } // namespace caps

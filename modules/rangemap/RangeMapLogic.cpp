@@ -29,22 +29,19 @@ seg::ProgressCallback part(const TaskProgress& progress, double from, double to)
 {
   if (!progress)
     return {};
-  return [&progress, from, to](double f, const std::string& step) {
-    return progress(from + (to - from) * f, step);
-  };
+  return [&progress, from, to](double f, const std::string& step) { return progress(from + (to - from) * f, step); };
 }
 
 } // namespace
 
-RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
-                                      const Parameters& parameters, const TaskProgress& progress)
+RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels, const Parameters& parameters,
+                                      const TaskProgress& progress)
 {
   if (!ct || !labels)
     throw std::invalid_argument("A CT and its skin/bone label map are needed for range maps.");
   if (parameters.nTheta < 4 || parameters.nZ < 2)
-    throw std::invalid_argument("The range map needs at least 4 x 2 samples (got " +
-                                std::to_string(parameters.nTheta) + " x " +
-                                std::to_string(parameters.nZ) + ").");
+    throw std::invalid_argument("The range map needs at least 4 x 2 samples (got " + std::to_string(parameters.nTheta) +
+                                " x " + std::to_string(parameters.nZ) + ").");
   report(progress, 0.0, "Head axis");
   const auto body = SegmentLogic::maskOf(labels, kSoftTissueLabel);
   const auto bone = SegmentLogic::maskOf(labels, kBoneLabel);
@@ -52,9 +49,9 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
   axisOptions.nTheta = parameters.nTheta;
   axisOptions.nZ = parameters.nZ;
   RangeMapOutput out;
-  out.axis = parameters.axis ? seg::axisThroughBody(body, parameters.axis->point,
-                                                    parameters.axis->direction, axisOptions)
-                             : seg::fitHeadAxis(body, axisOptions);
+  out.axis = parameters.axis
+               ? seg::axisThroughBody(body, parameters.axis->point, parameters.axis->direction, axisOptions)
+               : seg::fitHeadAxis(body, axisOptions);
 
   report(progress, 0.05, "Skin and bone range maps");
   seg::RangeMapBuildOptions build;
@@ -88,8 +85,7 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels,
   return out;
 }
 
-RangeMapLogic::Parameters RangeMapLogic::forLabelMap(Parameters parameters,
-                                                     const LabelMapNode& labels)
+RangeMapLogic::Parameters RangeMapLogic::forLabelMap(Parameters parameters, const LabelMapNode& labels)
 {
   if (const auto& made = labels.thresholds())
   {
@@ -129,8 +125,7 @@ RangeMapResult RangeMapLogic::addToScene(const VolumeNode& volume, const RangeMa
   result.skinId = add(output.skin, "skin", "skin range");
   result.boneId = add(output.bone, "bone", "bone range");
   result.thicknessId = add(output.thickness, "thickness", "thickness (radial)");
-  result.thicknessNormalId =
-    add(output.thicknessNormal, "thickness-normal", "thickness (along the skin normal)");
+  result.thicknessNormalId = add(output.thicknessNormal, "thickness-normal", "thickness (along the skin normal)");
   result.labelMapId = labelMapId;
 
   for (Node* node : s.nodesOfType(NodeType::Plan))
@@ -164,8 +159,7 @@ const RangeMapNode* newestOfRole(const Scene& scene, const std::string& role)
 
 } // namespace
 
-const RangeMapNode* RangeMapLogic::builtWith(const Scene& scene, const RangeMapNode& skin,
-                                             const std::string& role)
+const RangeMapNode* RangeMapLogic::builtWith(const Scene& scene, const RangeMapNode& skin, const std::string& role)
 {
   // A skin map without provenance (an older scene): the newest of the role.
   if (skin.skinMapId().empty())
@@ -196,8 +190,8 @@ SkinAndBoneMaps RangeMapLogic::mapsOf(const Scene& scene, const PlanNode& plan)
   return {own, builtWith(scene, *own, "bone")};
 }
 
-RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& parameters,
-                                  const TaskProgress& progress, RangeMapOutput* output)
+RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& parameters, const TaskProgress& progress,
+                                  RangeMapOutput* output)
 {
   SegmentLogic segment(scene());
   LabelMapNode* labels = segment.findLabelMap(volume);
@@ -232,9 +226,8 @@ Eigen::MatrixXf RangeMapLogic::toMatrix(const seg::RangeMap& map)
 seg::RangeMap RangeMapLogic::toRangeMap(const RangeMapNode& node)
 {
   const Eigen::MatrixXf& m = node.values();
-  const seg::CylindricalFrame frame(node.axisOrigin(), node.axisDirection(), node.zMin(),
-                                    node.zMax(), static_cast<int>(m.rows()),
-                                    static_cast<int>(m.cols()));
+  const seg::CylindricalFrame frame(node.axisOrigin(), node.axisDirection(), node.zMin(), node.zMax(),
+                                    static_cast<int>(m.rows()), static_cast<int>(m.cols()));
   seg::RangeMap map(frame);
   for (int j = 0; j < map.nZ(); ++j)
     for (int i = 0; i < map.nTheta(); ++i)
@@ -250,17 +243,16 @@ std::string RangeMapLogic::describeAxis(const seg::HeadAxisFit& axis)
   const double tilt = std::acos(std::clamp(d.z(), -1.0, 1.0)) * 180.0 / std::numbers::pi;
   std::ostringstream out;
   out << std::fixed << std::setprecision(1);
-  out << "Axis: through (" << o.x() << ", " << o.y() << ", " << o.z() << ") mm LPS, direction ("
-      << std::setprecision(3) << d.x() << ", " << d.y() << ", " << d.z() << "), "
-      << std::setprecision(1) << tilt << " deg from patient superior\n";
+  out << "Axis: through (" << o.x() << ", " << o.y() << ", " << o.z() << ") mm LPS, direction (" << std::setprecision(3)
+      << d.x() << ", " << d.y() << ", " << d.z() << "), " << std::setprecision(1) << tilt
+      << " deg from patient superior\n";
   if (axis.userDefined)
     out << "      set by the user";
   else
-    out << "      fitted to " << axis.slicesUsed << " of " << axis.centroids.size()
-        << " slice centroids, RMS residual " << std::setprecision(2) << axis.rmsResidual << " mm";
-  out << "; z from " << std::setprecision(1) << f.zMin() << " to " << f.zMax() << " mm, "
-      << f.nTheta() << " x " << f.nZ() << " samples (" << std::setprecision(2)
-      << 360.0 / f.nTheta() << " deg x " << f.zStep() << " mm)\n";
+    out << "      fitted to " << axis.slicesUsed << " of " << axis.centroids.size() << " slice centroids, RMS residual "
+        << std::setprecision(2) << axis.rmsResidual << " mm";
+  out << "; z from " << std::setprecision(1) << f.zMin() << " to " << f.zMax() << " mm, " << f.nTheta() << " x "
+      << f.nZ() << " samples (" << std::setprecision(2) << 360.0 / f.nTheta() << " deg x " << f.zStep() << " mm)\n";
   return out.str();
 }
 

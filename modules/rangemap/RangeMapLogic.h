@@ -90,8 +90,8 @@ public:
   /// Fits the head axis to the body (label ≥ 1), or takes Parameters::axis, and builds the maps from the
   /// CT and the label map (1 soft tissue, 2 bone). Touches no scene.
   /// @throws std::invalid_argument (no body, other grids, ...), seg::Cancelled.
-  static RangeMapOutput compute(vtkImageData* ct, vtkImageData* labels,
-                                const Parameters& parameters, const TaskProgress& progress = {});
+  static RangeMapOutput compute(vtkImageData* ct, vtkImageData* labels, const Parameters& parameters,
+                                const TaskProgress& progress = {});
 
   /// @a parameters with the thresholds @a labels was segmented with, when it
   /// records them: the sub-voxel crossings are searched at the HU where the
@@ -103,8 +103,7 @@ public:
   /// removes the maps an earlier run made for the same volume (those
   /// recording it as their source). Plans drawn on a
   /// removed skin map move to the new one (their cut paths are on the chart).
-  RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output,
-                            const NodeId& labelMapId = {});
+  RangeMapResult addToScene(const VolumeNode& volume, const RangeMapOutput& output, const NodeId& labelMapId = {});
 
   /// @name Which maps go together
   /// The one rule every module uses to pair maps: a bone map goes with the
@@ -118,14 +117,13 @@ public:
   /// that is gone) and the bone map built with it.
   static SkinAndBoneMaps mapsOf(const Scene& scene, const PlanNode& plan);
   /// The map of @a role ("bone", "thickness", ...) built with @a skin, or null.
-  static const RangeMapNode* builtWith(const Scene& scene, const RangeMapNode& skin,
-                                       const std::string& role);
+  static const RangeMapNode* builtWith(const Scene& scene, const RangeMapNode& skin, const std::string& role);
   ///@}
 
   /// The whole pipeline on the scene (segmenting first when the volume has no
   /// label map), at the label map's thresholds (forLabelMap). @a output, when given, receives what compute() found.
-  RangeMapResult run(const VolumeNode& volume, const Parameters& parameters,
-                     const TaskProgress& progress = {}, RangeMapOutput* output = nullptr);
+  RangeMapResult run(const VolumeNode& volume, const Parameters& parameters, const TaskProgress& progress = {},
+                     RangeMapOutput* output = nullptr);
 
   /// @name Conversions between the library's maps and the scene's nodes
   ///@{

@@ -66,8 +66,8 @@ QString statistics(const RangeMapOutput& output)
       .arg(s.mean, 0, 'f', 1)
       .arg(s.p95, 0, 'f', 1);
   };
-  return QString::fromStdString(RangeMapLogic::describeAxis(output.axis)) +
-         line("Radial:", output.radialStatistics) + line("Normal:", output.normalStatistics);
+  return QString::fromStdString(RangeMapLogic::describeAxis(output.axis)) + line("Radial:", output.radialStatistics) +
+         line("Normal:", output.normalStatistics);
 }
 
 QString millimetres(double v)
@@ -113,7 +113,6 @@ void RangeMapPanel::addBuildControls(QVBoxLayout* layout)
   status_->setWordWrap(true);
   status_->setFont(QFontDatabase::systemFont(QFontDatabase::FixedFont));
   layout->addWidget(status_);
-
 }
 
 void RangeMapPanel::addThicknessReview(QVBoxLayout* layout)
@@ -146,7 +145,6 @@ void RangeMapPanel::addThicknessReview(QVBoxLayout* layout)
   histogram_->setObjectName("rangemap.histogram");
   reviewLayout->addWidget(histogram_);
   layout->addWidget(review);
-
 }
 
 /// The landmark table and its buttons.
@@ -166,8 +164,7 @@ void RangeMapPanel::addLandmarks(QVBoxLayout* layout)
   marksLayout->addLayout(nameRow);
   landmarks_ = new QTableWidget(0, 5, marks);
   landmarks_->setObjectName("rangemap.landmarks");
-  landmarks_->setHorizontalHeaderLabels(
-    {tr("Name"), tr("θ (°)"), tr("z (mm)"), tr("Radial (mm)"), tr("Normal (mm)")});
+  landmarks_->setHorizontalHeaderLabels({tr("Name"), tr("θ (°)"), tr("z (mm)"), tr("Radial (mm)"), tr("Normal (mm)")});
   landmarks_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   landmarks_->horizontalHeader()->setStretchLastSection(true);
   landmarks_->verticalHeader()->hide();
@@ -260,8 +257,8 @@ void RangeMapPanel::reloadMaps()
 {
   review_ = ThicknessReview::fromScene(logic_.scene());
   const bool ready = review_.has_value();
-  for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, locate_, remove_landmark_,
-                                                    export_landmarks_})
+  for (QWidget* w :
+       std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, locate_, remove_landmark_, export_landmarks_})
     w->setEnabled(ready);
   if (!ready)
   {
@@ -327,14 +324,18 @@ void RangeMapPanel::showMap()
     map_view_->setMap(review_->thickness(), render::ColourMap::Thickness, 0.0, thickness_top_,
                       tr("soft-tissue thickness, radial (mm)"));
     break;
-  case kSkinRadius: {
+  case kSkinRadius:
+  {
     const auto [lo, hi] = rangeOf(review_->skin());
-    map_view_->setMap(review_->skin(), render::ColourMap::Viridis, lo, hi, tr("skin: distance from the head axis (mm)"));
+    map_view_->setMap(review_->skin(), render::ColourMap::Viridis, lo, hi,
+                      tr("skin: distance from the head axis (mm)"));
     break;
   }
-  case kBoneRadius: {
+  case kBoneRadius:
+  {
     const auto [lo, hi] = rangeOf(review_->bone());
-    map_view_->setMap(review_->bone(), render::ColourMap::Viridis, lo, hi, tr("bone: distance from the head axis (mm)"));
+    map_view_->setMap(review_->bone(), render::ColourMap::Viridis, lo, hi,
+                      tr("bone: distance from the head axis (mm)"));
     break;
   }
   }
@@ -444,16 +445,16 @@ void RangeMapPanel::exportLandmarks()
     host_.showError("Export landmarks", "There are no landmarks yet: add some with 'Add on the face'.");
     return;
   }
-  const QString file = QFileDialog::getSaveFileName(host_.window(), tr("Export the landmarks"), "landmarks.csv",
-                                                    tr("CSV (*.csv)"));
+  const QString file =
+    QFileDialog::getSaveFileName(host_.window(), tr("Export the landmarks"), "landmarks.csv", tr("CSV (*.csv)"));
   if (file.isEmpty())
     return;
   std::ofstream out(file.toStdString(), std::ios::binary);
   out << review_->landmarksCsv(node->landmarks());
   out.close();
   if (!out)
-    host_.showError("Export landmarks", "Could not write " + file.toStdString() +
-                                          ": check the folder exists and you may write there.");
+    host_.showError("Export landmarks",
+                    "Could not write " + file.toStdString() + ": check the folder exists and you may write there.");
   else
     host_.showStatus("Landmarks written to " + file.toStdString());
 }
@@ -498,41 +499,39 @@ void RangeMapPanel::run()
     parameters = RangeMapLogic::forLabelMap(parameters, *existing);
   vtkSmartPointer<vtkImageData> labels = existing ? existing->image() : nullptr;
   const std::string volumeId = volume->id();
-  host_.runTask("Range maps of " + volume->name(), [this, ct, labels, volumeId,
-                                                    parameters](const TaskProgress& progress) {
-    auto segmentation = std::make_shared<SegmentationOutput>();
-    vtkSmartPointer<vtkImageData> labelImage = labels;
-    TaskProgress rest = progress;
-    if (!labelImage)
-    {
-      SegmentLogic::Parameters p;
-      p.skinThresholdHu = parameters.skinThresholdHu;
-      p.boneThresholdHu = parameters.boneThresholdHu;
-      *segmentation = SegmentLogic::compute(ct, p, [&progress](double f, const std::string& s) {
-        return progress(0.5 * f, s);
-      });
-      labelImage = segmentation->labels;
-      rest = [&progress](double f, const std::string& s) { return progress(0.5 + 0.5 * f, s); };
-    }
-    auto output =
-      std::make_shared<RangeMapOutput>(RangeMapLogic::compute(ct, labelImage, parameters, rest));
-    const bool segmented = !labels;
-    return std::function<void()>([this, volumeId, segmentation, output, segmented]() {
-      auto* target = logic_.scene().nodeAs<VolumeNode>(volumeId);
-      if (!target)
+  host_.runTask(
+    "Range maps of " + volume->name(), [this, ct, labels, volumeId, parameters](const TaskProgress& progress) {
+      auto segmentation = std::make_shared<SegmentationOutput>();
+      vtkSmartPointer<vtkImageData> labelImage = labels;
+      TaskProgress rest = progress;
+      if (!labelImage)
       {
-        host_.showWarning("Range maps", "The volume was closed while its maps were being built.");
-        return;
+        SegmentLogic::Parameters p;
+        p.skinThresholdHu = parameters.skinThresholdHu;
+        p.boneThresholdHu = parameters.boneThresholdHu;
+        *segmentation =
+          SegmentLogic::compute(ct, p, [&progress](double f, const std::string& s) { return progress(0.5 * f, s); });
+        labelImage = segmentation->labels;
+        rest = [&progress](double f, const std::string& s) { return progress(0.5 + 0.5 * f, s); };
       }
-      SegmentLogic segment(logic_.scene());
-      if (segmented)
-        segment.addToScene(*target, std::move(*segmentation));
-      const LabelMapNode* madeFrom = segment.findLabelMap(*target);
-      logic_.addToScene(*target, *output, madeFrom ? madeFrom->id() : NodeId{});
-      status_->setText(statistics(*output));
-      host_.showStatus("Range maps of '" + target->name() + "' built");
+      auto output = std::make_shared<RangeMapOutput>(RangeMapLogic::compute(ct, labelImage, parameters, rest));
+      const bool segmented = !labels;
+      return std::function<void()>([this, volumeId, segmentation, output, segmented]() {
+        auto* target = logic_.scene().nodeAs<VolumeNode>(volumeId);
+        if (!target)
+        {
+          host_.showWarning("Range maps", "The volume was closed while its maps were being built.");
+          return;
+        }
+        SegmentLogic segment(logic_.scene());
+        if (segmented)
+          segment.addToScene(*target, std::move(*segmentation));
+        const LabelMapNode* madeFrom = segment.findLabelMap(*target);
+        logic_.addToScene(*target, *output, madeFrom ? madeFrom->id() : NodeId{});
+        status_->setText(statistics(*output));
+        host_.showStatus("Range maps of '" + target->name() + "' built");
+      });
     });
-  });
 }
 
 } // namespace caps

@@ -72,7 +72,8 @@ public:
     property->SetVerticalJustificationToBottom();
     vtkNew<vtkImageData> image;
     int dims[2] = {0, 0};
-    if (!vtkFreeTypeTools::GetInstance()->RenderString(property.GetPointer(), vtkStdString(s), 72, image.GetPointer(), dims))
+    if (!vtkFreeTypeTools::GetInstance()->RenderString(property.GetPointer(), vtkStdString(s), 72, image.GetPointer(),
+                                                       dims))
       return; // no text rather than no picture
     int extent[6];
     image->GetExtent(extent);
@@ -129,9 +130,9 @@ std::string formatTick(double value, double step)
 void viridis(double t, unsigned char rgb[3])
 {
   // Viridis (van der Walt and Smith, matplotlib 2015) at t = 0, 0.1, ..., 1.
-  static const unsigned char table[11][3] = {
-    {68, 1, 84},    {72, 36, 117},  {65, 68, 135},  {53, 95, 141},  {42, 120, 142}, {33, 145, 140},
-    {34, 168, 132}, {68, 191, 112}, {122, 209, 81}, {189, 223, 38}, {253, 231, 37}};
+  static const unsigned char table[11][3] = {{68, 1, 84},    {72, 36, 117},  {65, 68, 135},  {53, 95, 141},
+                                             {42, 120, 142}, {33, 145, 140}, {34, 168, 132}, {68, 191, 112},
+                                             {122, 209, 81}, {189, 223, 38}, {253, 231, 37}};
   const double x = std::clamp(t, 0.0, 1.0) * 10.0;
   const int k = std::min(9, static_cast<int>(x));
   const double f = x - k;
@@ -139,8 +140,8 @@ void viridis(double t, unsigned char rgb[3])
     rgb[a] = static_cast<unsigned char>(std::lround(table[k][a] * (1 - f) + table[k + 1][a] * f));
 }
 
-vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& values, double zMin,
-                                                    double zMax, const PreviewStyle& style)
+vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax,
+                                                    const PreviewStyle& style)
 {
   const int nTheta = static_cast<int>(values.rows());
   const int nZ = static_cast<int>(values.cols());
@@ -212,8 +213,7 @@ vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& value
   const double step = niceStep(style.high - style.low, 6);
   for (double v = std::ceil(style.low / step - 1e-9) * step; v <= style.high + 1e-9; v += step)
   {
-    const int y = bottom + static_cast<int>(
-                             std::lround((v - style.low) / (style.high - style.low) * (barH - 1)));
+    const int y = bottom + static_cast<int>(std::lround((v - style.low) / (style.high - style.low) * (barH - 1)));
     canvas.fill(barX + barW, y, barX + barW + px(5), y + std::max(1, px(1)), black);
     canvas.text(formatTick(v, step), barX + barW + px(8), y, px(13), 0, 1);
   }
@@ -225,8 +225,8 @@ vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& value
   return canvas.toImage();
 }
 
-void writeRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax,
-                          const PreviewStyle& style, const std::filesystem::path& file)
+void writeRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax, const PreviewStyle& style,
+                          const std::filesystem::path& file)
 {
   auto image = renderRangeMapPreview(values, zMin, zMax, style);
   vtkNew<vtkPNGWriter> writer;

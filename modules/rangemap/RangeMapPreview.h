@@ -15,11 +15,11 @@ namespace caps {
 /// What a preview shows and how.
 struct PreviewStyle
 {
-  std::string title;        ///< above the map: "Soft-tissue thickness, radial"
-  std::string unit = "mm";  ///< above the colour bar
-  double low = 0.0;         ///< value at the bottom of the colour bar
-  double high = 30.0;       ///< value at the top; values beyond are clamped
-  int pixelsPerSample = 2;  ///< the map's samples as squares of this many pixels
+  std::string title;       ///< above the map: "Soft-tissue thickness, radial"
+  std::string unit = "mm"; ///< above the colour bar
+  double low = 0.0;        ///< value at the bottom of the colour bar
+  double high = 30.0;      ///< value at the top; values beyond are clamped
+  int pixelsPerSample = 2; ///< the map's samples as squares of this many pixels
   /// Size of the text, margins and ticks against the defaults (13-18 px
   /// text): a map drawn large for print scales them with it.
   double textScale = 1.0;
@@ -41,13 +41,13 @@ PreviewStyle rangeStyle(const Eigen::MatrixXf& values, std::string title);
 /// below. Text is rendered with VTK's FreeType tools into the image: no
 /// OpenGL context, no X server.
 /// @param values rows θ (θ_i = -π + 2π i / rows), columns z from zMin to zMax.
-vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& values, double zMin,
-                                                    double zMax, const PreviewStyle& style);
+vtkSmartPointer<vtkImageData> renderRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax,
+                                                    const PreviewStyle& style);
 
 /// renderRangeMapPreview() written as PNG.
 /// @throws std::runtime_error naming the file when it cannot be written.
-void writeRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax,
-                          const PreviewStyle& style, const std::filesystem::path& file);
+void writeRangeMapPreview(const Eigen::MatrixXf& values, double zMin, double zMax, const PreviewStyle& style,
+                          const std::filesystem::path& file);
 
 /// Viridis at t in [0, 1] (clamped), as 8-bit RGB.
 void viridis(double t, unsigned char rgb[3]);

@@ -80,8 +80,7 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, ScanArgs&
       if (a == "--size")
       {
         char tail = 0;
-        if (!hasValue ||
-            std::sscanf(args[++i].c_str(), "%dx%d%c", &parsed.nTheta, &parsed.nZ, &tail) != 2 ||
+        if (!hasValue || std::sscanf(args[++i].c_str(), "%dx%d%c", &parsed.nTheta, &parsed.nZ, &tail) != 2 ||
             parsed.nTheta < 8 || parsed.nZ < 4 || parsed.nTheta > 8192 || parsed.nZ > 8192)
           return "--size needs NTHETAxNZ, e.g. 512x256 (at least 8x4, at most 8192x8192)";
       }
@@ -209,8 +208,7 @@ seg::CylindricalFrame defaultFrame(vtkPolyData* mesh, const ScanArgs& args)
 }
 
 void printCalibration(std::ostream& out, const std::vector<seg::LandmarkDistance>& distances,
-                      const std::vector<seg::CalibrationMeasurement>& rows,
-                      const seg::CalibrationResult& c)
+                      const std::vector<seg::CalibrationMeasurement>& rows, const seg::CalibrationResult& c)
 {
   out << "Calibration by measured distances (thesis §4.3, Tables 4.2-4.3; mm):\n"
       << "  distance                          class       model  measured   ratio  residual\n";
@@ -221,15 +219,14 @@ void printCalibration(std::ostream& out, const std::vector<seg::LandmarkDistance
     name.resize(std::max<std::size_t>(name.size(), 32), ' ');
     out << "  " << name << "  "
         << (rows[k].direction == seg::CalibrationDirection::Horizontal ? "horizontal" : "vertical  ")
-        << std::setprecision(1) << std::setw(8) << rows[k].model.length() << std::setw(10)
-        << rows[k].measuredMm << std::setprecision(3) << std::setw(8) << rows[k].ratio()
-        << std::setprecision(2) << std::setw(10) << c.residualsMm[k] << "\n";
+        << std::setprecision(1) << std::setw(8) << rows[k].model.length() << std::setw(10) << rows[k].measuredMm
+        << std::setprecision(3) << std::setw(8) << rows[k].ratio() << std::setprecision(2) << std::setw(10)
+        << c.residualsMm[k] << "\n";
   }
-  out << std::setprecision(4) << "Scale factors (least squares): horizontal " << c.horizontalScale
-      << ", vertical " << c.verticalScale << "; RMS residual " << std::setprecision(2)
-      << c.rmsResidualMm << " mm\n"
-      << std::setprecision(4) << "  (the thesis's class means: horizontal "
-      << c.thesisHorizontalScale << ", vertical " << c.thesisVerticalScale << ")\n";
+  out << std::setprecision(4) << "Scale factors (least squares): horizontal " << c.horizontalScale << ", vertical "
+      << c.verticalScale << "; RMS residual " << std::setprecision(2) << c.rmsResidualMm << " mm\n"
+      << std::setprecision(4) << "  (the thesis's class means: horizontal " << c.thesisHorizontalScale << ", vertical "
+      << c.thesisVerticalScale << ")\n";
   out.unsetf(std::ios::floatfield);
 }
 
@@ -247,17 +244,14 @@ int runScan(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& ou
       frame, mesh, args.vertices ? seg::SurfaceScanSampling::Vertices : seg::SurfaceScanSampling::RayCast);
     const Eigen::Vector3d& o = frame.origin();
     const Eigen::Vector3d d = frame.direction().array() + 0.0;
-    out << "Scan " << args.mesh.filename().string() << ": " << mesh->GetNumberOfPoints()
-        << " vertices, " << mesh->GetNumberOfPolys() << " triangles"
-        << (scan.hasColours ? ", coloured" : ", no colours") << "\n"
-        << std::fixed << std::setprecision(1) << "Axis through (" << o.x() << ", " << o.y()
-        << ", " << o.z() << ") along (" << std::setprecision(3) << d.x() << ", " << d.y() << ", "
-        << d.z() << "); z from " << std::setprecision(1) << frame.zMin() << " to " << frame.zMax()
-        << " mm; " << frame.nTheta() << " x " << frame.nZ() << " samples, "
-        << (args.vertices ? "outermost vertex per bucket" : "ray cast") << "\n";
+    out << "Scan " << args.mesh.filename().string() << ": " << mesh->GetNumberOfPoints() << " vertices, "
+        << mesh->GetNumberOfPolys() << " triangles" << (scan.hasColours ? ", coloured" : ", no colours") << "\n"
+        << std::fixed << std::setprecision(1) << "Axis through (" << o.x() << ", " << o.y() << ", " << o.z()
+        << ") along (" << std::setprecision(3) << d.x() << ", " << d.y() << ", " << d.z() << "); z from "
+        << std::setprecision(1) << frame.zMin() << " to " << frame.zMax() << " mm; " << frame.nTheta() << " x "
+        << frame.nZ() << " samples, " << (args.vertices ? "outermost vertex per bucket" : "ray cast") << "\n";
     out.unsetf(std::ios::floatfield);
-    out << "Surface found at " << scan.range.validCount() << " of " << scan.range.values().size()
-        << " samples\n";
+    out << "Surface found at " << scan.range.validCount() << " of " << scan.range.values().size() << " samples\n";
 
     if (!distances.empty())
     {
@@ -268,13 +262,12 @@ int runScan(ModuleLogic&, const std::vector<std::string>& argv, std::ostream& ou
       printCalibration(out, distances, rows, c);
       scan.range = seg::applyCalibration(scan.range, c);
       scan.colour = seg::applyCalibration(scan.colour, c);
-      out << "The maps below are calibrated: r times " << c.horizontalScale << ", z times "
-          << c.verticalScale << "\n";
+      out << "The maps below are calibrated: r times " << c.horizontalScale << ", z times " << c.verticalScale << "\n";
     }
 
     const auto encoding = seg::writeRangeMapPng(scan.range, (args.out / "range.png").string());
-    out << "wrote " << (args.out / "range.png").string() << " (16-bit, " << encoding.stepMm
-        << " mm per step from " << encoding.offsetMm << " mm)\n";
+    out << "wrote " << (args.out / "range.png").string() << " (16-bit, " << encoding.stepMm << " mm per step from "
+        << encoding.offsetMm << " mm)\n";
     seg::writeColourMapPng(scan.colour, (args.out / "colour.png").string());
     out << "wrote " << (args.out / "colour.png").string() << "\n";
     const seg::CylindricalFrame& f = scan.range.frame();
@@ -294,8 +287,7 @@ bool parseAxis(const std::string& text, Eigen::Vector3d& point, Eigen::Vector3d&
 {
   double v[6];
   char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4],
-                  &v[5], &tail) != 6)
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &tail) != 6)
     return false;
   point = Eigen::Vector3d(v[0], v[1], v[2]);
   direction = Eigen::Vector3d(v[3], v[4], v[5]);
@@ -304,8 +296,8 @@ bool parseAxis(const std::string& text, Eigen::Vector3d& point, Eigen::Vector3d&
 
 ModuleCommand scanCommand()
 {
-  return {"scan", "a coloured surface scan (PLY/OBJ) to range and colour map pictures, calibrated",
-          kScanUsage, runScan};
+  return {"scan", "a coloured surface scan (PLY/OBJ) to range and colour map pictures, calibrated", kScanUsage,
+          runScan};
 }
 
 } // namespace caps

@@ -54,8 +54,7 @@ ThicknessReview::ThicknessReview(seg::RangeMap skin, seg::RangeMap bone, seg::Ra
                                  seg::RangeMap thicknessNormal)
   : skin_(std::move(skin)), bone_(std::move(bone)), thickness_(std::move(thickness)),
     thickness_normal_(std::move(thicknessNormal))
-{
-}
+{}
 
 ThicknessProbe ThicknessReview::probe(double theta, double z) const
 {

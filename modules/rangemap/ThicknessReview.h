@@ -28,8 +28,8 @@ struct ThicknessProbe
   double theta = 0.0; ///< radians, [-π, π)
   double z = 0.0;     ///< mm along the head axis
   double skinRadius = 0.0, boneRadius = 0.0;
-  double thickness = 0.0;       ///< radial: skin r − bone r
-  double thicknessNormal = 0.0; ///< along the inward skin normal to the bone
+  double thickness = 0.0;            ///< radial: skin r − bone r
+  double thicknessNormal = 0.0;      ///< along the inward skin normal to the bone
   std::array<double, 3> skinPoint{}; ///< the skin there (patient LPS); NaN without skin
 };
 

@@ -27,7 +27,6 @@ using namespace caps::render;
 namespace caps::report {
 namespace {
 
-
 const PlanNode& findPlan(const Scene& scene, const std::string& name)
 {
   const std::vector<Node*> plans = scene.nodesOfType(NodeType::Plan);
@@ -73,8 +72,8 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   vtkPolyData* before = surfaceNamed(scene, result.planName + " skin before");
   vtkPolyData* after = surfaceNamed(scene, result.planName + " skin after");
   if (!before || !after)
-    throw std::invalid_argument("the scene does not hold the display surfaces of plan \"" + result.planName +
-                                "\" (\"" + result.planName + " skin before\" and \"" + result.planName +
+    throw std::invalid_argument("the scene does not hold the display surfaces of plan \"" + result.planName + "\" (\"" +
+                                result.planName + " skin before\" and \"" + result.planName +
                                 " skin after\"): predict it (caps plan, or Simulate in the workstation) first");
   if (before->GetNumberOfPoints() != after->GetNumberOfPoints())
     throw std::invalid_argument("plan \"" + result.planName + "\": the skin before has " +
@@ -101,9 +100,9 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   result.prePost.folder = fs::absolute(outDir) / "pre-post";
   result.prePost.width = width;
   result.prePost.height = height;
-  result.prePost.camera = fitCamera(std::vector<vtkPolyData*>{before, after},
-                                    frame.radialDirection(plan.centre().theta), frame.direction(),
-                                    base.sceneAspect(), 20.0, 1.05);
+  result.prePost.camera =
+    fitCamera(std::vector<vtkPolyData*>{before, after}, frame.radialDirection(plan.centre().theta), frame.direction(),
+              base.sceneAspect(), 20.0, 1.05);
   renderMorphFrames(before, after, base, result.prePost, options.prePostFrames, false, [&](const char* step) {
     seg::reportProgress(progress, 0.95 * done / total, step);
     ++done;

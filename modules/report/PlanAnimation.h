@@ -37,8 +37,7 @@ namespace caps::report {
 /// when @a progress asks to stop, std::runtime_error when a file cannot be
 /// written or ffmpeg fails.
 render::AnimationResult writePlanAnimation(Scene& scene, const std::string& planName,
-                                           const std::filesystem::path& outDir,
-                                           const render::AnimationOptions& options,
+                                           const std::filesystem::path& outDir, const render::AnimationOptions& options,
                                            const TaskProgress& progress = {});
 
 } // namespace caps::report

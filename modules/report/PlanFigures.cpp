@@ -29,9 +29,11 @@ using namespace caps::render;
 namespace caps::report {
 namespace {
 
-
 /// Pixels for a figure printed widthMm wide at dpi.
-int pixels(double widthMm, double dpi) { return int(std::lround(widthMm / 25.4 * dpi)); }
+int pixels(double widthMm, double dpi)
+{
+  return int(std::lround(widthMm / 25.4 * dpi));
+}
 
 /// A nice upper end for a colour bar: 1, 2 or 5 × 10^k at or above value.
 double niceCeiling(double value)
@@ -103,10 +105,8 @@ LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinC
   return line;
 }
 
-PlanFigures::PlanFigures(Scene& scene, const VolumeNode& volume, double dpi)
-  : scene_(scene), volume_(volume), dpi_(dpi)
-{
-}
+PlanFigures::PlanFigures(Scene& scene, const VolumeNode& volume, double dpi) : scene_(scene), volume_(volume), dpi_(dpi)
+{}
 
 void PlanFigures::addThicknessViews(ReportDocument& doc, const PlanFacts& plan) const
 {
@@ -124,17 +124,16 @@ void PlanFigures::addThicknessViews(ReportDocument& doc, const PlanFacts& plan) 
   style.low = 0.0;
   style.high = 30.0;
   style.title = "Soft-tissue thickness, radial (r_skin - r_bone)";
-  style.pixelsPerSample = std::max(
-    1, int(std::ceil(widthMm / 25.4 * dpi_ / std::max<Eigen::Index>(1, thickness->values().rows()) * 0.8)));
+  style.pixelsPerSample =
+    std::max(1, int(std::ceil(widthMm / 25.4 * dpi_ / std::max<Eigen::Index>(1, thickness->values().rows()) * 0.8)));
   {
     // Its 13 px labels about 2.5 mm (7 pt) high on paper: the picture is
     // mapW + 180 k pixels wide for text scale k and printed widthMm wide.
     const double mapWidth = double(thickness->values().rows() * style.pixelsPerSample);
     style.textScale = std::max(1.0, 2.5 * mapWidth / (widthMm * 13.0 - 2.5 * 180.0));
   }
-  const QImage unwrapped = toQImage(renderRangeMapPreview(thickness->values(), thickness->zMin(),
-                                                          thickness->zMax(), style)
-                                      .GetPointer());
+  const QImage unwrapped =
+    toQImage(renderRangeMapPreview(thickness->values(), thickness->zMin(), thickness->zMax(), style).GetPointer());
   doc.figures({unwrapped}, widthMm,
               {"The thickness map unwrapped around the head axis: the face in the middle, z up (mm); thickness in "
                "mm (0 to 30; thicker regions saturate). Under the incision: " +
@@ -175,7 +174,6 @@ void PlanFigures::addStoryboard(ReportDocument& doc) const
 
 } // namespace caps::report
 
-
 namespace caps::report {
 
 const RangeMapNode* PlanFigures::mapOfPlan(const PlanFacts& plan, const std::string& role) const
@@ -208,12 +206,18 @@ std::string planViewName(PlanView view, bool left)
 {
   switch (view)
   {
-  case PlanView::Front: return "front";
-  case PlanView::Oblique: return left ? "oblique, patient's left" : "oblique, patient's right";
-  case PlanView::Profile: return left ? "profile, patient's left" : "profile, patient's right";
-  case PlanView::Before: return "before the operation, the incision drawn";
-  case PlanView::After: return "predicted after closure (same camera)";
-  case PlanView::Stress: return "von Mises stress after closure (kPa)";
+  case PlanView::Front:
+    return "front";
+  case PlanView::Oblique:
+    return left ? "oblique, patient's left" : "oblique, patient's right";
+  case PlanView::Profile:
+    return left ? "profile, patient's left" : "profile, patient's right";
+  case PlanView::Before:
+    return "before the operation, the incision drawn";
+  case PlanView::After:
+    return "predicted after closure (same camera)";
+  case PlanView::Stress:
+    return "von Mises stress after closure (kPa)";
   }
   return "";
 }

@@ -45,7 +45,8 @@ vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name);
 /// The cut path of @a plan lifted onto the skin every 0.5 mm (§3.3.1: a
 /// solid line), its cut points labelled p0, p1, ... when @a labelled (on a
 /// long cut the ends and a few between, so labels do not overlap).
-render::LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled = true);
+render::LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart,
+                               bool labelled = true);
 
 /// A caption for a view; @a left: the plan is on the patient's left.
 std::string planViewName(PlanView view, bool left);
@@ -60,7 +61,7 @@ public:
   /// and its wound stress for Stress), @a printWidthMm wide on paper at this
   /// object's resolution; std::nullopt when the scene lacks the surfaces.
   std::optional<render::Figure> planFigure(const PlanFacts& plan, PlanView view, double printWidthMm,
-                                   double heightPerWidth) const;
+                                           double heightPerWidth) const;
 
   /// Front, oblique and profile views of the face with the cut drawn and its
   /// points numbered.

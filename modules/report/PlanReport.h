@@ -73,11 +73,11 @@ struct PlanFacts
   incision::PlanPrediction prediction;
   incision::WoundStress woundStress;
   double woundStressTheta = 0.0, woundStressZ = 0.0; ///< where the peak is (radians, mm)
-  double excisedVolumeToBone = 0.0; ///< by the range maps (mm³), the second method
+  double excisedVolumeToBone = 0.0;                  ///< by the range maps (mm³), the second method
   /// Soft-tissue thickness under the cut path (mm), sampled every 0.5 mm
   /// along it on the thickness map; NaN when the scene has none.
   double thicknessMin = 0.0, thicknessMean = 0.0, thicknessMax = 0.0;
-  std::string ctSha256; ///< of the CT the plan was made on (its recipe)
+  std::string ctSha256;  ///< of the CT the plan was made on (its recipe)
   std::string skinMapId; ///< the RangeMap node the plan was drawn on (RangeMapLogic::mapsOf)
 };
 

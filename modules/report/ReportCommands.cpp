@@ -35,30 +35,29 @@ void loadScene(const fs::path& path, Scene& scene)
   loadSceneBundle(scene, path);
 }
 
-const char* kReportUsage =
-  "usage: caps report SCENE.caps --pdf OUT.pdf [--deidentify] [--paper a4|letter]\n"
-  "                   [--surgeon NAME] [--date YYYY-MM-DD] [--plan NAME ...]\n"
-  "\n"
-  "Writes the plan report of a saved scene as a PDF (thesis §2.1, §3.3.3): the\n"
-  "patient and study, and for each plan the procedure and its parameters, the\n"
-  "incision on the face (front, oblique, profile), the measurements on the skin,\n"
-  "the predicted result before and after with the stress map, the closure force,\n"
-  "the tissue thickness under the incision, the storyboard of snapshots and the\n"
-  "model's assumptions. Each plan is predicted again from its recorded operations,\n"
-  "so the numbers are those caps plan printed.\n"
-  "\n"
-  "  --pdf OUT.pdf      the report to write (replaced only once the new one is complete)\n"
-  "  --deidentify       leaves out the patient's name, ID, birth date and the folders the\n"
-  "                     data came from, in the text and in the PDF's metadata\n"
-  "  --paper a4|letter  paper size (default a4)\n"
-  "  --surgeon NAME     the surgeon's name in the header (default: a line to sign)\n"
-  "  --date YYYY-MM-DD  the planning date (default today)\n"
-  "  --plan NAME        only this plan (repeatable); default every plan of the scene\n"
-  "\n"
-  "Figures are rendered offscreen; without a display, CAPS starts its own X server\n"
-  "(Xvfb, Debian package xvfb).\n"
-  "Exit status: 0 when written, 1 when the scene cannot be reported (the message\n"
-  "says why), 2 on wrong usage.\n";
+const char* kReportUsage = "usage: caps report SCENE.caps --pdf OUT.pdf [--deidentify] [--paper a4|letter]\n"
+                           "                   [--surgeon NAME] [--date YYYY-MM-DD] [--plan NAME ...]\n"
+                           "\n"
+                           "Writes the plan report of a saved scene as a PDF (thesis §2.1, §3.3.3): the\n"
+                           "patient and study, and for each plan the procedure and its parameters, the\n"
+                           "incision on the face (front, oblique, profile), the measurements on the skin,\n"
+                           "the predicted result before and after with the stress map, the closure force,\n"
+                           "the tissue thickness under the incision, the storyboard of snapshots and the\n"
+                           "model's assumptions. Each plan is predicted again from its recorded operations,\n"
+                           "so the numbers are those caps plan printed.\n"
+                           "\n"
+                           "  --pdf OUT.pdf      the report to write (replaced only once the new one is complete)\n"
+                           "  --deidentify       leaves out the patient's name, ID, birth date and the folders the\n"
+                           "                     data came from, in the text and in the PDF's metadata\n"
+                           "  --paper a4|letter  paper size (default a4)\n"
+                           "  --surgeon NAME     the surgeon's name in the header (default: a line to sign)\n"
+                           "  --date YYYY-MM-DD  the planning date (default today)\n"
+                           "  --plan NAME        only this plan (repeatable); default every plan of the scene\n"
+                           "\n"
+                           "Figures are rendered offscreen; without a display, CAPS starts its own X server\n"
+                           "(Xvfb, Debian package xvfb).\n"
+                           "Exit status: 0 when written, 1 when the scene cannot be reported (the message\n"
+                           "says why), 2 on wrong usage.\n";
 
 struct ReportArgs
 {
@@ -195,8 +194,7 @@ std::optional<int> positiveInt(const std::string& text)
       return value;
   }
   catch (const std::exception&)
-  {
-  }
+  {}
   return std::nullopt;
 }
 
@@ -246,8 +244,7 @@ std::optional<std::string> parseAnimate(const std::vector<std::string>& args, An
         fps = hasValue ? std::stod(args[++i]) : 0.0;
       }
       catch (const std::exception&)
-      {
-      }
+      {}
       if (!(fps > 0.0 && fps <= 240.0))
         return "--fps needs a frame rate from 0 to 240";
       parsed.options.framesPerSecond = fps;
@@ -302,19 +299,18 @@ int runAnimate(ModuleLogic&, const std::vector<std::string>& argv, std::ostream&
   });
 }
 
-const char* kSnapshotUsage =
-  "usage: caps snapshot SCENE.caps --plan NAME --view VIEW [--caption TEXT] [--size WxH]\n"
-  "\n"
-  "Adds a snapshot of a plan to the scene's storyboard (thesis §3.3.3), as the\n"
-  "workstation's snapshot button does, and saves the scene; the report prints the\n"
-  "snapshots in order with their captions.\n"
-  "\n"
-  "  --plan NAME       the plan (as the scene names it, e.g. \"Z-plasty 1\")\n"
-  "  --view VIEW       front, oblique or profile (the face, the incision drawn), before or\n"
-  "                    after (close-up, the same camera), stress (von Mises, colour bar)\n"
-  "  --caption TEXT    the caption (default: the plan and the view)\n"
-  "  --size WxH        pixels (default 1200x900)\n"
-  "Exit status: 0 when added, 1 when the scene cannot give that view, 2 on wrong usage.\n";
+const char* kSnapshotUsage = "usage: caps snapshot SCENE.caps --plan NAME --view VIEW [--caption TEXT] [--size WxH]\n"
+                             "\n"
+                             "Adds a snapshot of a plan to the scene's storyboard (thesis §3.3.3), as the\n"
+                             "workstation's snapshot button does, and saves the scene; the report prints the\n"
+                             "snapshots in order with their captions.\n"
+                             "\n"
+                             "  --plan NAME       the plan (as the scene names it, e.g. \"Z-plasty 1\")\n"
+                             "  --view VIEW       front, oblique or profile (the face, the incision drawn), before or\n"
+                             "                    after (close-up, the same camera), stress (von Mises, colour bar)\n"
+                             "  --caption TEXT    the caption (default: the plan and the view)\n"
+                             "  --size WxH        pixels (default 1200x900)\n"
+                             "Exit status: 0 when added, 1 when the scene cannot give that view, 2 on wrong usage.\n";
 
 int runSnapshot(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out, std::ostream& err)
 {

@@ -80,7 +80,10 @@ std::string breakBeforeHeading(std::string html, int index)
 }
 
 /// The token a figure's width is written as until the device's resolution is known.
-std::string widthToken(std::size_t figure) { return "@@W" + std::to_string(figure) + "@@"; }
+std::string widthToken(std::size_t figure)
+{
+  return "@@W" + std::to_string(figure) + "@@";
+}
 
 } // namespace
 
@@ -91,12 +94,23 @@ std::string escapeHtml(const std::string& text)
   for (char c : text)
     switch (c)
     {
-    case '&': out += "&amp;"; break;
-    case '<': out += "&lt;"; break;
-    case '>': out += "&gt;"; break;
-    case '"': out += "&quot;"; break;
-    case '\n': out += "<br/>"; break;
-    default: out += c;
+    case '&':
+      out += "&amp;";
+      break;
+    case '<':
+      out += "&lt;";
+      break;
+    case '>':
+      out += "&gt;";
+      break;
+    case '"':
+      out += "&quot;";
+      break;
+    case '\n':
+      out += "<br/>";
+      break;
+    default:
+      out += c;
     }
   return out;
 }
@@ -145,8 +159,8 @@ void ReportDocument::table(const std::vector<std::string>& header, const std::ve
   html_ += "</table>\n";
 }
 
-void ReportDocument::figures(const std::vector<QImage>& images, double widthMm, const std::vector<std::string>& captions,
-                             bool lettered)
+void ReportDocument::figures(const std::vector<QImage>& images, double widthMm,
+                             const std::vector<std::string>& captions, bool lettered)
 {
   // One paragraph of images: a line of the layout, which moves whole to the
   // next page when it does not fit (a table cell would be cut in two).
@@ -178,7 +192,10 @@ void ReportDocument::figures(const std::vector<QImage>& images, double widthMm, 
     html_ += "<p align=\"center\" class=\"caption\">" + caption + "</p>\n";
 }
 
-void ReportDocument::pageBreak() { pageBreakPending_ = !html_.empty(); }
+void ReportDocument::pageBreak()
+{
+  pageBreakPending_ = !html_.empty();
+}
 
 int ReportDocument::render(QPagedPaintDevice& device) const
 {
@@ -206,8 +223,7 @@ int ReportDocument::render(QPagedPaintDevice& device) const
   std::string html = html_;
   for (std::size_t i = 0; i < images_.size(); ++i)
   {
-    document.addResource(QTextDocument::ImageResource, QUrl(QString::fromStdString(images_[i].name)),
-                         images_[i].image);
+    document.addResource(QTextDocument::ImageResource, QUrl(QString::fromStdString(images_[i].name)), images_[i].image);
     const std::string token = widthToken(i);
     // Qt's rich text scales HTML image sizes from 96 dpi to the device's resolution.
     const std::string pixels = std::to_string(int(std::lround(images_[i].widthMm / kMmPerInch * 96.0)));
@@ -245,8 +261,7 @@ int ReportDocument::render(QPagedPaintDevice& device) const
     painter.setPen(QColor(40, 40, 40));
     const QRectF footerText(0, height - footerHeight + 2.0 * mm, width, footerHeight - 2.0 * mm);
     painter.drawText(footerText, Qt::AlignLeft | Qt::AlignTop, QString::fromStdString(footerNote_));
-    painter.drawText(footerText, Qt::AlignRight | Qt::AlignTop,
-                     QString("Page %1 of %2").arg(page + 1).arg(pages));
+    painter.drawText(footerText, Qt::AlignRight | Qt::AlignTop, QString("Page %1 of %2").arg(page + 1).arg(pages));
     // The page's slice of the laid-out body.
     painter.save();
     painter.translate(0, headerHeight - page * body.height());

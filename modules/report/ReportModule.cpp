@@ -52,9 +52,9 @@ report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool 
 
 void exportPdf(ModuleLogic& logic, ModuleHost& host, bool deidentify)
 {
-  const QString file = QFileDialog::getSaveFileName(host.window(), "Export the plan report",
-                                                    deidentify ? "plan-report-deidentified.pdf" : "plan-report.pdf",
-                                                    "PDF (*.pdf)");
+  const QString file =
+    QFileDialog::getSaveFileName(host.window(), "Export the plan report",
+                                 deidentify ? "plan-report-deidentified.pdf" : "plan-report.pdf", "PDF (*.pdf)");
   if (file.isEmpty())
     return;
   report::ReportDocument doc("");

@@ -16,7 +16,7 @@ namespace caps::report {
 
 PlanView planViewFromName(const std::string& name)
 {
-  const std::pair<const char*, PlanView> views[] = {{"front", PlanView::Front},   {"oblique", PlanView::Oblique},
+  const std::pair<const char*, PlanView> views[] = {{"front", PlanView::Front},     {"oblique", PlanView::Oblique},
                                                     {"profile", PlanView::Profile}, {"before", PlanView::Before},
                                                     {"after", PlanView::After},     {"stress", PlanView::Stress}};
   for (const auto& [word, view] : views)
@@ -25,8 +25,8 @@ PlanView planViewFromName(const std::string& name)
   throw std::invalid_argument("no view '" + name + "': give front, oblique, profile, before, after or stress");
 }
 
-SnapshotNode& takePlanSnapshot(Scene& scene, const std::string& planName, PlanView view, std::string caption,
-                               int width, int height)
+SnapshotNode& takePlanSnapshot(Scene& scene, const std::string& planName, PlanView view, std::string caption, int width,
+                               int height)
 {
   const PlanNode* node = nullptr;
   std::string names;
@@ -39,8 +39,8 @@ SnapshotNode& takePlanSnapshot(Scene& scene, const std::string& planName, PlanVi
       node = static_cast<const PlanNode*>(n);
   }
   if (!node)
-    throw std::invalid_argument("the scene has no plan \"" + planName + "\"; its plans are: " +
-                                (names.empty() ? std::string("none") : names));
+    throw std::invalid_argument("the scene has no plan \"" + planName +
+                                "\"; its plans are: " + (names.empty() ? std::string("none") : names));
   const auto volumes = scene.nodesOfType(NodeType::Volume);
   if (volumes.empty())
     throw std::invalid_argument("the scene has no CT volume");

@@ -37,25 +37,27 @@ SurfaceNode* surfaceNamed(const Scene& scene, const std::string& name)
   return nullptr;
 }
 
-
 } // namespace
 
 std::vector<ResultQuantity> resultQuantities()
 {
-  return {ResultQuantity::SkinShade, ResultQuantity::Displacement, ResultQuantity::VonMises,
-          ResultQuantity::MeanStress, ResultQuantity::EquivalentStrain};
+  return {ResultQuantity::SkinShade, ResultQuantity::Displacement, ResultQuantity::VonMises, ResultQuantity::MeanStress,
+          ResultQuantity::EquivalentStrain};
 }
 
 QuantityStyle quantityStyle(ResultQuantity quantity)
 {
   switch (quantity)
   {
-  case ResultQuantity::SkinShade: return {"skin shade", "skin_colour", "", "", false};
+  case ResultQuantity::SkinShade:
+    return {"skin shade", "skin_colour", "", "", false};
   case ResultQuantity::Displacement:
     return {"displacement", "displacement_magnitude_mm", "viridis", "displacement (mm)", false};
-  case ResultQuantity::VonMises: return {"von Mises stress", "von_mises_kPa", "viridis", "von Mises stress (kPa)", false};
+  case ResultQuantity::VonMises:
+    return {"von Mises stress", "von_mises_kPa", "viridis", "von Mises stress (kPa)", false};
   // Signed: compression blue, tension red, zero grey.
-  case ResultQuantity::MeanStress: return {"mean stress", "mean_stress_kPa", "cool-warm", "mean stress (kPa)", true};
+  case ResultQuantity::MeanStress:
+    return {"mean stress", "mean_stress_kPa", "cool-warm", "mean stress (kPa)", true};
   case ResultQuantity::EquivalentStrain:
     return {"equivalent strain", "equivalent_strain", "viridis", "equivalent strain (von Mises)", false};
   }

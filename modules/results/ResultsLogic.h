@@ -49,10 +49,10 @@ enum class ResultQuantity
 /// How a quantity is shown: the point array, its colour map, the bar's title.
 struct QuantityStyle
 {
-  std::string label;    ///< "von Mises stress", for menus and captions
-  std::string array;    ///< point array of planDisplayPolyData()
-  std::string colourMap;///< render/ColourMaps.h name; empty for RGB
-  std::string barTitle; ///< "von Mises stress (kPa)"
+  std::string label;      ///< "von Mises stress", for menus and captions
+  std::string array;      ///< point array of planDisplayPolyData()
+  std::string colourMap;  ///< render/ColourMaps.h name; empty for RGB
+  std::string barTitle;   ///< "von Mises stress (kPa)"
   bool symmetric = false; ///< range symmetric about 0 (signed quantities)
 };
 
@@ -64,10 +64,10 @@ QuantityStyle quantityStyle(ResultQuantity quantity);
 /// solve's reactions): the prediction made again from the plan's recipe.
 struct ClosureNumbers
 {
-  double closureForce = 0.0;      ///< sum of the sutures' force magnitudes (N), ClosureForces::magnitudeSum
-  double largestSutureForce = 0.0;///< N
-  double peakWoundStress = 0.0;   ///< largest von Mises stress in the skin within woundRadius of the wound (kPa)
-  double woundRadius = 10.0;      ///< mm
+  double closureForce = 0.0;       ///< sum of the sutures' force magnitudes (N), ClosureForces::magnitudeSum
+  double largestSutureForce = 0.0; ///< N
+  double peakWoundStress = 0.0;    ///< largest von Mises stress in the skin within woundRadius of the wound (kPa)
+  double woundRadius = 10.0;       ///< mm
 };
 
 /// What a re-prediction needs, copied out of the scene so a worker thread

@@ -253,8 +253,7 @@ void ResultsPanel::addViewControls(QVBoxLayout* layout)
   prePost_->setToolTip(tr("Switch between the skin before the operation and after the closure"));
   play_ = new QPushButton(tr("Play"), this);
   play_->setObjectName("results.play");
-  play_->setToolTip(tr("Animate from before to after the closure in %1 s; press again to go back")
-                      .arg(kPlaySeconds));
+  play_->setToolTip(tr("Animate from before to after the closure in %1 s; press again to go back").arg(kPlaySeconds));
   auto* buttons = new QHBoxLayout;
   buttons->addWidget(prePost_);
   buttons->addWidget(play_);
@@ -278,7 +277,6 @@ void ResultsPanel::addViewControls(QVBoxLayout* layout)
   compareRow->addWidget(compare_);
   form->addRow(tr("Compare with:"), compareRow);
   layout->addLayout(form);
-
 }
 
 /// The numbers of the plan and the profile along its incision.
@@ -297,7 +295,6 @@ void ResultsPanel::addSummaryAndProfile(QVBoxLayout* layout)
   plot_ = new IncisionPlot(this);
   plot_->setObjectName("results.plot");
   layout->addWidget(plot_);
-
 }
 
 /// The snapshots for the report's storyboard.
@@ -325,7 +322,6 @@ void ResultsPanel::addStoryboard(QVBoxLayout* layout)
   storyboard_->setMinimumHeight(170);
   layout->addWidget(storyboard_, 1);
   layout->addLayout(storyRow);
-
 }
 
 void ResultsPanel::connectControls()
@@ -653,10 +649,10 @@ void ResultsPanel::updateSummary()
     return QString::fromStdString(plain).toHtmlEscaped().toStdString();
   };
   std::string text = "<b>" + html(shown_.name) + "</b><br>";
-  text += "Largest displacement: " + fixed(ResultsLogic::arrayMaximum(before_, "displacement_magnitude_mm"), 2) +
-          " mm<br>";
-  text += "Peak von Mises stress on the skin: " + fixed(ResultsLogic::arrayMaximum(before_, "von_mises_kPa"), 1) +
-          " kPa<br>";
+  text +=
+    "Largest displacement: " + fixed(ResultsLogic::arrayMaximum(before_, "displacement_magnitude_mm"), 2) + " mm<br>";
+  text +=
+    "Peak von Mises stress on the skin: " + fixed(ResultsLogic::arrayMaximum(before_, "von_mises_kPa"), 1) + " kPa<br>";
   const auto* plan = logic_.scene().nodeAs<PlanNode>(shown_.plan);
   const std::string key = plan ? ResultsLogic::closureKey(*plan) : std::string();
   if (const auto it = closure_.find(key); it != closure_.end())
@@ -793,8 +789,8 @@ void ResultsPanel::takeSnapshot()
   std::string caption;
   if (!shown_.plan.empty())
   {
-    caption = shown_.name + " - " + stateWord() + " - " +
-              quantityStyle(ResultQuantity(colourBy_->currentData().toInt())).label;
+    caption =
+      shown_.name + " - " + stateWord() + " - " + quantityStyle(ResultQuantity(colourBy_->currentData().toInt())).label;
   }
   else
     caption = "3D view";
@@ -805,8 +801,8 @@ void ResultsPanel::takeSnapshot()
 void ResultsPanel::refreshStoryboard()
 {
   storyboardPending_ = false;
-  const QString selected = storyboard_->currentItem() ? storyboard_->currentItem()->data(Qt::UserRole).toString()
-                                                      : QString();
+  const QString selected =
+    storyboard_->currentItem() ? storyboard_->currentItem()->data(Qt::UserRole).toString() : QString();
   storyboard_->clear();
   int number = 0;
   for (Node* n : logic_.scene().nodesOfType(NodeType::Snapshot))

@@ -44,23 +44,20 @@ std::int64_t voxelCount(vtkImageData* image)
 
 void requireLabels(vtkImageData* image, const char* what)
 {
-  if (!image || image->GetScalarType() != VTK_UNSIGNED_CHAR ||
-      image->GetNumberOfScalarComponents() != 1)
-    throw std::invalid_argument(std::string(what) +
-                                ": an unsigned char image with one component is needed");
+  if (!image || image->GetScalarType() != VTK_UNSIGNED_CHAR || image->GetNumberOfScalarComponents() != 1)
+    throw std::invalid_argument(std::string(what) + ": an unsigned char image with one component is needed");
 }
 
 } // namespace
 
-SegmentationOutput SegmentLogic::compute(vtkImageData* ct, const Parameters& parameters,
-                                         const TaskProgress& progress)
+SegmentationOutput SegmentLogic::compute(vtkImageData* ct, const Parameters& parameters, const TaskProgress& progress)
 {
   if (!ct)
     throw std::invalid_argument("The volume has no image data to segment.");
   if (parameters.boneThresholdHu <= parameters.skinThresholdHu)
     throw std::invalid_argument("The bone threshold (" + std::to_string(parameters.boneThresholdHu) +
-                                " HU) must be above the skin threshold (" +
-                                std::to_string(parameters.skinThresholdHu) + " HU).");
+                                " HU) must be above the skin threshold (" + std::to_string(parameters.skinThresholdHu) +
+                                " HU).");
   seg::SegmentationParameters p;
   p.skinThresholdHu = parameters.skinThresholdHu;
   p.boneThresholdHu = parameters.boneThresholdHu;
@@ -107,8 +104,8 @@ SegmentationResult SegmentLogic::addToScene(const VolumeNode& volume, Segmentati
                      {kBoneLabel, {"Bone", {0.95, 0.93, 0.84}}}});
   auto* labelNode = static_cast<LabelMapNode*>(s.addNode(std::move(labels)));
 
-  auto addSurface = [&](const char* name, vtkSmartPointer<vtkPolyData> polyData,
-                        const std::array<double, 3>& colour, double opacity) {
+  auto addSurface = [&](const char* name, vtkSmartPointer<vtkPolyData> polyData, const std::array<double, 3>& colour,
+                        double opacity) {
     auto surface = std::make_unique<SurfaceNode>();
     surface->setName(name);
     surface->setPolyData(std::move(polyData));
@@ -126,7 +123,7 @@ SegmentationResult SegmentLogic::addToScene(const VolumeNode& volume, Segmentati
 }
 
 SegmentationResult SegmentLogic::segment(const VolumeNode& volume, const Parameters& parameters,
-                                        const TaskProgress& progress)
+                                         const TaskProgress& progress)
 {
   return addToScene(volume, compute(volume.image(), parameters, progress));
 }
@@ -183,8 +180,8 @@ vtkSmartPointer<vtkImageData> SegmentLogic::halfResolution(vtkImageData* mask)
   double shift[3] = {0.5 * spacing[0], 0.5 * spacing[1], 0.5 * spacing[2]};
   double newOrigin[3];
   for (int r = 0; r < 3; ++r)
-    newOrigin[r] = origin[r] + direction->GetElement(r, 0) * shift[0] +
-                   direction->GetElement(r, 1) * shift[1] + direction->GetElement(r, 2) * shift[2];
+    newOrigin[r] = origin[r] + direction->GetElement(r, 0) * shift[0] + direction->GetElement(r, 1) * shift[1] +
+                   direction->GetElement(r, 2) * shift[2];
   auto half = vtkSmartPointer<vtkImageData>::New();
   half->SetDimensions(h[0], h[1], h[2]);
   half->SetSpacing(2 * spacing[0], 2 * spacing[1], 2 * spacing[2]);

@@ -68,16 +68,14 @@ public:
 
   /// Segments a CT in HU and makes the display surfaces. Touches no scene.
   /// @throws std::invalid_argument (nothing above the skin threshold, ...), seg::Cancelled.
-  static SegmentationOutput compute(vtkImageData* ct, const Parameters& parameters,
-                                    const TaskProgress& progress = {});
+  static SegmentationOutput compute(vtkImageData* ct, const Parameters& parameters, const TaskProgress& progress = {});
 
   /// Adds the label map and the "Skin" and "Bone" surfaces for @a volume,
   /// removing the ones an earlier segmentation of it left.
   SegmentationResult addToScene(const VolumeNode& volume, SegmentationOutput output);
 
   /// compute() + addToScene().
-  SegmentationResult segment(const VolumeNode& volume, const Parameters& parameters,
-                            const TaskProgress& progress = {});
+  SegmentationResult segment(const VolumeNode& volume, const Parameters& parameters, const TaskProgress& progress = {});
 
   /// The label map made from @a volume (the newest), or nullptr.
   LabelMapNode* findLabelMap(const VolumeNode& volume) const;

@@ -184,10 +184,8 @@ void SegmentPanel::run()
   // never the node: the scene is only touched in the finish function.
   vtkSmartPointer<vtkImageData> ct = volume->image();
   const std::string volumeId = volume->id();
-  host_.runTask("Segmenting " + volume->name(), [this, ct, volumeId,
-                                                 parameters](const TaskProgress& progress) {
-    auto output = std::make_shared<SegmentationOutput>(
-      SegmentLogic::compute(ct, parameters, progress));
+  host_.runTask("Segmenting " + volume->name(), [this, ct, volumeId, parameters](const TaskProgress& progress) {
+    auto output = std::make_shared<SegmentationOutput>(SegmentLogic::compute(ct, parameters, progress));
     return std::function<void()>([this, volumeId, output]() {
       auto* target = logic_.scene().nodeAs<VolumeNode>(volumeId);
       if (!target)

@@ -257,7 +257,7 @@ vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& predic
   colours->SetNumberOfComponents(3);
   auto lines = vtkSmartPointer<vtkCellArray>::New();
   auto verts = vtkSmartPointer<vtkCellArray>::New();
-  auto addPoint = [&](const Eigen::Vector3d& p, const unsigned char (&rgb)[3]) {
+  auto addPoint = [&](const Eigen::Vector3d& p, const unsigned char(&rgb)[3]) {
     const vtkIdType id = points->InsertNextPoint(p.x(), p.y(), p.z());
     colours->InsertNextTypedTuple(rgb);
     return id;
@@ -306,15 +306,15 @@ std::string summaryText(const PlanRunResult& r)
 {
   const incision::PlanPrediction& p = r.prediction;
   std::ostringstream out;
-  out << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size()
-      << " elements, " << p.dofCount << " DOF (" << p.reducedDofCount << " free)\n";
+  out << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
+      << p.dofCount << " DOF (" << p.reducedDofCount << " free)\n";
   out << std::fixed << std::setprecision(2) << "Times: skin shade " << r.shadeSeconds << " s, mesh " << p.times.mesh
-      << " s, assembly " << p.times.assemble << " s, factorisation " << p.times.factor << " s, solve "
-      << p.times.solve << " s, display " << r.displaySeconds << " s, wound stress " << r.stressSeconds << " s\n";
-  out << "Wound " << p.maxSutureGapBefore << " mm wide before; largest suture gap after the solve "
-      << std::scientific << std::setprecision(2) << p.maxSutureGap << " mm\n";
-  out << std::defaultfloat << std::setprecision(4) << "Closure force: " << p.closure.magnitudeSum
-      << " N (sum over " << p.closure.sutures.size() << " sutures; largest " << p.closure.largest << " N)\n";
+      << " s, assembly " << p.times.assemble << " s, factorisation " << p.times.factor << " s, solve " << p.times.solve
+      << " s, display " << r.displaySeconds << " s, wound stress " << r.stressSeconds << " s\n";
+  out << "Wound " << p.maxSutureGapBefore << " mm wide before; largest suture gap after the solve " << std::scientific
+      << std::setprecision(2) << p.maxSutureGap << " mm\n";
+  out << std::defaultfloat << std::setprecision(4) << "Closure force: " << p.closure.magnitudeSum << " N (sum over "
+      << p.closure.sutures.size() << " sutures; largest " << p.closure.largest << " N)\n";
   out << std::fixed << std::setprecision(1) << "Peak skin stress within " << kWoundRadius
       << " mm of the wound: " << 1e3 * r.woundStress.peakVonMises << " kPa von Mises at \u03b8 "
       << r.woundStressTheta * 180.0 / kPi << "\u00b0, z " << r.woundStressZ << " mm (" << r.woundStress.distance

@@ -41,13 +41,12 @@ inline constexpr const char* kFacialTissuePreset = "Facial soft tissue (CAPS def
 std::string facialTissueSource();
 ///@}
 
-
 /// Everything a run needs, copied out of the scene on the GUI thread so the
 /// worker never touches the scene.
 struct PlanRunInput
 {
-  NodeId planId;            ///< the plan node it replaces
-  std::string name;         ///< its name, kept by the new nodes
+  NodeId planId;    ///< the plan node it replaces
+  std::string name; ///< its name, kept by the new nodes
   incision::IncisionPlan plan;
   incision::PlanRecipe recipe; ///< the node's recipe (operations only, when it has none: empty)
   seg::RangeMap skin, bone;
@@ -127,8 +126,7 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
 /// red, sutures green (kEdgeColour, kFixedColour, kSutureColour). Lines
 /// and points are lifted @a lift mm outwards (from the bone to the skin
 /// along each node column) so the skin surface does not hide them.
-vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& prediction, int steps = 4,
-                                          double lift = 0.3);
+vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& prediction, int steps = 4, double lift = 0.3);
 inline constexpr unsigned char kEdgeColour[3] = {30, 50, 120};
 inline constexpr unsigned char kFixedColour[3] = {220, 30, 30};
 inline constexpr unsigned char kSutureColour[3] = {0, 170, 60};

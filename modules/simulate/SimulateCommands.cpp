@@ -97,8 +97,7 @@ int runFem(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out
       deck = a;
     else
     {
-      err << "caps fem: one MODEL only (got '" << deck.string() << "' and '" << a << "')\n"
-          << kFemUsage;
+      err << "caps fem: one MODEL only (got '" << deck.string() << "' and '" << a << "')\n" << kFemUsage;
       return 2;
     }
   }
@@ -111,8 +110,8 @@ int runFem(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out
   if (!quiet)
     options.progress = [&out](const fem::NewtonIteration& it) {
       out << "increment " << it.increment << " to load fraction " << std::setprecision(6) << it.loadFraction
-          << ", iteration " << it.iteration << ": residual " << std::setprecision(3) << it.residual
-          << ", energy " << it.energy << (it.lineSearchStep < 1.0 ? ", line search " : "")
+          << ", iteration " << it.iteration << ": residual " << std::setprecision(3) << it.residual << ", energy "
+          << it.energy << (it.lineSearchStep < 1.0 ? ", line search " : "")
           << (it.lineSearchStep < 1.0 ? std::to_string(it.lineSearchStep) : std::string())
           << (it.newTangent ? "" : " (factorization kept)") << "\n"
           << std::flush;
@@ -128,11 +127,11 @@ int runFem(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out
   if (r.largeDeformation)
     out << ", Newton solve " << r.times.factor;
   else
-    out << ", assemble " << r.times.assemble << ", constrain " << r.times.constrain << ", analyse "
-        << r.times.analyse << ", factor " << r.times.factor << ", solve " << r.times.solve;
+    out << ", assemble " << r.times.assemble << ", constrain " << r.times.constrain << ", analyse " << r.times.analyse
+        << ", factor " << r.times.factor << ", solve " << r.times.solve;
   out << ", stresses " << r.recoverSeconds << ", write " << r.writeSeconds << "\n"
-      << std::defaultfloat << std::setprecision(6) << "max displacement: " << r.maxDisplacement
-      << " mm at node " << r.maxDisplacementNode << "\n"
+      << std::defaultfloat << std::setprecision(6) << "max displacement: " << r.maxDisplacement << " mm at node "
+      << r.maxDisplacementNode << "\n"
       << "max von Mises stress: " << r.maxVonMises << " MPa" << (r.largeDeformation ? " (Cauchy)" : "") << "\n";
   if (r.largeDeformation)
     out << "large deformation: " << r.increments << " increments, " << r.iterations
@@ -147,8 +146,7 @@ int runFem(ModuleLogic&, const std::vector<std::string>& args, std::ostream& out
 
 std::vector<ModuleCommand> simulateCommands()
 {
-  return {{"fem", "solve a CalculiX/Abaqus .inp deck; write displacements, stresses and a VTU",
-           kFemUsage, runFem}};
+  return {{"fem", "solve a CalculiX/Abaqus .inp deck; write displacements, stresses and a VTU", kFemUsage, runFem}};
 }
 
 } // namespace caps

@@ -107,8 +107,7 @@ public:
     text_.append(buffer, r.ptr);
     return *this;
   }
-  template <class Integer, class = std::enable_if_t<std::is_integral_v<Integer>>>
-  CsvText& operator<<(Integer v)
+  template <class Integer, class = std::enable_if_t<std::is_integral_v<Integer>>> CsvText& operator<<(Integer v)
   {
     char buffer[24];
     const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
@@ -163,8 +162,8 @@ fem::HyperelasticTable largeDeformationMaterials(const fem::CalculixModel& model
   {
     const auto it = model.hyperelastic.find(region);
     table[region] = it != model.hyperelastic.end()
-                        ? it->second
-                        : fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::StVenantKirchhoff, linear);
+                      ? it->second
+                      : fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::StVenantKirchhoff, linear);
   }
   return table;
 }
@@ -192,8 +191,8 @@ fs::path writeIncrementLog(const fs::path& outDir, const fem::NonlinearResult& r
   {
     std::string reason = i.rejection;
     std::replace(reason.begin(), reason.end(), '"', '\'');
-    f << i.increment << ',' << i.startFraction << ',' << i.endFraction << ',' << i.iterations << ','
-      << i.residual << ',' << (i.accepted ? 1 : 0) << ",\"" << reason << "\"\n";
+    f << i.increment << ',' << i.startFraction << ',' << i.endFraction << ',' << i.iterations << ',' << i.residual
+      << ',' << (i.accepted ? 1 : 0) << ",\"" << reason << "\"\n";
   }
   if (!f)
     throw std::runtime_error("error while writing " + path.string());
@@ -203,10 +202,10 @@ fs::path writeIncrementLog(const fs::path& outDir, const fem::NonlinearResult& r
 /// What a solve of a deck hands to the writers.
 struct DeckResults
 {
-  fem::NodalStressMatrix nodalStress;                      ///< 6 x N (Cauchy in large deformation), MPa
-  std::vector<std::vector<fem::StressPoint>> gaussStress;  ///< per element, its rule's points
-  std::vector<fem::VtuArray> extraArrays;                  ///< more point data for result.vtu
-  std::vector<fs::path> extraFiles;                        ///< written before (the increment log)
+  fem::NodalStressMatrix nodalStress;                     ///< 6 x N (Cauchy in large deformation), MPa
+  std::vector<std::vector<fem::StressPoint>> gaussStress; ///< per element, its rule's points
+  std::vector<fem::VtuArray> extraArrays;                 ///< more point data for result.vtu
+  std::vector<fs::path> extraFiles;                       ///< written before (the increment log)
 };
 
 /// The stress invariants at each node of the report's stress field.
@@ -424,8 +423,8 @@ FemRunReport solveLargeDeformation(const fem::CalculixModel& model, const fs::pa
     const fs::path log = writeIncrementLog(outDir, r);
     if (r.status != fem::NonlinearStatus::Converged)
     {
-      report.status = r.status == fem::NonlinearStatus::Cancelled ? FemRunStatus::Cancelled
-                                                                  : FemRunStatus::NotConverged;
+      report.status =
+        r.status == fem::NonlinearStatus::Cancelled ? FemRunStatus::Cancelled : FemRunStatus::NotConverged;
       const int worst = r.failedElement >= 0 ? r.failedElement : r.check.minDetFElement;
       report.message = r.message;
       if (worst >= 0 && std::size_t(worst) < model.elementIds.size())
@@ -565,20 +564,18 @@ DeckResults linearStresses(const fem::CalculixModel& model, const Eigen::VectorX
     return fem::integrationPointsOf(el, options.stressPointsPerDirection) ==
            fem::integrationPointsOf(el, assembly.gaussPointsPerDirection);
   });
-  results.nodalStress =
-    samePoints ? fem::nodalStressesFromGaussPoints(model.mesh, model.materials, results.gaussStress,
-                                                   options.stressPointsPerDirection)
-                   .stress
-               : fem::recoverNodalStresses(model.mesh, model.materials, u, options.stressPointsPerDirection,
-                                           options.threads)
-                   .stress;
+  results.nodalStress = samePoints ? fem::nodalStressesFromGaussPoints(model.mesh, model.materials, results.gaussStress,
+                                                                       options.stressPointsPerDirection)
+                                       .stress
+                                   : fem::recoverNodalStresses(model.mesh, model.materials, u,
+                                                               options.stressPointsPerDirection, options.threads)
+                                       .stress;
   return results;
 }
 
 } // namespace
 
-FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outDir,
-                                      const FemRunOptions& options)
+FemRunReport SimulateLogic::solveDeck(const fs::path& deck, const fs::path& outDir, const FemRunOptions& options)
 {
   FemRunReport report;
   fem::CalculixModel model;

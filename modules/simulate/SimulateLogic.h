@@ -28,7 +28,7 @@ enum class FemRunStatus
 
 struct FemRunOptions
 {
-  int threads = 2;               ///< assembly threads
+  int threads = 2;                  ///< assembly threads
   int stressPointsPerDirection = 2; ///< Gauss points the nodal stresses are extrapolated from
   /// After every Newton iteration of a large-deformation step (progress).
   std::function<void(const fem::NewtonIteration&)> progress;
@@ -44,12 +44,12 @@ struct FemRunReport
   Eigen::Index nodes = 0, elements = 0, dofs = 0;
   double readSeconds = 0.0, recoverSeconds = 0.0, writeSeconds = 0.0;
   fem::PhaseTimes times;
-  double maxDisplacement = 0.0; ///< largest |u| (mm)
-  long maxDisplacementNode = 0; ///< its node number in the deck
-  double maxVonMises = 0.0;     ///< largest nodal von Mises stress (MPa)
-  bool largeDeformation = false; ///< solved by Newton (*STEP, NLGEOM); times.factor is the whole solve
+  double maxDisplacement = 0.0;       ///< largest |u| (mm)
+  long maxDisplacementNode = 0;       ///< its node number in the deck
+  double maxVonMises = 0.0;           ///< largest nodal von Mises stress (MPa)
+  bool largeDeformation = false;      ///< solved by Newton (*STEP, NLGEOM); times.factor is the whole solve
   int increments = 0, iterations = 0; ///< accepted increments, Newton iterations in all
-  fem::DeformationCheck check;  ///< smallest det F, stretches (large deformation)
+  fem::DeformationCheck check;        ///< smallest det F, stretches (large deformation)
   std::vector<std::filesystem::path> files;
 };
 

@@ -73,7 +73,6 @@ void SimulatePanel::addPlanChooser(QWidget* content, QVBoxLayout* layout)
   plan_->setToolTip(tr("The plan to predict: the scene's plans (Incision module)."));
   planLayout->addWidget(plan_);
   layout->addWidget(planBox);
-
 }
 
 /// 2. Materials: the preset, its source, the table per layer.
@@ -106,7 +105,6 @@ void SimulatePanel::addMaterials(QWidget* content, QVBoxLayout* layout)
                             "layer, skin first. Double-click a value to change it."));
   materialLayout->addWidget(materials_);
   layout->addWidget(materialBox);
-
 }
 
 /// 3. The mesh: layers, region, element size, cut depth, undermining, and
@@ -156,7 +154,6 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
   estimate_->setWordWrap(true);
   form->addRow(estimate_);
   layout->addWidget(meshBox);
-
 }
 
 /// 4. Run, 5. results, 6. the mesh.
@@ -180,7 +177,6 @@ void SimulatePanel::addRunAndResults(QWidget* content, QVBoxLayout* layout)
   summary_->setText(tr("Run a plan to see its closure force and skin stress here."));
   layout->addWidget(summary_);
   layout->addStretch(1);
-
 }
 
 /// The estimate's timer and the default options (the first plan's own
@@ -199,7 +195,6 @@ void SimulatePanel::setDefaults()
   elementSize_->setValue(defaults.elementSize);
   undermining_->setValue(defaults.underminingWidth);
   resizeMaterials(defaults.layerCount);
-
 }
 
 void SimulatePanel::connectControls()
@@ -225,7 +220,6 @@ void SimulatePanel::connectControls()
   connect(cutDepth_, qOverload<int>(&QSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
   connect(run_, &QPushButton::clicked, this, &SimulatePanel::run);
   connect(showMesh_, &QCheckBox::toggled, this, &SimulatePanel::applyShowMesh);
-
 }
 
 /// Plans come and go with the scene; the combo follows (once per burst of events).
@@ -460,18 +454,21 @@ void SimulatePanel::estimate()
     {
       text = tr("Cannot mesh this plan: %1").arg(QString::fromStdString(e.what()));
     }
-    QMetaObject::invokeMethod(this, [this, text, generation]() {
-      estimateThread_->wait();
-      estimateThread_->deleteLater();
-      estimateThread_ = nullptr;
-      if (generation == estimateGeneration_)
-        estimate_->setText(text);
-      if (estimateAgain_ || generation != estimateGeneration_)
-      {
-        estimateAgain_ = false;
-        estimate();
-      }
-    }, Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+      this,
+      [this, text, generation]() {
+        estimateThread_->wait();
+        estimateThread_->deleteLater();
+        estimateThread_ = nullptr;
+        if (generation == estimateGeneration_)
+          estimate_->setText(text);
+        if (estimateAgain_ || generation != estimateGeneration_)
+        {
+          estimateAgain_ = false;
+          estimate();
+        }
+      },
+      Qt::QueuedConnection);
   });
   estimateThread_->start();
 }

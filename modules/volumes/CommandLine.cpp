@@ -36,9 +36,8 @@ std::optional<std::string> parseSeries(const std::string& value, seg::CtReadOpti
   return std::nullopt;
 }
 
-std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args,
-                                                   std::filesystem::path& input, std::filesystem::path& out,
-                                                   bool& help, const CommandOption& option,
+std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args, std::filesystem::path& input,
+                                                   std::filesystem::path& out, bool& help, const CommandOption& option,
                                                    const char* inputName)
 {
   for (std::size_t i = 0; i < args.size(); ++i)
@@ -71,13 +70,12 @@ std::optional<std::string> parseInputOutputCommand(const std::vector<std::string
   return std::nullopt;
 }
 
-std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
-                                          CtCommandArgs& parsed, const CommandOption& option)
+std::optional<std::string> parseCtCommand(const std::vector<std::string>& args, CtCommandArgs& parsed,
+                                          const CommandOption& option)
 {
   return parseInputOutputCommand(
     args, parsed.ct, parsed.out, parsed.help,
-    [&](const std::string& a, const std::vector<std::string>& all,
-        std::size_t& i) -> std::optional<std::string> {
+    [&](const std::string& a, const std::vector<std::string>& all, std::size_t& i) -> std::optional<std::string> {
       if (a != "--series")
         return option(a, all, i);
       if (i + 1 >= all.size())
@@ -114,10 +112,9 @@ TaskProgress consoleProgress(std::ostream& err)
   return [&err, state](double fraction, const std::string& step) {
     if (step != state->step)
     {
-      const double t =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - state->start).count();
-      err << "  [" << std::setw(3) << static_cast<int>(std::lround(100 * fraction)) << "%] "
-          << std::fixed << std::setprecision(1) << std::setw(5) << t << " s  " << step << "\n";
+      const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - state->start).count();
+      err << "  [" << std::setw(3) << static_cast<int>(std::lround(100 * fraction)) << "%] " << std::fixed
+          << std::setprecision(1) << std::setw(5) << t << " s  " << step << "\n";
       err.unsetf(std::ios::floatfield);
       state->step = step;
     }
@@ -125,8 +122,7 @@ TaskProgress consoleProgress(std::ostream& err)
   };
 }
 
-VolumeNode* loadCt(ModuleLogic& logic, const fs::path& path, const seg::CtReadOptions& options,
-                   std::ostream& err)
+VolumeNode* loadCt(ModuleLogic& logic, const fs::path& path, const seg::CtReadOptions& options, std::ostream& err)
 {
   // The Volumes module's reading, on the same scene: a CT read before (by
   // `caps info` in the demo, say) is reused.
@@ -146,8 +142,7 @@ void writeStl(vtkPolyData* surface, const fs::path& file)
   writer->SetFileTypeToBinary();
   writer->SetHeader("CAPS surface, mm, patient LPS");
   if (!writer->Write())
-    throw std::runtime_error("Could not write " + file.string() +
-                             ": is the folder writable and the disk not full?");
+    throw std::runtime_error("Could not write " + file.string() + ": is the folder writable and the disk not full?");
 }
 
 } // namespace cli

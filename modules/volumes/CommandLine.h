@@ -38,21 +38,20 @@ struct CtCommandArgs
 /// Handles a command's own option @a option found at args[i], advancing @a i
 /// past a value it takes; returns an error text (also for an option it does
 /// not know), or nothing.
-using CommandOption = std::function<std::optional<std::string>(
-  const std::string& option, const std::vector<std::string>& args, std::size_t& i)>;
+using CommandOption = std::function<std::optional<std::string>(const std::string& option,
+                                                               const std::vector<std::string>& args, std::size_t& i)>;
 
 /// Parses a command's arguments of the form INPUT --out DIR [options]:
 /// INPUT, --out and --help here, the others through @a option; then checks
 /// that INPUT (named @a inputName in messages) and --out are there (unless
 /// --help). Returns an error text for the usage message, or nothing.
-std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args,
-                                                   std::filesystem::path& input, std::filesystem::path& out,
-                                                   bool& help, const CommandOption& option,
+std::optional<std::string> parseInputOutputCommand(const std::vector<std::string>& args, std::filesystem::path& input,
+                                                   std::filesystem::path& out, bool& help, const CommandOption& option,
                                                    const char* inputName);
 
 /// parseInputOutputCommand() for a CT command, which also takes --series.
-std::optional<std::string> parseCtCommand(const std::vector<std::string>& args,
-                                          CtCommandArgs& parsed, const CommandOption& option);
+std::optional<std::string> parseCtCommand(const std::vector<std::string>& args, CtCommandArgs& parsed,
+                                          const CommandOption& option);
 
 /// Creates the output folder of a command.
 /// @throws std::runtime_error naming it when it cannot be made.
@@ -106,8 +105,8 @@ TaskProgress consoleProgress(std::ostream& err);
 
 /// Reads the CT at @a path into @a logic's scene (reusing a volume already
 /// read from it), printing the reader's warnings on @a err.
-VolumeNode* loadCt(ModuleLogic& logic, const std::filesystem::path& path,
-                   const seg::CtReadOptions& options, std::ostream& err);
+VolumeNode* loadCt(ModuleLogic& logic, const std::filesystem::path& path, const seg::CtReadOptions& options,
+                   std::ostream& err);
 
 /// Writes a triangle surface as binary STL (mm, patient LPS).
 /// @throws std::runtime_error naming the file when it cannot be written.

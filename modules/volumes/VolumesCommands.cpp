@@ -14,20 +14,19 @@ namespace fs = std::filesystem;
 namespace caps {
 namespace {
 
-const char* kInfoUsage =
-  "usage: caps info PATH [--series N|UID] [--deidentify]\n"
-  "\n"
-  "Prints what CAPS reads from a CT: dimensions, spacing, origin, orientation,\n"
-  "HU range and the DICOM patient, study and series fields.\n"
-  "\n"
-  "  PATH          a DICOM folder (or one of its files), or a NIfTI (.nii, .nii.gz),\n"
-  "                NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file\n"
-  "  --series N    in a folder with several series, load the N-th (as listed)\n"
-  "  --series UID  ... or the one with this series instance UID\n"
-  "                (a folder with several series and no --series lists them and stops)\n"
-  "  --deidentify  leave out the fields that identify the patient\n"
-  "\n"
-  "Exit status: 0 when read, 1 when the data cannot be read, 2 on wrong usage.\n";
+const char* kInfoUsage = "usage: caps info PATH [--series N|UID] [--deidentify]\n"
+                         "\n"
+                         "Prints what CAPS reads from a CT: dimensions, spacing, origin, orientation,\n"
+                         "HU range and the DICOM patient, study and series fields.\n"
+                         "\n"
+                         "  PATH          a DICOM folder (or one of its files), or a NIfTI (.nii, .nii.gz),\n"
+                         "                NRRD (.nrrd, .nhdr) or MetaImage (.mha, .mhd) file\n"
+                         "  --series N    in a folder with several series, load the N-th (as listed)\n"
+                         "  --series UID  ... or the one with this series instance UID\n"
+                         "                (a folder with several series and no --series lists them and stops)\n"
+                         "  --deidentify  leave out the fields that identify the patient\n"
+                         "\n"
+                         "Exit status: 0 when read, 1 when the data cannot be read, 2 on wrong usage.\n";
 
 const char* kSlicesUsage =
   "usage: caps slices PATH [--out DIR] [--preset NAME | --window W --level L] [--series N|UID]\n"
@@ -48,8 +47,7 @@ struct CommonArgs
 };
 
 // Parses the arguments shared by the Volumes commands; returns an error text.
-std::optional<std::string> parse(const std::vector<std::string>& args, bool withOutput,
-                                 CommonArgs& parsed)
+std::optional<std::string> parse(const std::vector<std::string>& args, bool withOutput, CommonArgs& parsed)
 {
   for (size_t i = 0; i < args.size(); ++i)
   {
@@ -123,8 +121,7 @@ VolumeNode* loadFor(VolumesLogic& logic, const CommonArgs& args, std::ostream& e
   return volume;
 }
 
-int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out,
-            std::ostream& err)
+int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
   const auto parseInfo = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, false, args); };
   return cli::runCommand<CommonArgs>("info", kInfoUsage, argv, out, err, parseInfo, [&](CommonArgs& args) {
@@ -136,8 +133,7 @@ int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostre
   });
 }
 
-int runSlices(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out,
-              std::ostream& err)
+int runSlices(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
   const auto parseSlices = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, true, args); };
   return cli::runCommand<CommonArgs>("slices", kSlicesUsage, argv, out, err, parseSlices, [&](CommonArgs& args) {
@@ -153,10 +149,8 @@ int runSlices(ModuleLogic& logic, const std::vector<std::string>& argv, std::ost
 std::vector<ModuleCommand> volumesCommands()
 {
   return {
-    {"info", "describe a CT: dimensions, spacing, orientation, HU range, DICOM fields",
-     kInfoUsage, runInfo},
-    {"slices", "write the middle axial, coronal and sagittal slices of a CT as PNG",
-     kSlicesUsage, runSlices},
+    {"info", "describe a CT: dimensions, spacing, orientation, HU range, DICOM fields", kInfoUsage, runInfo},
+    {"slices", "write the middle axial, coronal and sagittal slices of a CT as PNG", kSlicesUsage, runSlices},
   };
 }
 

@@ -111,8 +111,7 @@ std::string VolumesLogic::describe(const VolumeNode& volume)
 
   out << "Dimensions:   " << dims[0] << " x " << dims[1] << " x " << dims[2] << " voxels\n";
   out << "Spacing:      " << spacing[0] << " x " << spacing[1] << " x " << spacing[2] << " mm\n";
-  out << "Origin:       (" << origin[0] << ", " << origin[1] << ", " << origin[2]
-      << ") mm, patient LPS\n";
+  out << "Origin:       (" << origin[0] << ", " << origin[1] << ", " << origin[2] << ") mm, patient LPS\n";
   std::string code;
   out << "Orientation:  ";
   for (int c = 0; c < 3; ++c)
@@ -122,33 +121,27 @@ std::string VolumesLogic::describe(const VolumeNode& volume)
     code += axisLabel(column);
   }
   out << " (axes point to " << code << ")\n";
-  out << "Extent:       " << spacing[0] * (dims[0] - 1) << " x " << spacing[1] * (dims[1] - 1)
-      << " x " << spacing[2] * (dims[2] - 1) << " mm\n";
+  out << "Extent:       " << spacing[0] * (dims[0] - 1) << " x " << spacing[1] * (dims[1] - 1) << " x "
+      << spacing[2] * (dims[2] - 1) << " mm\n";
   out << "Voxel type:   " << image->GetScalarTypeAsString() << "\n";
   out << "HU range:     " << range[0] << " .. " << range[1] << "\n";
   if (!volume.metadata().empty())
   {
-    out << "Patient:      " << field(volume, "PatientName") << ", ID " << field(volume, "PatientID")
-        << ", sex " << field(volume, "PatientSex") << ", born "
-        << isoDate(field(volume, "PatientBirthDate")) << ", age " << field(volume, "PatientAge")
-        << "\n";
-    out << "Study:        " << isoDate(field(volume, "StudyDate")) << " '"
-        << field(volume, "StudyDescription") << "', UID " << field(volume, "StudyInstanceUID")
-        << "\n";
-    out << "Series:       " << field(volume, "Modality") << " '"
-        << field(volume, "SeriesDescription") << "', number " << field(volume, "SeriesNumber")
-        << ", UID " << field(volume, "SeriesInstanceUID") << "\n";
-    out << "Scanner:      " << field(volume, "Manufacturer") << " "
-        << field(volume, "ManufacturerModelName") << ", " << field(volume, "KVP") << " kV, kernel "
-        << field(volume, "ConvolutionKernel") << ", slice thickness "
-        << field(volume, "SliceThickness") << " mm, position " << field(volume, "PatientPosition")
-        << "\n";
+    out << "Patient:      " << field(volume, "PatientName") << ", ID " << field(volume, "PatientID") << ", sex "
+        << field(volume, "PatientSex") << ", born " << isoDate(field(volume, "PatientBirthDate")) << ", age "
+        << field(volume, "PatientAge") << "\n";
+    out << "Study:        " << isoDate(field(volume, "StudyDate")) << " '" << field(volume, "StudyDescription")
+        << "', UID " << field(volume, "StudyInstanceUID") << "\n";
+    out << "Series:       " << field(volume, "Modality") << " '" << field(volume, "SeriesDescription") << "', number "
+        << field(volume, "SeriesNumber") << ", UID " << field(volume, "SeriesInstanceUID") << "\n";
+    out << "Scanner:      " << field(volume, "Manufacturer") << " " << field(volume, "ManufacturerModelName") << ", "
+        << field(volume, "KVP") << " kV, kernel " << field(volume, "ConvolutionKernel") << ", slice thickness "
+        << field(volume, "SliceThickness") << " mm, position " << field(volume, "PatientPosition") << "\n";
   }
   return out.str();
 }
 
-std::vector<fs::path> VolumesLogic::writeMiddleSlices(const VolumeNode& volume,
-                                                      const fs::path& folder, double window,
+std::vector<fs::path> VolumesLogic::writeMiddleSlices(const VolumeNode& volume, const fs::path& folder, double window,
                                                       double level)
 {
   vtkImageData* image = volume.image();
@@ -162,14 +155,13 @@ std::vector<fs::path> VolumesLogic::writeMiddleSlices(const VolumeNode& volume,
   struct View
   {
     const char* name;
-    int axis;        // the slice axis
-    int columns;     // image axis along the picture's columns (left to right)
-    int rows;        // image axis along the picture's rows (bottom to top)
-    bool flipRows;   // axial: anterior (low j) at the top of the picture
+    int axis;      // the slice axis
+    int columns;   // image axis along the picture's columns (left to right)
+    int rows;      // image axis along the picture's rows (bottom to top)
+    bool flipRows; // axial: anterior (low j) at the top of the picture
   };
   // Radiological orientation: patient left on the right, superior up, face left.
-  const View views[3] = {{"axial", 2, 0, 1, true}, {"coronal", 1, 0, 2, false},
-                         {"sagittal", 0, 1, 2, false}};
+  const View views[3] = {{"axial", 2, 0, 1, true}, {"coronal", 1, 0, 2, false}, {"sagittal", 0, 1, 2, false}};
   std::vector<fs::path> files;
   for (const View& view : views)
   {

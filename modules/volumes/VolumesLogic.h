@@ -21,8 +21,7 @@ public:
   /// Reads a CT (DICOM folder or file, NIfTI, NRRD, MetaImage). Touches no
   /// scene, so the GUI runs it on a worker thread.
   /// @throws seg::CtReadError, seg::Cancelled
-  static seg::CtVolume read(const std::filesystem::path& path,
-                            const seg::CtReadOptions& options = {});
+  static seg::CtVolume read(const std::filesystem::path& path, const seg::CtReadOptions& options = {});
 
   /// Adds a read CT to the scene as a Volume node named after its series,
   /// with the soft-tissue window.
@@ -42,9 +41,8 @@ public:
 
   /// Writes the middle axial, coronal and sagittal slices as 8-bit PNGs in
   /// radiological orientation with square pixels; returns the files.
-  static std::vector<std::filesystem::path> writeMiddleSlices(const VolumeNode& volume,
-                                                              const std::filesystem::path& folder,
-                                                              double window, double level);
+  static std::vector<std::filesystem::path>
+  writeMiddleSlices(const VolumeNode& volume, const std::filesystem::path& folder, double window, double level);
 };
 
 } // namespace caps

@@ -19,8 +19,7 @@ namespace fs = std::filesystem;
 
 namespace caps {
 
-void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host, const fs::path& path,
-                            seg::CtReadOptions options)
+void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host, const fs::path& path, seg::CtReadOptions options)
 {
   const std::string title = "Loading " + path.filename().string();
   host.runTask(title, [&logic, &host, path, options](const TaskProgress& progress) mutable {
@@ -55,8 +54,7 @@ VolumesPanel::VolumesPanel(VolumesLogic& logic, ModuleHost& host, QWidget* paren
   layout->addWidget(new QLabel(tr("Series in the folder (double-click to load):"), this));
   series_tree_ = new QTreeWidget(this);
   series_tree_->setHeaderLabels(
-    {tr("#"), tr("Patient"), tr("Study date"), tr("Description"), tr("Modality"), tr("Slices"),
-     tr("Spacing (mm)")});
+    {tr("#"), tr("Patient"), tr("Study date"), tr("Description"), tr("Modality"), tr("Slices"), tr("Spacing (mm)")});
   series_tree_->setObjectName("volumes.series");
   series_tree_->setRootIsDecorated(false);
   series_tree_->header()->setSectionResizeMode(QHeaderView::ResizeToContents);
@@ -82,8 +80,7 @@ VolumesPanel::VolumesPanel(VolumesLogic& logic, ModuleHost& host, QWidget* paren
     options.seriesUid = series_[index].seriesUid;
     loadVolumeInBackground(logic_, host_, folder_, options);
   });
-  connect(volumes_, qOverload<int>(&QComboBox::currentIndexChanged), this,
-          &VolumesPanel::showSelectedVolume);
+  connect(volumes_, qOverload<int>(&QComboBox::currentIndexChanged), this, &VolumesPanel::showSelectedVolume);
 
   observer_ = logic_.scene().addObserver([this](SceneEvent event, const Node& node) {
     if (node.type() != NodeType::Volume)
@@ -107,8 +104,7 @@ VolumesPanel::~VolumesPanel()
 
 void VolumesPanel::openFolder()
 {
-  const QString folder =
-    QFileDialog::getExistingDirectory(this, tr("Open a DICOM folder"), QString());
+  const QString folder = QFileDialog::getExistingDirectory(this, tr("Open a DICOM folder"), QString());
   if (folder.isEmpty())
     return;
   const fs::path path = folder.toStdString();
@@ -130,15 +126,14 @@ void VolumesPanel::openFolder()
 
 void VolumesPanel::openFile()
 {
-  const QString file = QFileDialog::getOpenFileName(
-    this, tr("Open a CT image"), QString(),
-    tr("CT images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd *.dcm);;All files (*)"));
+  const QString file =
+    QFileDialog::getOpenFileName(this, tr("Open a CT image"), QString(),
+                                 tr("CT images (*.nii *.nii.gz *.nrrd *.nhdr *.mha *.mhd *.dcm);;All files (*)"));
   if (!file.isEmpty())
     loadVolumeInBackground(logic_, host_, file.toStdString());
 }
 
-void VolumesPanel::showSeries(const fs::path& folder,
-                              const std::vector<seg::DicomSeriesInfo>& series)
+void VolumesPanel::showSeries(const fs::path& folder, const std::vector<seg::DicomSeriesInfo>& series)
 {
   folder_ = folder;
   series_ = series;

@@ -22,8 +22,8 @@ class VolumesLogic;
 /// Loads @a path in the background with progress and cancel, then adds the
 /// volume to the scene. A folder with several series loads its largest CT
 /// series unless @a options names another.
-void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host,
-                            const std::filesystem::path& path, seg::CtReadOptions options = {});
+void loadVolumeInBackground(VolumesLogic& logic, ModuleHost& host, const std::filesystem::path& path,
+                            seg::CtReadOptions options = {});
 
 class VolumesPanel : public QWidget
 {
@@ -35,8 +35,7 @@ public:
 private:
   void openFolder();
   void openFile();
-  void showSeries(const std::filesystem::path& folder,
-                  const std::vector<seg::DicomSeriesInfo>& series);
+  void showSeries(const std::filesystem::path& folder, const std::vector<seg::DicomSeriesInfo>& series);
   void updateFromScene();
   void showSelectedVolume();
 

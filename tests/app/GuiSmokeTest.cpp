@@ -29,8 +29,8 @@ caps::test::ProcessResult runWorkstation(const std::string& args)
 
 struct RegionStats
 {
-  int greyLevels = 0;     // distinct grey values
-  double darkFraction = 0; // near-black pixels (air around the head)
+  int greyLevels = 0;        // distinct grey values
+  double darkFraction = 0;   // near-black pixels (air around the head)
   double brightFraction = 0; // tissue and bone in the soft-tissue window
 };
 
@@ -75,8 +75,7 @@ TEST(GuiSmoke, WorkstationShowsTheSampleInTheSliceViews)
 {
   const fs::path shot = caps::test::artifacts() / "workstation-sample.png";
   fs::remove(shot);
-  const auto r =
-    runWorkstation(quoted(caps::test::sampleCt().string()) + " --screenshot " + quoted(shot.string()));
+  const auto r = runWorkstation(quoted(caps::test::sampleCt().string()) + " --screenshot " + quoted(shot.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   ASSERT_FALSE(r.crashed);
   QImage image(QString::fromStdString(shot.string()));
@@ -94,8 +93,7 @@ TEST(GuiSmoke, SavedSceneReopens)
   ASSERT_TRUE(fs::exists(demo / "sample.caps")) << demo;
   const fs::path shot = caps::test::artifacts() / "workstation-scene.png";
   fs::remove(shot);
-  const auto r = runWorkstation(quoted((demo / "sample.caps").string()) + " --screenshot " +
-                                quoted(shot.string()));
+  const auto r = runWorkstation(quoted((demo / "sample.caps").string()) + " --screenshot " + quoted(shot.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   QImage image(QString::fromStdString(shot.string()));
   ASSERT_FALSE(image.isNull());

@@ -20,8 +20,7 @@ public:
   std::vector<caps::ModuleCommand> commands() const override
   {
     return {{"probe", "count nodes", "usage: caps probe",
-             [](caps::ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out,
-                std::ostream&) {
+             [](caps::ModuleLogic& logic, const std::vector<std::string>& args, std::ostream& out, std::ostream&) {
                out << "nodes=" << logic.scene().size() << " args=" << args.size();
                return 7;
              }}};

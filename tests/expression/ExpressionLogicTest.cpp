@@ -66,9 +66,9 @@ FittedMuscle muscle(const std::string& id, const std::string& definition)
 /// Two bilateral muscles and a midline one, as fitMuscleSet names them.
 std::vector<FittedMuscle> someMuscles()
 {
-  return {muscle("zygomaticus_major_left", "zygomaticus_major"),
-          muscle("zygomaticus_major_right", "zygomaticus_major"), muscle("risorius_left", "risorius"),
-          muscle("risorius_right", "risorius"), muscle("orbicularis_oris_upper", "orbicularis_oris_upper")};
+  return {muscle("zygomaticus_major_left", "zygomaticus_major"), muscle("zygomaticus_major_right", "zygomaticus_major"),
+          muscle("risorius_left", "risorius"), muscle("risorius_right", "risorius"),
+          muscle("orbicularis_oris_upper", "orbicularis_oris_upper")};
 }
 
 std::vector<std::string> savedNames(const ExpressionLogic& logic)
@@ -121,18 +121,17 @@ TEST(ExpressionMix, MismatchedSizesThrow)
 
 TEST(ExpressionActivations, ADefinitionIdMeansBothSidesAFittedIdOne)
 {
-  const ExpressionDefinition e{"test", "Test", "",
-                               {{"zygomaticus_major", 0.7},
-                                {"risorius_left", 0.4},
-                                {"orbicularis_oris_upper", 1.0},
-                                {"no_such_muscle", 0.5}}};
+  const ExpressionDefinition e{
+    "test",
+    "Test",
+    "",
+    {{"zygomaticus_major", 0.7}, {"risorius_left", 0.4}, {"orbicularis_oris_upper", 1.0}, {"no_such_muscle", 0.5}}};
   expectVector(expression::expressionActivations(e, someMuscles()), {0.7, 0.7, 0.4, 0.0, 1.0});
 }
 
 TEST(ExpressionActivations, TheLaterEntryWins)
 {
-  const ExpressionDefinition oneSideLess{
-    "a", "A", "", {{"zygomaticus_major", 1.0}, {"zygomaticus_major_left", 0.3}}};
+  const ExpressionDefinition oneSideLess{"a", "A", "", {{"zygomaticus_major", 1.0}, {"zygomaticus_major_left", 0.3}}};
   expectVector(expression::expressionActivations(oneSideLess, someMuscles()), {0.3, 1.0, 0.0, 0.0, 0.0});
   const ExpressionDefinition bothSidesAfter{
     "b", "B", "", {{"zygomaticus_major_left", 0.3}, {"zygomaticus_major", 1.0}}};
@@ -177,14 +176,14 @@ TEST(SavedExpression, ANewOneIsOneUndoableEdit)
 {
   Scene scene;
   ExpressionLogic logic(scene);
-  ExpressionNode& saved = logic.saveExpression(
-    "grin", "default",
-    {{"zygomaticus_major_left", 0.8},
-     {"risorius_right", 1.7},                 // clamped to 1
-     {"depressor_labii_inferioris_left", 0.0}, // zeros left out
-     {"temporalis_left", -0.2},
-     {"corrugator_supercilii_left", std::numeric_limits<double>::quiet_NaN()}},
-    "a test grin");
+  ExpressionNode& saved =
+    logic.saveExpression("grin", "default",
+                         {{"zygomaticus_major_left", 0.8},
+                          {"risorius_right", 1.7},                  // clamped to 1
+                          {"depressor_labii_inferioris_left", 0.0}, // zeros left out
+                          {"temporalis_left", -0.2},
+                          {"corrugator_supercilii_left", std::numeric_limits<double>::quiet_NaN()}},
+                         "a test grin");
   const NodeId id = saved.id();
   const std::map<std::string, double> expected{{"zygomaticus_major_left", 0.8}, {"risorius_right", 1.0}};
   EXPECT_EQ(saved.name(), "grin");
@@ -300,8 +299,7 @@ TEST(SavedExpression, AnUndoneOneStaysGoneThroughSavingAndLoadingTheScene)
   loadSceneBundle(loaded, bundle);
   ExpressionLogic reloaded(loaded);
   EXPECT_EQ(savedNames(reloaded), std::vector<std::string>{"kept"});
-  EXPECT_EQ(reloaded.savedExpression("kept")->activations(),
-            (std::map<std::string, double>{{"risorius_left", 0.5}}));
+  EXPECT_EQ(reloaded.savedExpression("kept")->activations(), (std::map<std::string, double>{{"risorius_left", 0.5}}));
 }
 
 // --- The sample face of the other tests --------------------------------------
@@ -432,8 +430,8 @@ TEST(ExpressionModelInput, TheDemoSceneGivesItsMapsItsCtAndTheUsersLandmarks)
   const expression::ExpressionModelInput own = logic.modelInput();
   EXPECT_EQ(own.landmarkSource, "1 placed by you, the others automatically");
   EXPECT_EQ(own.landmarks.size(), automatic.landmarks.size());
-  const auto moved = std::find_if(own.landmarks.begin(), own.landmarks.end(),
-                                  [](const seg::Landmark& l) { return l.name == "nasion"; });
+  const auto moved =
+    std::find_if(own.landmarks.begin(), own.landmarks.end(), [](const seg::Landmark& l) { return l.name == "nasion"; });
   ASSERT_NE(moved, own.landmarks.end());
   EXPECT_NEAR(moved->theta, nasion->theta, 1e-9);
   EXPECT_NEAR(moved->z, nasion->z + 4.0, 1e-9);

@@ -73,15 +73,20 @@ const Model& coarseFace()
 std::vector<std::vector<fem::Muscle>> testMuscles()
 {
   const double mouthCorner = 25.0 / 85.0; // rad: about 25 mm of arc from the midline
-  fem::Muscle cheekUpper{"cheek upper", underSkin("zygion_left", -0.15, 5.0, 6.0), 0.0,
-                         underSkin("labrale_superius", mouthCorner, -4.0, 4.0), 7.0, 5.0e-5, 2.0};
+  fem::Muscle cheekUpper{"cheek upper",
+                         underSkin("zygion_left", -0.15, 5.0, 6.0),
+                         0.0,
+                         underSkin("labrale_superius", mouthCorner, -4.0, 4.0),
+                         7.0,
+                         5.0e-5,
+                         2.0};
   fem::Muscle cheekLower = cheekUpper;
   cheekLower.name = "cheek lower";
   cheekLower.insertion = underSkin("labrale_inferius", mouthCorner, 4.0, 4.0);
-  fem::Muscle chin{"chin", underSkin("menton", 0.0, -5.0, 8.0), 0.0, underSkin("labrale_inferius", 0.0, -5.0, 4.0),
-                   6.0, 8.0e-5, 1.5};
-  fem::Muscle brow{"brow", underSkin("forehead", 0.35, 0.0, 5.0), 4.0, underSkin("glabella", 0.08, 5.0, 3.0), 6.0,
-                   5.0e-5, 0.0};
+  fem::Muscle chin{
+    "chin", underSkin("menton", 0.0, -5.0, 8.0), 0.0, underSkin("labrale_inferius", 0.0, -5.0, 4.0), 6.0, 8.0e-5, 1.5};
+  fem::Muscle brow{
+    "brow", underSkin("forehead", 0.35, 0.0, 5.0), 4.0, underSkin("glabella", 0.08, 5.0, 3.0), 6.0, 5.0e-5, 0.0};
   return {{cheekUpper, cheekLower}, {chin}, {brow}};
 }
 
@@ -163,8 +168,8 @@ TEST(Superposition, WeightedUnitResponsesEqualTheDirectSolveOfTheCombinedLoad)
   for (Eigen::Index k = 0; k < 3; ++k)
     EXPECT_GT(responses.displacements().col(k).cwiseAbs().maxCoeff(), 0.05) << "muscle " << k << " moves nothing";
 
-  for (const Eigen::Vector3d& a : {Eigen::Vector3d(0.3, 1.0, 0.55), Eigen::Vector3d(1.0, 0.0, 0.0),
-                                  Eigen::Vector3d(0.75, 0.2, 1.0)})
+  for (const Eigen::Vector3d& a :
+       {Eigen::Vector3d(0.3, 1.0, 0.55), Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Vector3d(0.75, 0.2, 1.0)})
   {
     // The direct way: one load case with every function's load scaled by its muscle's activation.
     fem::LoadCase combined;
@@ -178,8 +183,8 @@ TEST(Superposition, WeightedUnitResponsesEqualTheDirectSolveOfTheCombinedLoad)
     const Eigen::VectorXd direct = analysis.solve(combined);
     const Eigen::VectorXd summed = responses.combined(a);
     const double relative = (summed - direct).norm() / direct.norm();
-    std::printf("[superposition] activations (%.2f, %.2f, %.2f): |U| %.3f mm, relative difference %.2e\n", a[0],
-                a[1], a[2], direct.cwiseAbs().maxCoeff(), relative);
+    std::printf("[superposition] activations (%.2f, %.2f, %.2f): |U| %.3f mm, relative difference %.2e\n", a[0], a[1],
+                a[2], direct.cwiseAbs().maxCoeff(), relative);
     EXPECT_LT(relative, 1e-9);
   }
   EXPECT_THROW(responses.combined(Eigen::VectorXd::Ones(2)), std::invalid_argument);
@@ -190,8 +195,7 @@ TEST(Superposition, TheDisplaySkinMovesAsTheDisplacedBody)
   const Model& model = coarseFace();
   const fem::Mesh& mesh = model.face.continuum.mesh;
   const MuscleResponses responses(*model.analysis, testMuscles());
-  const ExpressionSurface surface(mesh, fem::DisplaySurface(mesh, fem::skinFaces(model.face.continuum), 2),
-                                  responses);
+  const ExpressionSurface surface(mesh, fem::DisplaySurface(mesh, fem::skinFaces(model.face.continuum), 2), responses);
   const Eigen::Vector3d a(0.8, 0.4, 0.6);
   Eigen::Matrix3Xd x;
   surface.positions(a, false, x);

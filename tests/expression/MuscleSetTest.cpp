@@ -44,12 +44,14 @@ struct CylinderFace
 std::vector<seg::Landmark> cylinderLandmarks()
 {
   auto at = [](const char* name, double arc, double z) { return seg::Landmark{name, kFront + arc / kSkinR, z}; };
-  return {at("glabella", 0, 15),        at("nasion", 0, 0),          at("pronasale", 0, -35),
-          at("subnasale", 0, -53),      at("mid_philtrum", 0, -60),  at("labrale_superius", 0, -65),
-          at("labrale_inferius", 0, -80), at("pogonion", 0, -95),    at("menton", 0, -117),
-          at("zygion_left", 65, -20),   at("zygion_right", -65, -20), at("gonion_left", 50, -75),
-          at("gonion_right", -50, -75), at("mid_cheek_left", 45, -35), at("mid_cheek_right", -45, -35),
-          at("forehead", 0, 40)};
+  return {at("glabella", 0, 15),           at("nasion", 0, 0),
+          at("pronasale", 0, -35),         at("subnasale", 0, -53),
+          at("mid_philtrum", 0, -60),      at("labrale_superius", 0, -65),
+          at("labrale_inferius", 0, -80),  at("pogonion", 0, -95),
+          at("menton", 0, -117),           at("zygion_left", 65, -20),
+          at("zygion_right", -65, -20),    at("gonion_left", 50, -75),
+          at("gonion_right", -50, -75),    at("mid_cheek_left", 45, -35),
+          at("mid_cheek_right", -45, -35), at("forehead", 0, 40)};
 }
 
 const CylinderFace& cylinderFace()
@@ -133,8 +135,8 @@ std::vector<std::pair<const fem::Muscle*, const fem::Muscle*>> mirrorPairs(const
         if (f.name.size() > 5 && f.name.compare(f.name.size() - 5, 5, "_left") == 0)
         {
           const std::string twin = f.name.substr(0, f.name.size() - 5) + "_right";
-          const auto it = std::find_if(m.functions.begin(), m.functions.end(),
-                                       [&](const fem::Muscle& g) { return g.name == twin; });
+          const auto it =
+            std::find_if(m.functions.begin(), m.functions.end(), [&](const fem::Muscle& g) { return g.name == twin; });
           EXPECT_NE(it, m.functions.end()) << twin;
           if (it != m.functions.end())
             pairs.emplace_back(&f, &*it);
@@ -265,15 +267,17 @@ TEST(MuscleSetFile, ErrorsNameTheLineAndTheFix)
     std::string from, to, expected;
   };
   const std::vector<Case> cases = {
-    {"insertion = cheilion_left,", "insertion = cheilion_middle,", ":13: insertion: unknown landmark 'cheilion_middle'; known: glabella"},
+    {"insertion = cheilion_left,", "insertion = cheilion_middle,",
+     ":13: insertion: unknown landmark 'cheilion_middle'; known: glabella"},
     {"insertion = cheilion_left, across 10, up 3, depth 0.35, radius 6\n", "",
      ":11: function 'main' of muscle 'zygomaticus_major' has no insertion; add 'insertion = LANDMARK"},
     {"radius 6", "radius -6", ":13: insertion: radius -6 is negative"},
     {"across 10,", "across 1O,", ":13: insertion across: '1O' is not a number; write a plain decimal number"},
     {"load = 2.5e-5", "load = lots", ":9: load: 'lots' is not a number"},
     {"reference = a test", "refrence = a test", ":8: unknown key 'refrence'; here the keys are:"},
-    {"origin = zygion_left,", "origin = zygion_right,", ":12: 'zygion_right': a side = both muscle is written for the "
-                                                          "patient's LEFT side"},
+    {"origin = zygion_left,", "origin = zygion_right,",
+     ":12: 'zygion_right': a side = both muscle is written for the "
+     "patient's LEFT side"},
     {"side = both", "side = across", ":7: side must be both"},
     {"depth 0.35", "depth bone", ":13: insertion: 'depth bone' is for an origin"},
     {"depth bone", "depth 1.5", ":12: origin: depth 1.5 is outside 0 (skin) .. 1 (bone surface)"},
@@ -282,16 +286,17 @@ TEST(MuscleSetFile, ErrorsNameTheLineAndTheFix)
     {"title = Zygomaticus major\n", "", ":5: muscle 'zygomaticus_major' has no title"},
     {"load = 2.5e-5\n", "", ":10: function 'main' of muscle 'zygomaticus_major' has no load; add 'load = L'"},
     {"side = both", "side = both\nmirror = yes", ":8: 'mirror' belongs to a function"},
-    {"function = main", "function = main\nmirror = yes", ":12: 'mirror = yes' is for the functions of a midline muscle"},
-    {"muscle = zygomaticus_major", "muscle = zygomaticus_major_left", ":5: muscle id 'zygomaticus_major_left' must not "
-                                                                     "end in _left or _right"},
+    {"function = main", "function = main\nmirror = yes",
+     ":12: 'mirror = yes' is for the functions of a midline muscle"},
+    {"muscle = zygomaticus_major", "muscle = zygomaticus_major_left",
+     ":5: muscle id 'zygomaticus_major_left' must not "
+     "end in _left or _right"},
     {"across -15, up -8", "across -15, up -8, sideways 3", ":12: origin: unknown part 'sideways 3'"},
   };
   for (const auto& c : cases)
   {
     const std::string message = readError("bad.muscles", replaced(kGood, c.from, c.to));
-    EXPECT_NE(message.find("bad.muscles" + c.expected), std::string::npos)
-      << "for '" << c.to << "' got: " << message;
+    EXPECT_NE(message.find("bad.muscles" + c.expected), std::string::npos) << "for '" << c.to << "' got: " << message;
   }
   // A file with no muscles, and no file at all.
   EXPECT_NE(readError("empty.muscles", "# nothing\nmuscle_set = empty\n").find("empty.muscles: no muscles; add"),
@@ -484,7 +489,8 @@ TEST(MuscleSetSample, MirroredLandmarksGiveMirroredMuscles)
       // The construction: θ mirrored about the nasion's, the same height, the
       // same fraction of the soft tissue, exactly.
       EXPECT_NEAR(seg::CylindricalFrame::wrapTheta(b.theta - front), -seg::CylindricalFrame::wrapTheta(a.theta - front),
-                  1e-9) << l->name;
+                  1e-9)
+        << l->name;
       EXPECT_NEAR(a.z, b.z, 1e-9) << l->name;
       EXPECT_NEAR((a.skinRadius - a.r) / a.thickness, (b.skinRadius - b.r) / b.thickness, 1e-9) << l->name;
       EXPECT_NEAR(frame.toCylindrical(a.position).z, a.z, 1e-9);
@@ -661,8 +667,8 @@ TEST(MuscleSetSample, ScaledLandmarksScaleTheAttachmentsExactly)
   // exactly; the depths follow the real tissue.
   const auto& face = test::sampleFace();
   const double k = 1.1;
-  const auto big = fitMuscleSet(defaultSet(), scaledAboutNasion(face.landmarks.landmarks, k), face.maps.skin,
-                                face.maps.bone);
+  const auto big =
+    fitMuscleSet(defaultSet(), scaledAboutNasion(face.landmarks.landmarks, k), face.maps.skin, face.maps.bone);
   const auto& base = sampleMuscles();
   ASSERT_EQ(base.size(), big.size());
   const double zn = face.landmarks.find("nasion")->z;

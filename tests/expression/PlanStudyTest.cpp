@@ -53,8 +53,7 @@ Studied& studied()
     Scene scene;
     IncisionLogic logic(scene);
     out->input.planName = "Z-plasty 1";
-    out->input.plan =
-      logic.placeProcedure("z-plasty", face.maps.skin, incision::SkinPoint{-40.0 * kDegree, -47.0}, {});
+    out->input.plan = logic.placeProcedure("z-plasty", face.maps.skin, incision::SkinPoint{-40.0 * kDegree, -47.0}, {});
     out->input.skin = face.maps.skin;
     out->input.bone = face.maps.bone;
     out->input.model = out->model;

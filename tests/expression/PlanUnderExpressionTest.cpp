@@ -43,8 +43,8 @@ const ClosedPlan& closedPlan()
     options.threads = 2;
     out->prediction = incision::simulatePlan(face.maps.skin, face.maps.bone, z, options);
     out->analysis = postOperativeAnalysis(out->prediction);
-    out->muscles = fitMuscleSet(readMuscleSet(defaultMuscleSetPath()), face.landmarks.landmarks, face.maps.skin,
-                                face.maps.bone);
+    out->muscles =
+      fitMuscleSet(readMuscleSet(defaultMuscleSetPath()), face.landmarks.landmarks, face.maps.skin, face.maps.bone);
     return out;
   }();
   return *plan;
@@ -175,10 +175,10 @@ TEST(PlanUnderExpression, APushOfHalfTheTravelIsHalfWay)
   push.displacement = 6.0 * frame.direction().normalized();
   const Eigen::VectorXd full = pushedDisplacement(p, push);
   // The fingertip's skin went where it was pushed.
-  EXPECT_LT((full.segment<3>(3 * Eigen::Index(tip)) - p.displacements.segment<3>(3 * Eigen::Index(tip)) -
-             push.displacement)
-              .norm(),
-            1e-9);
+  EXPECT_LT(
+    (full.segment<3>(3 * Eigen::Index(tip)) - p.displacements.segment<3>(3 * Eigen::Index(tip)) - push.displacement)
+      .norm(),
+    1e-9);
   // Half the travel, solved again: half way between closure and full travel.
   SkinPush half = push;
   half.displacement *= 0.5;
@@ -220,8 +220,7 @@ TEST(PlanUnderExpression, ThreeUnitPushesGiveAnyTravelAsAFreshSolveDoes)
   const ClosedPlan& plan = closedPlan();
   const incision::PlanPrediction& p = plan.prediction;
   const int tip = fingertipNode(p);
-  const Eigen::Vector3d centre =
-    p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
+  const Eigen::Vector3d centre = p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
   const PushResponses responses(p, centre, 4.0);
   EXPECT_FALSE(responses.pushedNodes().empty());
   EXPECT_LT((responses.displacement(Eigen::Vector3d::Zero()) - p.displacements).norm(), 1e-9 * p.displacements.norm())

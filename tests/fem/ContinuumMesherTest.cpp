@@ -28,12 +28,16 @@ namespace caps::fem {
 namespace {
 
 constexpr double kSkinRadius = 80.0;
-constexpr double kFaceTheta = -std::numbers::pi / 2.0;  // the chart is centred on the front of the face
+constexpr double kFaceTheta = -std::numbers::pi / 2.0; // the chart is centred on the front of the face
 
-double thetaOf(const ChartPoint& c) { return kFaceTheta + c.x() / kSkinRadius; }
+double thetaOf(const ChartPoint& c)
+{
+  return kFaceTheta + c.x() / kSkinRadius;
+}
 
 /// Skin on the cylinder r = 80 mm around the z axis; chart u = r0 (θ − θc), v = z.
-TissueGeometry cylinderGeometry(std::function<double(const ChartPoint&)> depth) {
+TissueGeometry cylinderGeometry(std::function<double(const ChartPoint&)> depth)
+{
   TissueGeometry g;
   g.skinPoint = [](const ChartPoint& c) {
     const double th = thetaOf(c);
@@ -42,89 +46,123 @@ TissueGeometry cylinderGeometry(std::function<double(const ChartPoint&)> depth) 
   g.tissueDepth = std::move(depth);
   g.inwardDirection = [](const ChartPoint& c) {
     const double th = thetaOf(c);
-    return Eigen::Vector3d(-2.0 * std::cos(th), -2.0 * std::sin(th), 0.0);  // not unit on purpose
+    return Eigen::Vector3d(-2.0 * std::cos(th), -2.0 * std::sin(th), 0.0); // not unit on purpose
   };
   return g;
 }
 
-double radiusOf(const Eigen::Vector3d& x) { return std::hypot(x.x(), x.y()); }
+double radiusOf(const Eigen::Vector3d& x)
+{
+  return std::hypot(x.x(), x.y());
+}
 
 /// A slit from (-10, 0) to (10, 0) (hole loop 0, 1, 2, 1' = 3) in the
 /// rectangle [-20, 20] x [-10, 10], in 6 quadrilaterals and 4 triangles.
-SurfaceMesh slitMesh() {
+SurfaceMesh slitMesh()
+{
   SurfaceMesh m;
-  m.vertices = {{-10, 0}, {0, 0}, {10, 0}, {0, 0},  // hole loop (3 is the lower twin of 1)
-                {-20, 0}, {20, 0},                   // 4, 5: rim ends of the cut line
-                {-20, 10}, {-10, 10}, {0, 10}, {10, 10}, {20, 10},         // 6..10
-                {-20, -10}, {-10, -10}, {0, -10}, {10, -10}, {20, -10}};  // 11..15
+  m.vertices = {{-10, 0},   {0, 0},     {10, 0},  {0, 0},                // hole loop (3 is the lower twin of 1)
+                {-20, 0},   {20, 0},                                     // 4, 5: rim ends of the cut line
+                {-20, 10},  {-10, 10},  {0, 10},  {10, 10},  {20, 10},   // 6..10
+                {-20, -10}, {-10, -10}, {0, -10}, {10, -10}, {20, -10}}; // 11..15
   m.holeVertexCount = 4;
-  m.polygons = {{4, 0, 7}, {4, 7, 6}, {0, 1, 8, 7}, {1, 2, 9, 8}, {2, 5, 10, 9},
-                {11, 12, 0, 4}, {12, 13, 3, 0}, {13, 14, 2, 3}, {14, 15, 5}, {14, 5, 2}};
+  m.polygons = {{4, 0, 7},      {4, 7, 6},      {0, 1, 8, 7},   {1, 2, 9, 8}, {2, 5, 10, 9},
+                {11, 12, 0, 4}, {12, 13, 3, 0}, {13, 14, 2, 3}, {14, 15, 5},  {14, 5, 2}};
   m.outerBorder = {4, 11, 12, 13, 14, 15, 5, 10, 9, 8, 7, 6};
   return m;
 }
 
-std::vector<SutureEdgePair> slitSutures() { return {{{0, 1}, {0, 3}}, {{1, 2}, {3, 2}}}; }
+std::vector<SutureEdgePair> slitSutures()
+{
+  return {{{0, 1}, {0, 3}}, {{1, 2}, {3, 2}}};
+}
 
 /// Mirror v -> -v of the lens mesh's vertices.
-int lensMirror(int v) {
-  switch (v) {
-    case 1: return 5;
-    case 5: return 1;
-    case 2: return 4;
-    case 4: return 2;
-    default: break;
+int lensMirror(int v)
+{
+  switch (v)
+  {
+  case 1:
+    return 5;
+  case 5:
+    return 1;
+  case 2:
+    return 4;
+  case 4:
+    return 2;
+  default:
+    break;
   }
-  if (v >= 8 && v <= 13) return v + 6;
-  if (v >= 14 && v <= 19) return v - 6;
-  return v;  // 0, 3 (the lens's corners) and 6, 7 (the rim on v = 0)
+  if (v >= 8 && v <= 13)
+    return v + 6;
+  if (v >= 14 && v <= 19)
+    return v - 6;
+  return v; // 0, 3 (the lens's corners) and 6, 7 (the rim on v = 0)
 }
 
 /// A lens-shaped (elliptical) excision (Fig. 4.12): path (-15,0) (-5,0)
 /// (5,0) (15,0), the inner twins offset by ±3 mm; loop 0..5 clockwise. The
 /// mesh covers [-25, 25] x [-15, 15] and is mirror-symmetric in v.
-SurfaceMesh lensMesh() {
+SurfaceMesh lensMesh()
+{
   SurfaceMesh m;
-  m.vertices = {{-15, 0}, {-5, 3}, {5, 3}, {15, 0}, {5, -3}, {-5, -3},  // hole loop
-                {-25, 0}, {25, 0}};                                      // 6, 7
-  for (double u : {-25, -15, -5, 5, 15, 25}) m.vertices.push_back({u, 15});   // 8..13
-  for (double u : {-25, -15, -5, 5, 15, 25}) m.vertices.push_back({u, -15});  // 14..19
+  m.vertices = {{-15, 0}, {-5, 3}, {5, 3}, {15, 0}, {5, -3}, {-5, -3}, // hole loop
+                {-25, 0}, {25, 0}};                                    // 6, 7
+  for (double u : {-25, -15, -5, 5, 15, 25})
+    m.vertices.push_back({u, 15}); // 8..13
+  for (double u : {-25, -15, -5, 5, 15, 25})
+    m.vertices.push_back({u, -15}); // 14..19
   m.holeVertexCount = 6;
-  const std::vector<std::vector<int>> upper = {{6, 0, 9}, {6, 9, 8},     {0, 1, 10, 9}, {1, 2, 11, 10},
+  const std::vector<std::vector<int>> upper = {{6, 0, 9},      {6, 9, 8},  {0, 1, 10, 9}, {1, 2, 11, 10},
                                                {2, 3, 12, 11}, {3, 7, 13}, {3, 13, 12}};
   m.polygons = upper;
-  for (const auto& p : upper) {  // mirrored polygons, reversed to stay counter-clockwise
+  for (const auto& p : upper)
+  { // mirrored polygons, reversed to stay counter-clockwise
     std::vector<int> q;
-    for (auto it = p.rbegin(); it != p.rend(); ++it) q.push_back(lensMirror(*it));
+    for (auto it = p.rbegin(); it != p.rend(); ++it)
+      q.push_back(lensMirror(*it));
     m.polygons.push_back(q);
   }
   return m;
 }
 
-std::vector<SutureEdgePair> lensSutures() {  // §4.4.5, Fig. 4.12
+std::vector<SutureEdgePair> lensSutures()
+{ // §4.4.5, Fig. 4.12
   return {{{0, 1}, {0, 5}}, {{1, 2}, {5, 4}}, {{2, 3}, {4, 3}}};
 }
 
 /// N_e of a mesh of an annulus (one hole), from Euler: V - E + F = 0.
-int annulusEdgeCount(const SurfaceMesh& m) { return int(m.vertices.size() + m.polygons.size()); }
+int annulusEdgeCount(const SurfaceMesh& m)
+{
+  return int(m.vertices.size() + m.polygons.size());
+}
 
-int thesisNodeCount(int nv, int ne, int nl) { return nl * (2 * nv + ne) + nv + ne; }
+int thesisNodeCount(int nv, int ne, int nl)
+{
+  return nl * (2 * nv + ne) + nv + ne;
+}
 
-double constantDepth(const ChartPoint&) { return 20.0; }
+double constantDepth(const ChartPoint&)
+{
+  return 20.0;
+}
 
 /// Evaluates every element at every integration point (ElementGeometry
 /// throws ElementError on a non-positive or collapsed Jacobian) and its
 /// stiffness; returns the smallest det J and the total volume.
-std::pair<double, double> checkJacobians(const Mesh& mesh) {
+std::pair<double, double> checkJacobians(const Mesh& mesh)
+{
   double minDet = std::numeric_limits<double>::infinity(), volume = 0.0;
   const LinearElasticMaterial material{1.0, 0.3, 0.0};
-  for (std::size_t e = 0; e < mesh.elements.size(); ++e) {
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+  {
     const auto& el = mesh.elements[e];
     const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
     const ElementCoordinates x = mesh.elementCoordinates(e);
     const IntegrationRule& rule = integrationRule(el.kind, 3);
     PointGeometry g;
-    for (std::size_t q = 0; q < rule.size(); ++q) {
+    for (std::size_t q = 0; q < rule.size(); ++q)
+    {
       evaluateGeometry(shape, x, rule.points[q], int(e), g);
       minDet = std::min(minDet, g.detJ);
       volume += rule.weights[q] * g.detJ;
@@ -135,22 +173,30 @@ std::pair<double, double> checkJacobians(const Mesh& mesh) {
   return {minDet, volume};
 }
 
-void expectThrowsWith(const std::function<void()>& f, const std::string& fragment) {
-  try {
+void expectThrowsWith(const std::function<void()>& f, const std::string& fragment)
+{
+  try
+  {
     f();
     ADD_FAILURE() << "expected std::invalid_argument containing \"" << fragment << "\"";
-  } catch (const std::invalid_argument& e) {
+  }
+  catch (const std::invalid_argument& e)
+  {
     EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
   }
 }
 
-TEST(ContinuumMesherTest, CountsFollowTheThesisFormula) {
-  for (const SurfaceMesh& surface : {slitMesh(), lensMesh()}) {
+TEST(ContinuumMesherTest, CountsFollowTheThesisFormula)
+{
+  for (const SurfaceMesh& surface : {slitMesh(), lensMesh()})
+  {
     const int nv = int(surface.vertices.size()), np = int(surface.polygons.size());
     const int ne = annulusEdgeCount(surface);
     int triangles = 0;
-    for (const auto& p : surface.polygons) triangles += p.size() == 3 ? 1 : 0;
-    for (int layers : {1, 2, 3, 5}) {
+    for (const auto& p : surface.polygons)
+      triangles += p.size() == 3 ? 1 : 0;
+    for (int layers : {1, 2, 3, 5})
+    {
       ContinuumMeshOptions options;
       options.layerCount = layers;
       const ContinuumMesh cm = meshContinuum(surface, {}, cylinderGeometry(constantDepth), options);
@@ -159,18 +205,23 @@ TEST(ContinuumMesherTest, CountsFollowTheThesisFormula) {
       ASSERT_EQ(int(cm.mesh.elements.size()), layers * np);
       int wedges = 0;
       std::vector<int> uses(std::size_t(cm.mesh.nodeCount()), 0);
-      for (std::size_t e = 0; e < cm.mesh.elements.size(); ++e) {
+      for (std::size_t e = 0; e < cm.mesh.elements.size(); ++e)
+      {
         const Element& el = cm.mesh.elements[e];
         const int slots = el.kind == ElementKind::Wedge15 ? 15 : 20;
         wedges += el.kind == ElementKind::Wedge15 ? 1 : 0;
         EXPECT_EQ(int(surface.polygons[std::size_t(cm.elementPolygon[e])].size()),
                   el.kind == ElementKind::Wedge15 ? 3 : 4);
         EXPECT_EQ(el.region, cm.elementLayer[e]);
-        for (int k = 0; k < 20; ++k) {
-          if (k < slots) {
+        for (int k = 0; k < 20; ++k)
+        {
+          if (k < slots)
+          {
             ASSERT_GE(el.nodes[std::size_t(k)], 0);
             ++uses[std::size_t(el.nodes[std::size_t(k)])];
-          } else {
+          }
+          else
+          {
             EXPECT_EQ(el.nodes[std::size_t(k)], -1);
           }
         }
@@ -182,10 +233,12 @@ TEST(ContinuumMesherTest, CountsFollowTheThesisFormula) {
   }
 }
 
-TEST(ContinuumMesherTest, JacobiansArePositiveAndVolumeMatchesTheCylindricalShell) {
+TEST(ContinuumMesherTest, JacobiansArePositiveAndVolumeMatchesTheCylindricalShell)
+{
   // Constant depth 20 mm: the tissue is the shell 60 <= r <= 80 over the
   // chart region, volume = area / r0 * (80^2 - 60^2) / 2 (the slit has no area).
-  for (int layers : {1, 3}) {
+  for (int layers : {1, 3})
+  {
     ContinuumMeshOptions options;
     options.layerCount = layers;
     const ContinuumMesh cm = meshContinuum(slitMesh(), slitSutures(), cylinderGeometry(constantDepth), options);
@@ -200,14 +253,15 @@ TEST(ContinuumMesherTest, JacobiansArePositiveAndVolumeMatchesTheCylindricalShel
   ContinuumMeshOptions options;
   options.layerCount = 3;
   options.layerFractions = {0.2, 0.3, 0.5};
-  const ContinuumMesh cm = meshContinuum(
-      lensMesh(), lensSutures(),
-      cylinderGeometry([](const ChartPoint& c) { return 15.0 + 5.0 * std::cos(c.x() / 15.0) + 0.02 * c.y() * c.y(); }),
-      options);
+  const ContinuumMesh cm = meshContinuum(lensMesh(), lensSutures(), cylinderGeometry([](const ChartPoint& c) {
+                                           return 15.0 + 5.0 * std::cos(c.x() / 15.0) + 0.02 * c.y() * c.y();
+                                         }),
+                                         options);
   EXPECT_GT(checkJacobians(cm.mesh).first, 0.0);
 }
 
-TEST(ContinuumMesherTest, NodesFollowSkinAndDepth) {
+TEST(ContinuumMesherTest, NodesFollowSkinAndDepth)
+{
   auto depth = [](const ChartPoint& c) { return 15.0 + 5.0 * std::cos(c.x() / 15.0) + 0.02 * c.y() * c.y(); };
   const SurfaceMesh surface = lensMesh();
   ContinuumMeshOptions options;
@@ -222,10 +276,12 @@ TEST(ContinuumMesherTest, NodesFollowSkinAndDepth) {
     EXPECT_NEAR(x.z(), c.y(), 1e-9);
     EXPECT_NEAR(std::atan2(x.y(), x.x()), thetaOf(c), 1e-12);
   };
-  for (std::size_t v = 0; v < surface.vertices.size(); ++v) {
+  for (std::size_t v = 0; v < surface.vertices.size(); ++v)
+  {
     const auto& column = cm.vertexColumns[v];
     ASSERT_EQ(column.size(), 7u);
-    for (int k = 0; k <= 3; ++k) expectAt(column[std::size_t(2 * k)], surface.vertices[v], levels[std::size_t(k)]);
+    for (int k = 0; k <= 3; ++k)
+      expectAt(column[std::size_t(2 * k)], surface.vertices[v], levels[std::size_t(k)]);
     for (int k = 0; k < 3; ++k)
       expectAt(column[std::size_t(2 * k + 1)], surface.vertices[v],
                0.5 * (levels[std::size_t(k)] + levels[std::size_t(k) + 1]));
@@ -233,29 +289,35 @@ TEST(ContinuumMesherTest, NodesFollowSkinAndDepth) {
   }
   // Mid-edge columns stand on the chart midpoint: the top node on the skin
   // cylinder, the bottom node at the depth of the midpoint.
-  for (std::size_t e = 0; e < cm.edges.size(); ++e) {
+  for (std::size_t e = 0; e < cm.edges.size(); ++e)
+  {
     const ChartPoint mid =
-        0.5 * (surface.vertices[std::size_t(cm.edges[e][0])] + surface.vertices[std::size_t(cm.edges[e][1])]);
-    for (int k = 0; k <= 3; ++k) expectAt(cm.edgeColumns[e][std::size_t(k)], mid, levels[std::size_t(k)]);
+      0.5 * (surface.vertices[std::size_t(cm.edges[e][0])] + surface.vertices[std::size_t(cm.edges[e][1])]);
+    for (int k = 0; k <= 3; ++k)
+      expectAt(cm.edgeColumns[e][std::size_t(k)], mid, levels[std::size_t(k)]);
   }
   // Top mid-edge slots of the skin layer's elements lie on the skin.
-  for (std::size_t e = 0; e < cm.mesh.elements.size(); ++e) {
+  for (std::size_t e = 0; e < cm.mesh.elements.size(); ++e)
+  {
     const Element& el = cm.mesh.elements[e];
     EXPECT_EQ(el.region, 7 + cm.elementLayer[e]);
-    if (cm.elementLayer[e] != 0) continue;
+    if (cm.elementLayer[e] != 0)
+      continue;
     const int first = el.kind == ElementKind::Hex20 ? 8 : 6, count = el.kind == ElementKind::Hex20 ? 4 : 3;
     for (int k = first; k < first + count; ++k)
       EXPECT_NEAR(radiusOf(cm.mesh.nodes.col(el.nodes[std::size_t(k)])), kSkinRadius, 1e-9);
   }
 }
 
-TEST(ContinuumMesherTest, DepthIsClampedAndDefaultedWhereThereIsNoBone) {
+TEST(ContinuumMesherTest, DepthIsClampedAndDefaultedWhereThereIsNoBone)
+{
   // Raw depth 2 + |u|/2, no bone beyond u = 18 mm; clamped to [6, 12], 9 mm without bone.
   auto raw = [](const ChartPoint& c) {
     return c.x() > 18.0 ? std::numeric_limits<double>::quiet_NaN() : 2.0 + 0.5 * std::abs(c.x());
   };
   auto expected = [](const ChartPoint& c) {
-    if (c.x() > 18.0) return 9.0;
+    if (c.x() > 18.0)
+      return 9.0;
     return std::min(12.0, std::max(6.0, 2.0 + 0.5 * std::abs(c.x())));
   };
   ContinuumMeshOptions options;
@@ -266,7 +328,8 @@ TEST(ContinuumMesherTest, DepthIsClampedAndDefaultedWhereThereIsNoBone) {
   const SurfaceMesh surface = lensMesh();
   const ContinuumMesh cm = meshContinuum(surface, lensSutures(), cylinderGeometry(raw), options);
   int clampedLow = 0, clampedHigh = 0, noBone = 0;
-  for (std::size_t v = 0; v < surface.vertices.size(); ++v) {
+  for (std::size_t v = 0; v < surface.vertices.size(); ++v)
+  {
     const ChartPoint& c = surface.vertices[v];
     EXPECT_DOUBLE_EQ(cm.vertexDepths[v], expected(c));
     EXPECT_NEAR(radiusOf(cm.mesh.nodes.col(cm.vertexColumns[v].back())), kSkinRadius - expected(c), 1e-9);
@@ -287,8 +350,10 @@ TEST(ContinuumMesherTest, DepthIsClampedAndDefaultedWhereThereIsNoBone) {
   EXPECT_DOUBLE_EQ(effectiveTissueDepth(7.5, options), 7.5);
 }
 
-TEST(ContinuumMesherTest, SuturesFollowTheCornerRule) {
-  for (int layers : {1, 2, 4}) {
+TEST(ContinuumMesherTest, SuturesFollowTheCornerRule)
+{
+  for (int layers : {1, 2, 4})
+  {
     ContinuumMeshOptions options;
     options.layerCount = layers;
     // Slit: only the inner point 1 and its twin 3 meet (0 and 2 are corners),
@@ -300,29 +365,34 @@ TEST(ContinuumMesherTest, SuturesFollowTheCornerRule) {
     const ContinuumMesh lens = meshContinuum(lensMesh(), lensSutures(), cylinderGeometry(constantDepth), options);
     ASSERT_EQ(int(lens.sutures.size()), 2 * (2 * layers + 1) + 3 * (layers + 1));
     std::set<std::pair<int, int>> pairs;
-    for (const Suture& s : lens.sutures) pairs.insert({s.node, s.target});
+    for (const Suture& s : lens.sutures)
+      pairs.insert({s.node, s.target});
     EXPECT_EQ(pairs.size(), lens.sutures.size());
-    for (int i = 0; i <= 2 * layers; ++i) {
+    for (int i = 0; i <= 2 * layers; ++i)
+    {
       EXPECT_TRUE(pairs.count({lens.vertexColumns[1][std::size_t(i)], lens.vertexColumns[5][std::size_t(i)]}));
       EXPECT_TRUE(pairs.count({lens.vertexColumns[2][std::size_t(i)], lens.vertexColumns[4][std::size_t(i)]}));
     }
     using EdgePair = std::pair<std::pair<int, int>, std::pair<int, int>>;
-    for (const auto& [a, b] : std::vector<EdgePair>{{{0, 1}, {0, 5}}, {{1, 2}, {5, 4}}, {{2, 3}, {4, 3}}}) {
+    for (const auto& [a, b] : std::vector<EdgePair>{{{0, 1}, {0, 5}}, {{1, 2}, {5, 4}}, {{2, 3}, {4, 3}}})
+    {
       const int ea = lens.edgeIndex(a.first, a.second), eb = lens.edgeIndex(b.first, b.second);
       ASSERT_GE(ea, 0);
       ASSERT_GE(eb, 0);
       for (int k = 0; k <= layers; ++k)
         EXPECT_TRUE(pairs.count(
-            {lens.edgeColumns[std::size_t(ea)][std::size_t(k)], lens.edgeColumns[std::size_t(eb)][std::size_t(k)]}));
+          {lens.edgeColumns[std::size_t(ea)][std::size_t(k)], lens.edgeColumns[std::size_t(eb)][std::size_t(k)]}));
     }
     // The corner columns carry no suture.
     for (int corner : {0, 3})
       for (int node : lens.vertexColumns[std::size_t(corner)])
-        for (const Suture& s : lens.sutures) EXPECT_TRUE(s.node != node && s.target != node);
+        for (const Suture& s : lens.sutures)
+          EXPECT_TRUE(s.node != node && s.target != node);
   }
 }
 
-TEST(ContinuumMesherTest, ThreePointsClosingTogetherAreSuturedOnceEach) {
+TEST(ContinuumMesherTest, ThreePointsClosingTogetherAreSuturedOnceEach)
+{
   // A Z-plasty-like set where vertex 1 is named onto 5 and onto 4 (by
   // different pairs): all three columns close onto one node, no node is
   // sutured to two targets and there is no loop.
@@ -331,32 +401,39 @@ TEST(ContinuumMesherTest, ThreePointsClosingTogetherAreSuturedOnceEach) {
   const std::vector<SutureEdgePair> pairs = {{{0, 1}, {0, 5}}, {{1, 2}, {4, 3}}};
   const ContinuumMesh cm = meshContinuum(lensMesh(), pairs, cylinderGeometry(constantDepth), options);
   std::set<int> slaves;
-  for (const Suture& s : cm.sutures) EXPECT_TRUE(slaves.insert(s.node).second) << "node " << s.node << " sutured twice";
-  for (const Suture& s : cm.sutures) EXPECT_FALSE(slaves.count(s.target)) << "chain through " << s.target;
+  for (const Suture& s : cm.sutures)
+    EXPECT_TRUE(slaves.insert(s.node).second) << "node " << s.node << " sutured twice";
+  for (const Suture& s : cm.sutures)
+    EXPECT_FALSE(slaves.count(s.target)) << "chain through " << s.target;
   // Groups: {1,5,4} per level (2 sutures), {2,3} per level (1), edges (0,1)-(0,5) and (1,2)-(4,3) (1 each).
   EXPECT_EQ(int(cm.sutures.size()), 5 * 3 + 2 * 3);
   EXPECT_NO_THROW(resolveConstraints(cm.mesh, cm.constraints()));
 }
 
-TEST(ContinuumMesherTest, FixedNodesAreTheBoneLessTheSutured) {
+TEST(ContinuumMesherTest, FixedNodesAreTheBoneLessTheSutured)
+{
   const SurfaceMesh surface = lensMesh();
   const int nv = int(surface.vertices.size()), ne = annulusEdgeCount(surface);
-  for (int layers : {1, 3}) {
+  for (int layers : {1, 3})
+  {
     ContinuumMeshOptions options;
     options.layerCount = layers;
     const ContinuumMesh cm = meshContinuum(surface, lensSutures(), cylinderGeometry(constantDepth), options);
     ASSERT_EQ(int(cm.boneNodes.size()), nv + ne);
-    for (int node : cm.boneNodes) EXPECT_NEAR(radiusOf(cm.mesh.nodes.col(node)), 60.0, 1e-9);
+    for (int node : cm.boneNodes)
+      EXPECT_NEAR(radiusOf(cm.mesh.nodes.col(node)), 60.0, 1e-9);
     // Sutured bone nodes: vertices 1, 2, 4, 5 and the six sutured hole edges.
     EXPECT_EQ(int(cm.fixedNodes.size()), nv + ne - 10);
     std::set<int> sutured;
-    for (const Suture& s : cm.sutures) {
+    for (const Suture& s : cm.sutures)
+    {
       sutured.insert(s.node);
       sutured.insert(s.target);
     }
     std::vector<int> expected;
     for (int node : cm.boneNodes)
-      if (!sutured.count(node)) expected.push_back(node);
+      if (!sutured.count(node))
+        expected.push_back(node);
     EXPECT_EQ(cm.fixedNodes, expected);
     EXPECT_TRUE(std::is_sorted(cm.fixedNodes.begin(), cm.fixedNodes.end()));
     const Constraints c = cm.constraints();
@@ -374,7 +451,8 @@ TEST(ContinuumMesherTest, FixedNodesAreTheBoneLessTheSutured) {
   }
 }
 
-TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
+TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand)
+{
   // The slit (-10, 0)-(10, 0): at 10 mm lie the ends of the cut line (4, 5)
   // and the rows v = ±10 over it (7, 8, 9 and 12, 13, 14); the corners
   // (6, 10, 11, 15) are √200 mm away.
@@ -382,7 +460,8 @@ TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
   auto flagged = [](const std::vector<char>& band) {
     std::vector<int> v;
     for (std::size_t i = 0; i < band.size(); ++i)
-      if (band[i]) v.push_back(int(i));
+      if (band[i])
+        v.push_back(int(i));
     return v;
   };
   EXPECT_EQ(flagged(underminingBand(surface, slitSutures(), 0.0)), std::vector<int>{});
@@ -391,7 +470,8 @@ TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
   EXPECT_EQ(flagged(band), (std::vector<int>{0, 1, 2, 3, 4, 5, 7, 8, 9, 12, 13, 14}));
   expectThrowsWith([&] { underminingBand(surface, slitSutures(), -1.0); }, "undermining width");
 
-  for (int layers : {1, 2}) {
+  for (int layers : {1, 2})
+  {
     ContinuumMeshOptions options;
     options.layerCount = layers;
     const ContinuumMesh held = meshContinuum(surface, slitSutures(), cylinderGeometry(constantDepth), options);
@@ -410,7 +490,8 @@ TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
     // in the band; the 12 of the corners and their 8 edges stay fixed.
     EXPECT_EQ(held.fixedNodes.size(), 36u);
     ASSERT_EQ(freed.fixedNodes.size(), 12u);
-    for (int node : freed.fixedNodes) {
+    for (int node : freed.fixedNodes)
+    {
       EXPECT_TRUE(std::binary_search(held.fixedNodes.begin(), held.fixedNodes.end(), node));
       EXPECT_FALSE(std::binary_search(freed.underminedNodes.begin(), freed.underminedNodes.end(), node));
     }
@@ -428,7 +509,8 @@ TEST(ContinuumMesherTest, UnderminingReleasesTheBoneNodesOfTheBand) {
                    "undermining flags");
 }
 
-TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
+TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric)
+{
   // Skin 2 mm, fat 5 mm, the rest muscle; depth varies in u and v^2 so the
   // cylinder's mirror z -> -z is the only symmetry.
   auto depth = [](const ChartPoint& c) { return 16.0 + 2.0 * std::sin(c.x() / 20.0) + 0.01 * c.y() * c.y(); };
@@ -445,9 +527,11 @@ TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
   auto deformed = [&](int node) { return Eigen::Vector3d(cm.mesh.nodes.col(node) + u.segment<3>(3 * node)); };
 
   double gap = 0.0;
-  for (const Suture& s : cm.sutures) gap = std::max(gap, (deformed(s.node) - deformed(s.target)).norm());
+  for (const Suture& s : cm.sutures)
+    gap = std::max(gap, (deformed(s.node) - deformed(s.target)).norm());
   EXPECT_LT(gap, 1e-9);
-  for (int node : cm.fixedNodes) EXPECT_EQ(u.segment<3>(3 * node).norm(), 0.0);
+  for (int node : cm.fixedNodes)
+    EXPECT_EQ(u.segment<3>(3 * node).norm(), 0.0);
   // The wound closed: the inner points' 3 mm offsets are taken up.
   const double uMax = u.cwiseAbs().maxCoeff();
   EXPECT_GT(uMax, 1.0);
@@ -456,12 +540,14 @@ TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
   // Mirror symmetry: node j at (x, y, -z) of node i has (ux, uy, -uz).
   int matched = 0;
   double asymmetry = 0.0;
-  for (Eigen::Index i = 0; i < n; ++i) {
+  for (Eigen::Index i = 0; i < n; ++i)
+  {
     const Eigen::Vector3d xi = cm.mesh.nodes.col(i);
     const Eigen::Vector3d mirror(xi.x(), xi.y(), -xi.z());
     Eigen::Index j = -1;
     for (Eigen::Index k = 0; k < n; ++k)
-      if ((cm.mesh.nodes.col(k) - mirror).norm() < 1e-9) {
+      if ((cm.mesh.nodes.col(k) - mirror).norm() < 1e-9)
+      {
         ASSERT_EQ(j, -1) << "coincident nodes";
         j = k;
       }
@@ -473,14 +559,15 @@ TEST(ContinuumMesherTest, LensClosureMeetsAndIsMirrorSymmetric) {
     ++matched;
   }
   EXPECT_EQ(matched, n);
-  std::cout << "lens closure: " << n << " nodes, " << cm.mesh.elements.size() << " elements, "
-            << cm.sutures.size() << " sutures, max |u| = " << uMax << " mm, largest suture gap " << gap
-            << " mm, largest relative asymmetry " << asymmetry << "\n";
+  std::cout << "lens closure: " << n << " nodes, " << cm.mesh.elements.size() << " elements, " << cm.sutures.size()
+            << " sutures, max |u| = " << uMax << " mm, largest suture gap " << gap << " mm, largest relative asymmetry "
+            << asymmetry << "\n";
 }
 
 /// Flat skin z = 0 over the chart, the bone `depth` mm under it: every
 /// element is straight-sided, so volumes are exact.
-TissueGeometry flatGeometry(double depth) {
+TissueGeometry flatGeometry(double depth)
+{
   TissueGeometry g;
   g.skinPoint = [](const ChartPoint& c) { return Eigen::Vector3d(c.x(), c.y(), 0.0); };
   g.tissueDepth = [depth](const ChartPoint&) { return depth; };
@@ -488,9 +575,11 @@ TissueGeometry flatGeometry(double depth) {
   return g;
 }
 
-double shoelaceArea(const std::vector<ChartPoint>& points, int count) {
+double shoelaceArea(const std::vector<ChartPoint>& points, int count)
+{
   double sum = 0.0;
-  for (int i = 0; i < count; ++i) {
+  for (int i = 0; i < count; ++i)
+  {
     const ChartPoint& a = points[std::size_t(i)];
     const ChartPoint& b = points[std::size_t((i + 1) % count)];
     sum += a.x() * b.y() - a.y() * b.x();
@@ -498,7 +587,8 @@ double shoelaceArea(const std::vector<ChartPoint>& points, int count) {
   return std::abs(0.5 * sum);
 }
 
-TEST(ContinuumMesherTest, APartialCutSharesTheTwinsBelowIt) {
+TEST(ContinuumMesherTest, APartialCutSharesTheTwinsBelowIt)
+{
   // The slit cut through the top layer of three: twin 3 of vertex 1 shares
   // its column from the cut's root (index 2) down, and so do the edges
   // (0, 1) / (0, 3) and (1, 2) / (3, 2) from level 1 down.
@@ -510,10 +600,11 @@ TEST(ContinuumMesherTest, APartialCutSharesTheTwinsBelowIt) {
   ContinuumMeshOptions fullOptions;
   fullOptions.layerCount = 3;
   const ContinuumMesh full = meshContinuum(m, slitSutures(), cylinderGeometry(constantDepth), fullOptions);
-  const int merged = 5 + 3 + 3;  // vertex column indices 2..6, two edges' levels 1..3
+  const int merged = 5 + 3 + 3; // vertex column indices 2..6, two edges' levels 1..3
   EXPECT_EQ(cm.mesh.nodeCount(), full.mesh.nodeCount() - merged);
-  EXPECT_EQ(cm.mesh.elements.size(), full.mesh.elements.size());  // a slit has no floor
-  for (int i = 0; i <= 6; ++i) {
+  EXPECT_EQ(cm.mesh.elements.size(), full.mesh.elements.size()); // a slit has no floor
+  for (int i = 0; i <= 6; ++i)
+  {
     if (i < 2)
       EXPECT_NE(cm.vertexColumns[1][std::size_t(i)], cm.vertexColumns[3][std::size_t(i)]) << i;
     else
@@ -524,26 +615,31 @@ TEST(ContinuumMesherTest, APartialCutSharesTheTwinsBelowIt) {
   ASSERT_GE(e03, 0);
   EXPECT_NE(cm.edgeColumns[std::size_t(e01)][0], cm.edgeColumns[std::size_t(e03)][0]);
   for (int level = 1; level <= 3; ++level)
-    EXPECT_EQ(cm.edgeColumns[std::size_t(e01)][std::size_t(level)], cm.edgeColumns[std::size_t(e03)][std::size_t(level)]);
+    EXPECT_EQ(cm.edgeColumns[std::size_t(e01)][std::size_t(level)],
+              cm.edgeColumns[std::size_t(e03)][std::size_t(level)]);
   // Sutures only in the layer cut: vertex 3 onto 1 at column indices 0, 1
   // and the two edges' skin level; nothing at the root or below.
   EXPECT_EQ(cm.sutures.size(), 4u);
   std::set<int> below;
   for (int v : {1, 3})
-    for (int i = 2; i <= 6; ++i) below.insert(cm.vertexColumns[std::size_t(v)][std::size_t(i)]);
-  for (const Suture& s : cm.sutures) EXPECT_EQ(below.count(s.node) + below.count(s.target), 0u);
+    for (int i = 2; i <= 6; ++i)
+      below.insert(cm.vertexColumns[std::size_t(v)][std::size_t(i)]);
+  for (const Suture& s : cm.sutures)
+    EXPECT_EQ(below.count(s.node) + below.count(s.target), 0u);
   // Every node in some element; the bone nodes listed once each.
   std::vector<int> uses(std::size_t(cm.mesh.nodeCount()), 0);
   for (const auto& el : cm.mesh.elements)
     for (int node : el.nodes)
-      if (node >= 0) ++uses[std::size_t(node)];
+      if (node >= 0)
+        ++uses[std::size_t(node)];
   EXPECT_EQ(std::count(uses.begin(), uses.end(), 0), 0);
   EXPECT_EQ(std::set<int>(cm.boneNodes.begin(), cm.boneNodes.end()).size(), cm.boneNodes.size());
   EXPECT_EQ(int(cm.boneNodes.size()), int(m.vertices.size()) - 1 + int(cm.edges.size()) - 2);
   checkJacobians(cm.mesh);
 }
 
-TEST(ContinuumMesherTest, APartialExcisionKeepsTheFloorAndTheVolumesAreExact) {
+TEST(ContinuumMesherTest, APartialExcisionKeepsTheFloorAndTheVolumesAreExact)
+{
   // The lens excision on flat skin, 12 mm deep, cut through the skin layer
   // (15 % of the depth) of three: the tissue kept is the region less the
   // lens over the top layer; the excised tissue is the lens over that layer.
@@ -576,22 +672,29 @@ TEST(ContinuumMesherTest, APartialExcisionKeepsTheFloorAndTheVolumesAreExact) {
   EXPECT_TRUE(meshExcisedTissue(slitMesh(), flatGeometry(depth), options).mesh.elements.empty());
 }
 
-TEST(ContinuumMesherTest, TheExcisedBoxHasItsAnalyticVolume) {
+TEST(ContinuumMesherTest, TheExcisedBoxHasItsAnalyticVolume)
+{
   // A 16 x 8 mm box excision on flat skin over a bone 9 mm down, its sides
   // refined every 2 mm, inside a 40 x 20 mm region of quadrilaterals whose
   // inner corners are the box's points: the excised volume is 16 * 8 * 9 mm³.
   SurfaceMesh m;
   std::vector<ChartPoint>& v = m.vertices;
-  for (int i = 0; i < 8; ++i) v.push_back({-8.0 + 2 * i, -4.0});  // clockwise seen from the skin: along the bottom
-  for (int i = 0; i < 4; ++i) v.push_back({8.0, -4.0 + 2 * i});
-  for (int i = 0; i < 8; ++i) v.push_back({8.0 - 2 * i, 4.0});
-  for (int i = 0; i < 4; ++i) v.push_back({-8.0, 4.0 - 2 * i});
-  std::reverse(v.begin(), v.end());  // the hole loop runs clockwise
+  for (int i = 0; i < 8; ++i)
+    v.push_back({-8.0 + 2 * i, -4.0}); // clockwise seen from the skin: along the bottom
+  for (int i = 0; i < 4; ++i)
+    v.push_back({8.0, -4.0 + 2 * i});
+  for (int i = 0; i < 8; ++i)
+    v.push_back({8.0 - 2 * i, 4.0});
+  for (int i = 0; i < 4; ++i)
+    v.push_back({-8.0, 4.0 - 2 * i});
+  std::reverse(v.begin(), v.end()); // the hole loop runs clockwise
   m.holeVertexCount = int(v.size());
   // A ring of quads from each loop vertex to its point scaled out 2.5 times.
   const int n = m.holeVertexCount;
-  for (int i = 0; i < n; ++i) v.push_back(2.5 * v[std::size_t(i)]);
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < n; ++i)
+    v.push_back(2.5 * v[std::size_t(i)]);
+  for (int i = 0; i < n; ++i)
+  {
     const int j = (i + 1) % n;
     m.polygons.push_back({i, j, n + j, n + i});
   }
@@ -606,7 +709,8 @@ TEST(ContinuumMesherTest, TheExcisedBoxHasItsAnalyticVolume) {
   EXPECT_NEAR(meshVolume(cm.mesh), ring * 9.0 + 16.0 * 8.0 * 4.5, 1e-9);
 }
 
-TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne) {
+TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne)
+{
   // The lens closed with its cut through one layer of three and through all
   // three: the sutured nodes meet either way, no rigid-body freedom is left,
   // and the tissue left under a partial cut holds the cut layer's base in
@@ -615,7 +719,8 @@ TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne) {
   auto depth = [](const ChartPoint&) { return 12.0; };
   const MaterialTable materials = {{0, {0.15, 0.45, 1e-9}}, {1, {0.01, 0.45, 1e-9}}, {2, {0.05, 0.45, 1e-9}}};
   double pull[2] = {0.0, 0.0};
-  for (int cutLayers : {0, 1}) {
+  for (int cutLayers : {0, 1})
+  {
     ContinuumMeshOptions options;
     options.layerCount = 3;
     options.cutLayers = cutLayers;
@@ -625,13 +730,17 @@ TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne) {
     const Eigen::VectorXd u = analysis.solve(LoadCase{});
     const Eigen::VectorXd f = analysis.internalForces(u);
     double gap = 0.0;
-    for (const Suture& s : cm.sutures) {
+    for (const Suture& s : cm.sutures)
+    {
       gap = std::max(gap, (cm.mesh.nodes.col(s.node) + u.segment<3>(3 * s.node) - cm.mesh.nodes.col(s.target) -
-                           u.segment<3>(3 * s.target)).norm());
+                           u.segment<3>(3 * s.target))
+                            .norm());
       bool onSkin = false;
       for (const auto* columns : {&cm.vertexColumns, &cm.edgeColumns})
-        for (const auto& column : *columns) onSkin = onSkin || column.front() == s.node;
-      if (onSkin) pull[cutLayers] += f.segment<3>(3 * s.node).norm();
+        for (const auto& column : *columns)
+          onSkin = onSkin || column.front() == s.node;
+      if (onSkin)
+        pull[cutLayers] += f.segment<3>(3 * s.node).norm();
     }
     EXPECT_LT(gap, 1e-9);
   }
@@ -640,12 +749,13 @@ TEST(ContinuumMesherTest, APartialCutClosesHarderThanAFullOne) {
             << " N, through 1 of 3: " << pull[1] << " N\n";
 }
 
-TEST(ContinuumMesherTest, BadInputIsRejectedWithAClearMessage) {
+TEST(ContinuumMesherTest, BadInputIsRejectedWithAClearMessage)
+{
   const TissueGeometry geometry = cylinderGeometry(constantDepth);
   {
     SurfaceMesh m = slitMesh();
     m.vertices.push_back({-30, 0});
-    m.polygons[1] = {4, 7, 6, 16, 11};  // not a valid cover, but the size is rejected first
+    m.polygons[1] = {4, 7, 6, 16, 11}; // not a valid cover, but the size is rejected first
     expectThrowsWith([&] { meshContinuum(m, {}, geometry); }, "surface polygon 1 has 5 vertices");
   }
   {
@@ -679,5 +789,5 @@ TEST(ContinuumMesherTest, BadInputIsRejectedWithAClearMessage) {
   }
 }
 
-}  // namespace
-}  // namespace caps::fem
+} // namespace
+} // namespace caps::fem

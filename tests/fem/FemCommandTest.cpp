@@ -21,44 +21,53 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path freshDir(const std::string& name) {
+fs::path freshDir(const std::string& name)
+{
   const fs::path dir = fs::temp_directory_path() / ("caps_fem_cmd_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   return dir;
 }
 
-caps::test::ProcessResult runCaps(const std::string& args) { return runProcess(quoted(CAPS_EXECUTABLE) + " " + args); }
+caps::test::ProcessResult runCaps(const std::string& args)
+{
+  return runProcess(quoted(CAPS_EXECUTABLE) + " " + args);
+}
 
-void write(const fs::path& path, const std::string& text) {
+void write(const fs::path& path, const std::string& text)
+{
   std::ofstream f(path);
   f << text;
 }
 
 /// displacements.csv as written by caps fem (deck node numbers 1..n).
-Eigen::Matrix3Xd readDisplacementsCsv(const fs::path& path, Eigen::Index nodeCount) {
+Eigen::Matrix3Xd readDisplacementsCsv(const fs::path& path, Eigen::Index nodeCount)
+{
   std::ifstream csv(path);
   std::string line;
   std::getline(csv, line);
   EXPECT_EQ(line, "node,x,y,z,ux,uy,uz");
   Eigen::Matrix3Xd u = Eigen::Matrix3Xd::Zero(3, nodeCount);
   int rows = 0;
-  while (std::getline(csv, line)) {
+  while (std::getline(csv, line))
+  {
     std::replace(line.begin(), line.end(), ',', ' ');
     std::istringstream in(line);
     long id;
     double x, y, z, ux, uy, uz;
     EXPECT_TRUE(in >> id >> x >> y >> z >> ux >> uy >> uz) << line;
     ++rows;
-    if (id >= 1 && id <= nodeCount) u.col(id - 1) = Eigen::Vector3d(ux, uy, uz);
+    if (id >= 1 && id <= nodeCount)
+      u.col(id - 1) = Eigen::Vector3d(ux, uy, uz);
   }
   EXPECT_EQ(rows, nodeCount);
   return u;
 }
 
-}  // namespace
+} // namespace
 
-TEST(FemCommand, MatchesCcxOnTheSameDeck) {
+TEST(FemCommand, MatchesCcxOnTheSameDeck)
+{
   ASSERT_EQ(std::system("command -v ccx > /dev/null 2>&1"), 0) << "install calculix-ccx";
   Mesh mesh = test::boxMesh(3, 2, 2, 30, 20, 10);
   const Mesh wedges = test::boxMesh(2, 2, 1, 20, 20, 5, Eigen::Vector3d(0, 0, 10), true);
@@ -69,9 +78,12 @@ TEST(FemCommand, MatchesCcxOnTheSameDeck) {
   Constraints c;
   LoadCase load;
   load.gravity = Eigen::Vector3d(0, 0, -9810);
-  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-    if (mesh.nodes(0, i) < 0.5) c.fixNode(int(i));
-    if (mesh.nodes(0, i) > 29.0) load.nodalForces.push_back({int(i), Eigen::Vector3d(0, 0.05, -0.1)});
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+  {
+    if (mesh.nodes(0, i) < 0.5)
+      c.fixNode(int(i));
+    if (mesh.nodes(0, i) > 29.0)
+      load.nodalForces.push_back({int(i), Eigen::Vector3d(0, 0.05, -0.1)});
   }
   const MaterialTable materials{{0, {5.0, 0.45, 1e-9}}};
   const fs::path dir = freshDir("ccx");
@@ -81,7 +93,8 @@ TEST(FemCommand, MatchesCcxOnTheSameDeck) {
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("max displacement:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("factor"), std::string::npos) << r.output;
-  for (const char* f : {"displacements.csv", "stresses.csv", "result.vtu"}) EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
+  for (const char* f : {"displacements.csv", "stresses.csv", "result.vtu"})
+    EXPECT_TRUE(fs::exists(dir / "out" / f)) << f;
 
   ASSERT_EQ(std::system(("cd " + quoted(dir.string()) + " && OMP_NUM_THREADS=1 ccx -i job > ccx.log 2>&1").c_str()), 0);
   const Eigen::Matrix3Xd ccx = readDatDisplacements((dir / "job.dat").string(), mesh.nodeCount());
@@ -95,15 +108,16 @@ TEST(FemCommand, MatchesCcxOnTheSameDeck) {
   std::string line;
   std::getline(stresses, line);
   EXPECT_EQ(line, "node,sxx,syy,szz,sxy,syz,szx,von_mises");
-  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
+  if (!std::getenv("CAPS_KEEP_CCX"))
+    fs::remove_all(dir);
 }
 
-TEST(FemCommand, ErrorsAndUsage) {
+TEST(FemCommand, ErrorsAndUsage)
+{
   const fs::path dir = freshDir("errors");
-  const std::string cube =
-      "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n"
-      "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n*MATERIAL,NAME=M\n*ELASTIC\n100,0.3\n"
-      "*SOLID SECTION, ELSET=E, MATERIAL=M\n";
+  const std::string cube = "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n"
+                           "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n*MATERIAL,NAME=M\n*ELASTIC\n100,0.3\n"
+                           "*SOLID SECTION, ELSET=E, MATERIAL=M\n";
   write(dir / "unsupported.inp", cube + "*STEP\n*STATIC\n*FILM\nE, F1, 20, 1\n*END STEP\n");
   auto r = runCaps("fem " + quoted((dir / "unsupported.inp").string()) + " --out " + quoted(dir.string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
@@ -119,13 +133,14 @@ TEST(FemCommand, ErrorsAndUsage) {
                               "*SOLID SECTION, ELSET=E, MATERIAL=M\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n");
   r = runCaps("fem " + quoted((dir / "inverted.inp").string()) + " --out " + quoted(dir.string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_NE(r.output.find("element 1 "), std::string::npos) << r.output;  // the deck's number, not CAPS's index 0
+  EXPECT_NE(r.output.find("element 1 "), std::string::npos) << r.output; // the deck's number, not CAPS's index 0
 
   r = runCaps("fem " + quoted((dir / "missing.inp").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
   EXPECT_NE(r.output.find("cannot read"), std::string::npos) << r.output;
 
-  for (const char* args : {"fem", "fem --bogus x.inp", "fem a.inp b.inp", "fem x.inp --out"}) {
+  for (const char* args : {"fem", "fem --bogus x.inp", "fem a.inp b.inp", "fem x.inp --out"})
+  {
     r = runCaps(args);
     EXPECT_EQ(r.exitCode, 2) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("usage: caps fem"), std::string::npos) << r.output;
@@ -135,7 +150,8 @@ TEST(FemCommand, ErrorsAndUsage) {
   fs::remove_all(dir);
 }
 
-TEST(FemCommand, ALargeDeformationDeckMatchesCcxNlgeom) {
+TEST(FemCommand, ALargeDeformationDeckMatchesCcxNlgeom)
+{
   // A neo-Hookean cantilever bent by a tip load until the tip moves about a
   // third of its length: *STEP, NLGEOM with *STATIC increments, solved by
   // caps fem and by ccx (tight *CONTROLS) from the same deck.
@@ -143,9 +159,12 @@ TEST(FemCommand, ALargeDeformationDeckMatchesCcxNlgeom) {
   const Mesh mesh = test::boxMesh(6, 1, 1, 30, 4, 4);
   Constraints c;
   LoadCase load;
-  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
-    if (mesh.nodes(0, i) < 1e-9) c.fixNode(int(i));
-    if (mesh.nodes(0, i) > 30 - 1e-9) load.nodalForces.push_back({int(i), Eigen::Vector3d(0, 0, -0.0004)});
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+  {
+    if (mesh.nodes(0, i) < 1e-9)
+      c.fixNode(int(i));
+    if (mesh.nodes(0, i) > 30 - 1e-9)
+      load.nodalForces.push_back({int(i), Eigen::Vector3d(0, 0, -0.0004)});
   }
   const HyperelasticMaterial skin = HyperelasticMaterial::neoHookean(0.02, 5.0);
   CalculixExportOptions options;
@@ -179,18 +198,20 @@ TEST(FemCommand, ALargeDeformationDeckMatchesCcxNlgeom) {
   std::cout << "caps fem vs ccx NLGEOM: tip deflection " << tip << " mm of 30, relative difference " << diff << "\n";
   EXPECT_GT(tip, 6.0) << "not a large deformation";
   EXPECT_LT(diff, 1e-5);
-  if (!std::getenv("CAPS_KEEP_CCX")) fs::remove_all(dir);
+  if (!std::getenv("CAPS_KEEP_CCX"))
+    fs::remove_all(dir);
 }
 
-TEST(FemCommand, ALargeDeformationStepThatCannotConvergeWritesNoResult) {
+TEST(FemCommand, ALargeDeformationStepThatCannotConvergeWritesNoResult)
+{
   // A cube whose top is pushed 150 % of its height down through its base.
   const fs::path dir = freshDir("nonconverging");
   std::string deck =
-      "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n"
-      "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n*MATERIAL,NAME=M\n*HYPERELASTIC, NEO HOOKE\n0.02, 2.0\n"
-      "*SOLID SECTION, ELSET=E, MATERIAL=M\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n"
-      "*STEP, NLGEOM\n*STATIC\n0.5, 1.0, 0.01, 1.0\n*BOUNDARY\n5,3,3,-1.5\n6,3,3,-1.5\n7,3,3,-1.5\n8,3,3,-1.5\n"
-      "*END STEP\n";
+    "*NODE\n1,0,0,0\n2,1,0,0\n3,1,1,0\n4,0,1,0\n5,0,0,1\n6,1,0,1\n7,1,1,1\n8,0,1,1\n"
+    "*ELEMENT, TYPE=C3D8, ELSET=E\n1,1,2,3,4,5,6,7,8\n*MATERIAL,NAME=M\n*HYPERELASTIC, NEO HOOKE\n0.02, 2.0\n"
+    "*SOLID SECTION, ELSET=E, MATERIAL=M\n*BOUNDARY\n1,1,3\n2,1,3\n3,1,3\n4,1,3\n"
+    "*STEP, NLGEOM\n*STATIC\n0.5, 1.0, 0.01, 1.0\n*BOUNDARY\n5,3,3,-1.5\n6,3,3,-1.5\n7,3,3,-1.5\n8,3,3,-1.5\n"
+    "*END STEP\n";
   write(dir / "push.inp", deck);
   const auto r = runCaps("fem " + quoted((dir / "push.inp").string()) + " --out " + quoted((dir / "out").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;

@@ -26,27 +26,32 @@ namespace caps::fem {
 namespace {
 
 using test::boxMesh;
-using test::MeshBuilder;
 using test::elementCases;
+using test::MeshBuilder;
 using test::wobble;
 
 /// Nearly incompressible tissue: E = 0.1 MPa, nu = 0.49.
 const LinearElasticMaterial kTissue{0.1, 0.49, 1e-9};
 
-std::vector<std::pair<std::string, HyperelasticMaterial>> splitMaterials() {
+std::vector<std::pair<std::string, HyperelasticMaterial>> splitMaterials()
+{
   return {{"NeoHookean", HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, kTissue)},
           {"MooneyRivlin", HyperelasticMaterial::fromLinear(HyperelasticLaw::MooneyRivlin, kTissue)},
           {"MooneyRivlin, nu = 0.3", HyperelasticMaterial::mooneyRivlin(0.012, 0.006, 1.2)},
           {"VerondaWestmann", HyperelasticMaterial::fromLinear(HyperelasticLaw::VerondaWestmann, kTissue, 4.0)}};
 }
 
-TEST(HyperelasticMaterial, DeviatoricAndVolumetricPartsSumToTheResponse) {
+TEST(HyperelasticMaterial, DeviatoricAndVolumetricPartsSumToTheResponse)
+{
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> d(-0.3, 0.3);
-  for (const auto& [name, m] : splitMaterials()) {
-    for (int sample = 0; sample < 5; ++sample) {
+  for (const auto& [name, m] : splitMaterials())
+  {
+    for (int sample = 0; sample < 5; ++sample)
+    {
       Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-      for (int i = 0; i < 9; ++i) f(i / 3, i % 3) += d(rng);
+      for (int i = 0; i < 9; ++i)
+        f(i / 3, i % 3) += d(rng);
       const double j = f.determinant();
       ASSERT_GT(j, 0.0);
       const Eigen::Matrix3d c = f.transpose() * f, ci = c.inverse();
@@ -56,10 +61,12 @@ TEST(HyperelasticMaterial, DeviatoricAndVolumetricPartsSumToTheResponse) {
       const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {2, 0}};
       Vector6d sVol;
       Matrix6d dVol;
-      for (int a = 0; a < 6; ++a) {
+      for (int a = 0; a < 6; ++a)
+      {
         const int p = pair[a][0], q = pair[a][1];
         sVol[a] = vol.pressure * j * ci(p, q);
-        for (int b = 0; b < 6; ++b) {
+        for (int b = 0; b < 6; ++b)
+        {
           const int k = pair[b][0], l = pair[b][1];
           dVol(a, b) = (vol.stiffness * j * j + vol.pressure * j) * ci(p, q) * ci(k, l) -
                        vol.pressure * j * (ci(p, k) * ci(q, l) + ci(p, l) * ci(q, k));
@@ -75,26 +82,33 @@ TEST(HyperelasticMaterial, DeviatoricAndVolumetricPartsSumToTheResponse) {
   EXPECT_THROW(svk.deviatoricResponse(Eigen::Matrix3d::Identity(), 1.0), std::invalid_argument);
 }
 
-ElementDisplacements slotsOf(const Element& el, const Eigen::Matrix3Xd& nodal) {
+ElementDisplacements slotsOf(const Element& el, const Eigen::Matrix3Xd& nodal)
+{
   ElementDisplacements u = ElementDisplacements::Zero();
   for (int a = 0; a < kHex20NodeCount; ++a)
-    if (el.nodes[std::size_t(a)] >= 0) u.row(a) = nodal.col(el.nodes[std::size_t(a)]).transpose();
+    if (el.nodes[std::size_t(a)] >= 0)
+      u.row(a) = nodal.col(el.nodes[std::size_t(a)]).transpose();
   return u;
 }
 
-TEST(MixedFiniteStrainElement, CondensedTangentIsTheDerivativeOfTheCondensedForces) {
+TEST(MixedFiniteStrainElement, CondensedTangentIsTheDerivativeOfTheCondensedForces)
+{
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> d(-0.2, 0.2);
-  for (const auto& c : elementCases()) {
+  for (const auto& c : elementCases())
+  {
     const Element& el = c.mesh.elements[0];
     const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
     const ElementCoordinates x = c.mesh.elementCoordinates(0);
-    for (int points : {2, 3}) {
+    for (int points : {2, 3})
+    {
       const IntegrationRule& rule = integrationRule(el.kind, points);
-      for (const auto& [name, m] : splitMaterials()) {
+      for (const auto& [name, m] : splitMaterials())
+      {
         Eigen::Matrix3Xd nodal(3, c.mesh.nodeCount());
         for (Eigen::Index i = 0; i < nodal.cols(); ++i)
-          for (int k = 0; k < 3; ++k) nodal(k, i) = d(rng);
+          for (int k = 0; k < 3; ++k)
+            nodal(k, i) = d(rng);
         const ElementDisplacements u = slotsOf(el, nodal);
         ElementVector f;
         ElementMatrix k;
@@ -106,7 +120,8 @@ TEST(MixedFiniteStrainElement, CondensedTangentIsTheDerivativeOfTheCondensedForc
         const double h = 1e-6;
         double worst = 0;
         for (Eigen::Index node = 0; node < c.mesh.nodeCount(); ++node)
-          for (int dir = 0; dir < 3; ++dir) {
+          for (int dir = 0; dir < 3; ++dir)
+          {
             Eigen::Matrix3Xd np = nodal, nm = nodal;
             np(dir, node) += h;
             nm(dir, node) -= h;
@@ -115,7 +130,8 @@ TEST(MixedFiniteStrainElement, CondensedTangentIsTheDerivativeOfTheCondensedForc
             assembleElementMixedFiniteStrain(shape, x, slotsOf(el, nm), m, rule, 0, fm, nullptr, check);
             ElementVector column = (fp - fm) / (2 * h), analytic = ElementVector::Zero();
             for (int a = 0; a < kHex20NodeCount; ++a)
-              if (el.nodes[std::size_t(a)] == node) analytic += k.col(3 * a + dir);
+              if (el.nodes[std::size_t(a)] == node)
+                analytic += k.col(3 * a + dir);
             worst = std::max(worst, (column - analytic).norm());
           }
         EXPECT_LT(worst, 1e-6 * k.norm()) << c.name << ", " << name << ", " << points << " points";
@@ -125,17 +141,21 @@ TEST(MixedFiniteStrainElement, CondensedTangentIsTheDerivativeOfTheCondensedForc
   }
 }
 
-TEST(MixedFiniteStrainElement, UnderAHomogeneousDeformationItIsTheDisplacementElement) {
+TEST(MixedFiniteStrainElement, UnderAHomogeneousDeformationItIsTheDisplacementElement)
+{
   // J is uniform, so J~ = J and p~ = U'(J): the same forces and tangent.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> d(-0.3, 0.3);
-  for (const auto& c : elementCases()) {
+  for (const auto& c : elementCases())
+  {
     const Element& el = c.mesh.elements[0];
     const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
     const ElementCoordinates x = c.mesh.elementCoordinates(0);
-    for (const auto& [name, m] : splitMaterials()) {
+    for (const auto& [name, m] : splitMaterials())
+    {
       Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
-      for (int i = 0; i < 9; ++i) f(i / 3, i % 3) += d(rng);
+      for (int i = 0; i < 9; ++i)
+        f(i / 3, i % 3) += d(rng);
       ASSERT_GT(f.determinant(), 0.0);
       const Eigen::Matrix3Xd nodal = (f - Eigen::Matrix3d::Identity()) * c.mesh.nodes;
       const ElementDisplacements u = slotsOf(el, nodal);
@@ -150,28 +170,32 @@ TEST(MixedFiniteStrainElement, UnderAHomogeneousDeformationItIsTheDisplacementEl
       // The tangents differ (the mixed one sees the projected dilatation
       // only), but not along a homogeneous increment, whose dJ is uniform.
       Eigen::Matrix3d df;
-      for (int i = 0; i < 9; ++i) df(i / 3, i % 3) = d(rng);
+      for (int i = 0; i < 9; ++i)
+        df(i / 3, i % 3) = d(rng);
       const ElementDisplacements du = slotsOf(el, df * c.mesh.nodes);
-      const ElementVector flat = Eigen::Map<const ElementVector>(Eigen::Matrix<double, 3, kHex20NodeCount>(du.transpose()).data());
+      const ElementVector flat =
+        Eigen::Map<const ElementVector>(Eigen::Matrix<double, 3, kHex20NodeCount>(du.transpose()).data());
       EXPECT_LT((kMixed * flat - kPlain * flat).norm(), 1e-10 * (kPlain * flat).norm()) << c.name << ", " << name;
       EXPECT_NEAR(cMixed.energy, cPlain.energy, 1e-10 * cPlain.energy) << c.name << ", " << name;
       EXPECT_NEAR(fields.dilatation[0], f.determinant(), 1e-12) << c.name;
       EXPECT_LT(fields.dilatation.tail<3>().norm(), 1e-12) << c.name;
       EXPECT_NEAR(fields.pressure[0], m.volumetricResponse(f.determinant()).pressure,
                   1e-10 * std::abs(m.volumetricResponse(f.determinant()).pressure))
-          << c.name;
+        << c.name;
     }
   }
 }
 
 /// Principal nominal stresses dW/dlambda_i of a neo-Hookean or Mooney-Rivlin
 /// law at principal stretches @a l, from the invariants' derivatives.
-Eigen::Vector3d principalNominalStress(const HyperelasticMaterial& m, const Eigen::Vector3d& l) {
+Eigen::Vector3d principalNominalStress(const HyperelasticMaterial& m, const Eigen::Vector3d& l)
+{
   const double j = l.prod(), i1 = l.squaredNorm();
   const double i2 = l[0] * l[0] * l[1] * l[1] + l[1] * l[1] * l[2] * l[2] + l[2] * l[2] * l[0] * l[0];
   const double jm23 = std::pow(j, -2.0 / 3.0), jm43 = jm23 * jm23;
   Eigen::Vector3d p;
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 3; ++i)
+  {
     const double di1b = jm23 * (2 * l[i] - (2.0 / 3.0) * i1 / l[i]);
     const double di2b = jm43 * (2 * l[i] * (i1 - l[i] * l[i]) - (4.0 / 3.0) * i2 / l[i]);
     p[i] = m.c10 * di1b + m.c01 * di2b + (2 * (j - 1) / m.d1) * j / l[i];
@@ -179,16 +203,19 @@ Eigen::Vector3d principalNominalStress(const HyperelasticMaterial& m, const Eige
   return p;
 }
 
-TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosedForm) {
+TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosedForm)
+{
   // The block of FiniteStrainTest, of bricks and of native wedges: the
   // deformation is homogeneous, so the mixed element is exact as well.
   const double length = 10, side = 4, stretch = 2.0;
   for (bool wedges : {false, true})
     for (const HyperelasticMaterial& m :
          {HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, kTissue),
-          HyperelasticMaterial::fromLinear(HyperelasticLaw::MooneyRivlin, {0.1, 0.499, 0.0})}) {
+          HyperelasticMaterial::fromLinear(HyperelasticLaw::MooneyRivlin, {0.1, 0.499, 0.0})})
+    {
       Mesh mesh = boxMesh(2, 1, 1, length, side, side, Eigen::Vector3d::Zero(), wedges);
-      if (wedges) mesh = withNativeWedges(mesh);
+      if (wedges)
+        mesh = withNativeWedges(mesh);
       const Constraints c = test::uniaxialStretch(mesh, length, side, stretch);
       AssemblyOptions options;
       options.volumetric = VolumetricFormulation::MixedPressure;
@@ -203,7 +230,8 @@ TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosed
 
       // Closed form: the lateral stretch l makes the lateral stress vanish.
       double lo = 0.3, hi = 1.0;
-      for (int i = 0; i < 200; ++i) {
+      for (int i = 0; i < 200; ++i)
+      {
         const double mid = 0.5 * (lo + hi);
         (principalNominalStress(m, Eigen::Vector3d(stretch, mid, mid))[1] > 0 ? hi : lo) = mid;
       }
@@ -211,7 +239,8 @@ TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosed
       const double nominal = principalNominalStress(m, Eigen::Vector3d(stretch, lateral, lateral))[0];
 
       double worst = 0;
-      for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+      for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+      {
         const Eigen::Vector3d x = mesh.nodes.col(i), u = r.displacements.segment<3>(3 * i);
         worst = std::max({worst, std::abs(u[1] - (lateral - 1) * x[1]), std::abs(u[2] - (lateral - 1) * x[2]),
                           std::abs(u[0] - (stretch - 1) * x[0])});
@@ -220,24 +249,29 @@ TEST(MixedNonlinearStaticAnalysis, UniaxialStretchToTwiceTheLengthMeetsTheClosed
       const Eigen::VectorXd f = analysis.internalForces(r.displacements);
       double force = 0;
       for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
-        if (mesh.nodes(0, i) > length - 1e-9) force += f[3 * i];
+        if (mesh.nodes(0, i) > length - 1e-9)
+          force += f[3 * i];
       EXPECT_NEAR(force / (side * side), nominal, 1e-8 * std::abs(nominal)) << what;
       EXPECT_NEAR(r.check.minDetF, stretch * lateral * lateral, 1e-8) << what;
     }
 }
 
-TEST(MixedNonlinearStaticAnalysis, TheStVenantKirchhoffMaterialIsRefusedByName) {
+TEST(MixedNonlinearStaticAnalysis, TheStVenantKirchhoffMaterialIsRefusedByName)
+{
   AssemblyOptions options;
   options.volumetric = VolumetricFormulation::MixedPressure;
   Mesh mesh = boxMesh(1, 1, 1, 1, 1, 1);
   Constraints c;
   c.fixNode(0);
   NonlinearStaticAnalysis analysis(
-      mesh, {{0, HyperelasticMaterial::fromLinear(HyperelasticLaw::StVenantKirchhoff, kTissue)}}, c, options);
-  try {
+    mesh, {{0, HyperelasticMaterial::fromLinear(HyperelasticLaw::StVenantKirchhoff, kTissue)}}, c, options);
+  try
+  {
     analysis.solve(LoadCase{});
     FAIL();
-  } catch (const std::invalid_argument& e) {
+  }
+  catch (const std::invalid_argument& e)
+  {
     EXPECT_NE(std::string(e.what()).find("St. Venant-Kirchhoff"), std::string::npos) << e.what();
   }
 }
@@ -247,41 +281,50 @@ TEST(MixedNonlinearStaticAnalysis, TheStVenantKirchhoffMaterialIsRefusedByName) 
 /// sum over the inner nodes of the radial reaction, divided by the deformed
 /// inner area (pi/2) a h. That sum is d(energy)/da, so it is the pressure
 /// doing the same work.
-struct RingResult {
-  double pressure = 0.0;  ///< MPa, at the last converged state
+struct RingResult
+{
+  double pressure = 0.0; ///< MPa, at the last converged state
   bool converged = false;
   double loadFraction = 0.0;
   int increments = 0;
 };
 
 RingResult ringPressure(int nr, int nt, bool wedges, VolumetricFormulation formulation, const HyperelasticMaterial& m,
-                        double ra, double rb, double a) {
+                        double ra, double rb, double a)
+{
   const double h = 2.0, quarter = M_PI / 2;
   MeshBuilder b(Eigen::Vector3d((rb - ra) / (2 * nr), quarter / (2 * nt), h / 2), Eigen::Vector3d(ra, 0, 0));
   for (int j = 0; j < nt; ++j)
-    for (int i = 0; i < nr; ++i) {
+    for (int i = 0; i < nr; ++i)
+    {
       if (wedges)
         b.addWedgePair(i, j, 0);
       else
         b.addHex(i, j, 0);
     }
-  b.distort([](const Eigen::Vector3d& p) { return Eigen::Vector3d(p[0] * std::cos(p[1]), p[0] * std::sin(p[1]), p[2]); });
+  b.distort(
+    [](const Eigen::Vector3d& p) { return Eigen::Vector3d(p[0] * std::cos(p[1]), p[0] * std::sin(p[1]), p[2]); });
   Mesh mesh = b.build();
-  if (wedges) mesh = withNativeWedges(mesh);
+  if (wedges)
+    mesh = withNativeWedges(mesh);
   Constraints c;
   std::vector<int> inner;
-  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i) {
+  for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+  {
     const Eigen::Vector3d x = mesh.nodes.col(i);
     const double radius = std::hypot(x[0], x[1]);
-    c.fix(int(i), 2);  // plane strain
-    if (std::abs(radius - ra) < 1e-9) {
+    c.fix(int(i), 2); // plane strain
+    if (std::abs(radius - ra) < 1e-9)
+    {
       inner.push_back(int(i));
       c.prescribe(int(i), 0, (a - ra) * x[0] / radius);
       c.prescribe(int(i), 1, (a - ra) * x[1] / radius);
       continue;
     }
-    if (std::abs(x[0]) < 1e-9) c.fix(int(i), 0);  // symmetry planes
-    if (std::abs(x[1]) < 1e-9) c.fix(int(i), 1);
+    if (std::abs(x[0]) < 1e-9)
+      c.fix(int(i), 0); // symmetry planes
+    if (std::abs(x[1]) < 1e-9)
+      c.fix(int(i), 1);
   }
   AssemblyOptions options;
   options.volumetric = formulation;
@@ -296,7 +339,8 @@ RingResult ringPressure(int nr, int nt, bool wedges, VolumetricFormulation formu
   out.increments = int(r.increments.size());
   const Eigen::VectorXd f = analysis.internalForces(r.displacements);
   double radial = 0;
-  for (int n : inner) {
+  for (int n : inner)
+  {
     const Eigen::Vector3d x = mesh.nodes.col(n);
     radial += (f[3 * n] * x[0] + f[3 * n + 1] * x[1]) / std::hypot(x[0], x[1]);
   }
@@ -304,7 +348,8 @@ RingResult ringPressure(int nr, int nt, bool wedges, VolumetricFormulation formu
   return out;
 }
 
-TEST(MixedNonlinearStaticAnalysis, AThickCylinderExpandedNearlyIncompressiblyMeetsTheClosedForm) {
+TEST(MixedNonlinearStaticAnalysis, AThickCylinderExpandedNearlyIncompressiblyMeetsTheClosedForm)
+{
   // Plane strain quarter ring A = 10, B = 20 mm of 2 x 3 elements (radial x
   // around), inner radius taken to a = 15 mm. Incompressible neo-Hookean:
   // b^2 = a^2 + B^2 - A^2 and
@@ -314,30 +359,32 @@ TEST(MixedNonlinearStaticAnalysis, AThickCylinderExpandedNearlyIncompressiblyMee
   const double ra = 10, rb = 20, a = 15;
   const int nr = 2, nt = 3;
   const double b = std::sqrt(a * a + rb * rb - ra * ra), la = a / ra, lb = b / rb;
-  for (double nu : {0.499, 0.4999}) {
+  for (double nu : {0.499, 0.4999})
+  {
     const HyperelasticMaterial m = HyperelasticMaterial::fromLinear(HyperelasticLaw::NeoHookean, {3.0, nu, 0.0});
     const double exact = m.shearModulus() * (std::log(la / lb) + 0.5 * (1 / (lb * lb) - 1 / (la * la)));
-    for (bool wedges : {false, true}) {
+    for (bool wedges : {false, true})
+    {
       const std::string what = std::string(wedges ? "wedges" : "bricks") + ", nu = " + std::to_string(nu);
       const RingResult mixed = ringPressure(nr, nt, wedges, VolumetricFormulation::MixedPressure, m, ra, rb, a);
       const RingResult plain = ringPressure(nr, nt, wedges, VolumetricFormulation::Displacement, m, ra, rb, a);
       ASSERT_TRUE(mixed.converged) << what;
       const double errMixed = mixed.pressure / exact - 1, errPlain = plain.pressure / exact - 1;
-      const std::string suffix = plain.converged ? std::string() : ", did NOT converge: stopped at " +
-                                                                    std::to_string(100 * plain.loadFraction) +
-                                                                    " % of the expansion";
+      const std::string suffix = plain.converged ? std::string()
+                                                 : ", did NOT converge: stopped at " +
+                                                     std::to_string(100 * plain.loadFraction) + " % of the expansion";
       std::printf("[ cylinder ] %s, nu = %g: closed form p = %.6f MPa; mixed %.6f (%+.3f %%, %d increments), "
                   "displacement %.6f (%+.3f %%, %d increments)%s\n",
                   wedges ? "Wedge15" : "Hex20", nu, exact, mixed.pressure, 100 * errMixed, mixed.increments,
-                  plain.pressure, 100 * errPlain, plain.increments,
-                  suffix.c_str());
+                  plain.pressure, 100 * errPlain, plain.increments, suffix.c_str());
       EXPECT_LT(std::abs(errMixed), 0.01) << what;
-      if (plain.converged) {
+      if (plain.converged)
+      {
         EXPECT_LT(std::abs(errMixed), std::abs(errPlain)) << what;
       }
     }
   }
 }
 
-}  // namespace
-}  // namespace caps::fem
+} // namespace
+} // namespace caps::fem

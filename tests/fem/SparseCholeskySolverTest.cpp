@@ -18,17 +18,21 @@ using test::latticeStiffness;
 using test::SparseMatrix;
 using test::springChain;
 
-double relativeError(const Eigen::MatrixXd& x, const Eigen::MatrixXd& reference) {
+double relativeError(const Eigen::MatrixXd& x, const Eigen::MatrixXd& reference)
+{
   return (x - reference).norm() / reference.norm();
 }
 
-Eigen::VectorXd deterministicLoad(Eigen::Index n, double phase = 0.0) {
+Eigen::VectorXd deterministicLoad(Eigen::Index n, double phase = 0.0)
+{
   Eigen::VectorXd f(n);
-  for (Eigen::Index i = 0; i < n; ++i) f[i] = std::sin(0.7 * double(i) + phase) + 0.25;
+  for (Eigen::Index i = 0; i < n; ++i)
+    f[i] = std::sin(0.7 * double(i) + phase) + 0.25;
   return f;
 }
 
-TEST(SparseCholeskySolver, MatchesSimplicialLDLTOnElasticLattice) {
+TEST(SparseCholeskySolver, MatchesSimplicialLDLTOnElasticLattice)
+{
   const SparseMatrix k = latticeStiffness(12, true, 0.5);
   ASSERT_GT(k.rows(), 4000);
   const Eigen::VectorXd f = deterministicLoad(k.rows());
@@ -46,7 +50,8 @@ TEST(SparseCholeskySolver, MatchesSimplicialLDLTOnElasticLattice) {
   EXPECT_LT((k * u - f).norm() / f.norm(), 1e-10);
 }
 
-TEST(SparseCholeskySolver, UpperTriangleGivesTheSameSolutionAsFullMatrix) {
+TEST(SparseCholeskySolver, UpperTriangleGivesTheSameSolutionAsFullMatrix)
+{
   const SparseMatrix k = latticeStiffness(8, true, 0.3);
   const SparseMatrix upper = k.triangularView<Eigen::Upper>();
   const Eigen::VectorXd f = deterministicLoad(k.rows());
@@ -59,11 +64,13 @@ TEST(SparseCholeskySolver, UpperTriangleGivesTheSameSolutionAsFullMatrix) {
   EXPECT_LT(relativeError(upperOnly.solve(f), full.solve(f)), 1e-13);
 }
 
-TEST(SparseCholeskySolver, SpringChainMatchesClosedForm) {
+TEST(SparseCholeskySolver, SpringChainMatchesClosedForm)
+{
   // Fixed left end, load P at the free right end: every spring carries P, so
   // u_j = P * sum_{i <= j} 1 / k_i.
   std::vector<double> k;
-  for (int i = 0; i < 200; ++i) k.push_back(1.0 + 0.5 * std::cos(0.3 * i) + 0.01 * i);
+  for (int i = 0; i < 200; ++i)
+    k.push_back(1.0 + 0.5 * std::cos(0.3 * i) + 0.01 * i);
   const double p = 7.5;
   const SparseMatrix a = springChain(k, true);
   Eigen::VectorXd f = Eigen::VectorXd::Zero(a.rows());
@@ -75,16 +82,19 @@ TEST(SparseCholeskySolver, SpringChainMatchesClosedForm) {
   const Eigen::VectorXd u = solver.solve(f);
 
   double expected = 0.0;
-  for (Eigen::Index j = 0; j < a.rows(); ++j) {
+  for (Eigen::Index j = 0; j < a.rows(); ++j)
+  {
     expected += p / k[static_cast<size_t>(j)];
     EXPECT_NEAR(u[j], expected, 1e-12 * expected) << "node " << j + 1;
   }
 }
 
-TEST(SparseCholeskySolver, SolvesManyLoadCasesAtOnce) {
+TEST(SparseCholeskySolver, SolvesManyLoadCasesAtOnce)
+{
   const SparseMatrix k = latticeStiffness(9, true, 0.4);
   Eigen::MatrixXd loads(k.rows(), 7);
-  for (int c = 0; c < loads.cols(); ++c) loads.col(c) = deterministicLoad(k.rows(), 0.9 * c);
+  for (int c = 0; c < loads.cols(); ++c)
+    loads.col(c) = deterministicLoad(k.rows(), 0.9 * c);
 
   SparseCholeskySolver solver;
   solver.compute(k);
@@ -94,20 +104,22 @@ TEST(SparseCholeskySolver, SolvesManyLoadCasesAtOnce) {
   ASSERT_EQ(u.cols(), loads.cols());
 
   Eigen::SimplicialLDLT<SparseMatrix> reference(k);
-  for (int c = 0; c < loads.cols(); ++c) {
+  for (int c = 0; c < loads.cols(); ++c)
+  {
     const Eigen::VectorXd one = solver.solve(Eigen::VectorXd(loads.col(c)));
     EXPECT_LT(relativeError(u.col(c), one), 1e-14) << "load case " << c;
-    EXPECT_LT(relativeError(u.col(c), reference.solve(Eigen::VectorXd(loads.col(c)))), 1e-10)
-        << "load case " << c;
+    EXPECT_LT(relativeError(u.col(c), reference.solve(Eigen::VectorXd(loads.col(c)))), 1e-10) << "load case " << c;
   }
   EXPECT_EQ(solver.solve(Eigen::MatrixXd(k.rows(), 0)).cols(), 0);
 }
 
-TEST(SparseCholeskySolver, RefactorizesNewValuesOnTheSamePattern) {
+TEST(SparseCholeskySolver, RefactorizesNewValuesOnTheSamePattern)
+{
   const SparseMatrix first = latticeStiffness(8, true, 0.3);
   // Same pattern, new values: stiffer overall and a varying extra diagonal.
   SparseMatrix second = 2.5 * first;
-  for (Eigen::Index i = 0; i < second.rows(); ++i) second.coeffRef(i, i) += 1.0 + std::sin(0.1 * double(i));
+  for (Eigen::Index i = 0; i < second.rows(); ++i)
+    second.coeffRef(i, i) += 1.0 + std::sin(0.1 * double(i));
   ASSERT_EQ(first.nonZeros(), second.nonZeros());
   const Eigen::VectorXd f = deterministicLoad(first.rows());
 
@@ -123,22 +135,23 @@ TEST(SparseCholeskySolver, RefactorizesNewValuesOnTheSamePattern) {
 
   EXPECT_LT(relativeError(u1, Eigen::SimplicialLDLT<SparseMatrix>(first).solve(f)), 1e-10);
   EXPECT_LT(relativeError(u2, Eigen::SimplicialLDLT<SparseMatrix>(second).solve(f)), 1e-10);
-  EXPECT_GT(relativeError(u1, u2), 1e-3);  // the new values really were used
+  EXPECT_GT(relativeError(u1, u2), 1e-3); // the new values really were used
 }
 
-void expectNotPositiveDefinite(const SparseCholeskySolver& solver, Eigen::Index n) {
+void expectNotPositiveDefinite(const SparseCholeskySolver& solver, Eigen::Index n)
+{
   EXPECT_EQ(solver.status(), SolverStatus::NotPositiveDefinite);
   EXPECT_GE(solver.failedColumn(), 0);
   EXPECT_LT(solver.failedColumn(), n);
   const std::string text = solver.message();
-  EXPECT_NE(text.find("column " + std::to_string(solver.failedColumn())), std::string::npos)
-      << text;
+  EXPECT_NE(text.find("column " + std::to_string(solver.failedColumn())), std::string::npos) << text;
   EXPECT_NE(text.find("rigid-body"), std::string::npos) << text;
   EXPECT_NE(text.find("inverted element"), std::string::npos) << text;
   EXPECT_THROW(solver.solve(Eigen::VectorXd::Ones(n)), std::logic_error);
 }
 
-TEST(SparseCholeskySolver, FreeChainWithExactZeroPivotIsNotPositiveDefinite) {
+TEST(SparseCholeskySolver, FreeChainWithExactZeroPivotIsNotPositiveDefinite)
+{
   // Integer stiffnesses: elimination reaches an exact zero pivot.
   const SparseMatrix a = springChain(std::vector<double>(50, 1.0), false);
   SparseCholeskySolver solver;
@@ -146,18 +159,21 @@ TEST(SparseCholeskySolver, FreeChainWithExactZeroPivotIsNotPositiveDefinite) {
   expectNotPositiveDefinite(solver, a.rows());
 }
 
-TEST(SparseCholeskySolver, FreeChainWithRoundedPivotIsNotPositiveDefinite) {
+TEST(SparseCholeskySolver, FreeChainWithRoundedPivotIsNotPositiveDefinite)
+{
   // Irregular stiffnesses: rounding may leave a tiny positive pivot, which the
   // pivot tolerance must still catch.
   std::vector<double> k;
-  for (int i = 0; i < 50; ++i) k.push_back(0.3 + std::sqrt(2.0 + i) / 3.0);
+  for (int i = 0; i < 50; ++i)
+    k.push_back(0.3 + std::sqrt(2.0 + i) / 3.0);
   const SparseMatrix a = springChain(k, false);
   SparseCholeskySolver solver;
   solver.compute(a);
   expectNotPositiveDefinite(solver, a.rows());
 }
 
-TEST(SparseCholeskySolver, PivotToleranceIsApplied) {
+TEST(SparseCholeskySolver, PivotToleranceIsApplied)
+{
   // In an SPD matrix no pivot exceeds its diagonal entry, so a tolerance of 2
   // must reject any matrix, and 0 must accept this one.
   const SparseMatrix k = latticeStiffness(5, true, 0.2);
@@ -172,14 +188,16 @@ TEST(SparseCholeskySolver, PivotToleranceIsApplied) {
   EXPECT_EQ(solver.status(), SolverStatus::Success) << solver.message();
 }
 
-TEST(SparseCholeskySolver, UnconstrainedLatticeIsNotPositiveDefinite) {
+TEST(SparseCholeskySolver, UnconstrainedLatticeIsNotPositiveDefinite)
+{
   const SparseMatrix k = latticeStiffness(6, false, 0.3);
   SparseCholeskySolver solver;
   solver.compute(k);
   expectNotPositiveDefinite(solver, k.rows());
 }
 
-TEST(SparseCholeskySolver, NamesTheOriginalColumnOfANegativePivot) {
+TEST(SparseCholeskySolver, NamesTheOriginalColumnOfANegativePivot)
+{
   // A strongly negative diagonal entry (as from an inverted element) fails at
   // exactly that DOF, whatever the fill-reducing ordering did to it.
   SparseMatrix k = latticeStiffness(7, true, 0.2);
@@ -191,7 +209,8 @@ TEST(SparseCholeskySolver, NamesTheOriginalColumnOfANegativePivot) {
   EXPECT_EQ(solver.failedColumn(), bad);
 }
 
-TEST(SparseCholeskySolver, RejectsNonSquareMatrix) {
+TEST(SparseCholeskySolver, RejectsNonSquareMatrix)
+{
   SparseMatrix a(4, 3);
   a.insert(0, 0) = 1.0;
   a.makeCompressed();
@@ -202,7 +221,8 @@ TEST(SparseCholeskySolver, RejectsNonSquareMatrix) {
   EXPECT_THROW(solver.solve(Eigen::VectorXd::Ones(4)), std::logic_error);
 }
 
-TEST(SparseCholeskySolver, RejectsLowerTriangleOnly) {
+TEST(SparseCholeskySolver, RejectsLowerTriangleOnly)
+{
   const SparseMatrix k = latticeStiffness(4, true);
   const SparseMatrix lower = k.triangularView<Eigen::Lower>();
   SparseCholeskySolver solver;
@@ -211,10 +231,11 @@ TEST(SparseCholeskySolver, RejectsLowerTriangleOnly) {
   EXPECT_NE(solver.message().find("lower triangle"), std::string::npos) << solver.message();
 }
 
-TEST(SparseCholeskySolver, RejectsFactorizeOnAnotherPattern) {
+TEST(SparseCholeskySolver, RejectsFactorizeOnAnotherPattern)
+{
   SparseCholeskySolver solver;
   solver.factorize(latticeStiffness(4, true));
-  EXPECT_EQ(solver.status(), SolverStatus::InvalidInput);  // nothing analyzed yet
+  EXPECT_EQ(solver.status(), SolverStatus::InvalidInput); // nothing analyzed yet
 
   solver.analyzePattern(latticeStiffness(4, true));
   ASSERT_EQ(solver.status(), SolverStatus::Success);
@@ -223,7 +244,8 @@ TEST(SparseCholeskySolver, RejectsFactorizeOnAnotherPattern) {
   EXPECT_NE(solver.message().find("analyzePattern"), std::string::npos) << solver.message();
 }
 
-TEST(SparseCholeskySolver, RejectsRightHandSideOfWrongSize) {
+TEST(SparseCholeskySolver, RejectsRightHandSideOfWrongSize)
+{
   const SparseMatrix k = latticeStiffness(4, true);
   SparseCholeskySolver solver;
   solver.compute(k);
@@ -231,7 +253,8 @@ TEST(SparseCholeskySolver, RejectsRightHandSideOfWrongSize) {
   EXPECT_THROW(solver.solve(Eigen::VectorXd::Ones(k.rows() + 1)), std::invalid_argument);
 }
 
-TEST(SparseCholeskySolver, MovedSolverKeepsItsFactor) {
+TEST(SparseCholeskySolver, MovedSolverKeepsItsFactor)
+{
   const SparseMatrix k = latticeStiffness(5, true, 0.1);
   const Eigen::VectorXd f = deterministicLoad(k.rows());
   SparseCholeskySolver first;
@@ -241,5 +264,5 @@ TEST(SparseCholeskySolver, MovedSolverKeepsItsFactor) {
   EXPECT_LT((k * second.solve(f) - f).norm() / f.norm(), 1e-12);
 }
 
-}  // namespace
-}  // namespace caps::fem
+} // namespace
+} // namespace caps::fem

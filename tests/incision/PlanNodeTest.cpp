@@ -55,7 +55,8 @@ TEST(PlanNode, APlanReadBackPredictsTheSameBitForBit)
 {
   const seg::RangeMap skin = test::cylinderSkin(80.0), bone = test::cylinderSkin(70.0);
   const IncisionPlan plan =
-    test::shippedProcedure("z-plasty").place(skin, {0.3, -8.0}, {{"central_length", 12.0}, {"limb_angle", 60.0 * test::degree}});
+    test::shippedProcedure("z-plasty")
+      .place(skin, {0.3, -8.0}, {{"central_length", 12.0}, {"limb_angle", 60.0 * test::degree}});
   SimulationOptions options;
   options.elementSize = 2.5;
   options.regionRadius = 15.0;

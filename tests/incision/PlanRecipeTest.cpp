@@ -35,9 +35,15 @@ namespace {
 using test::degree;
 
 using Phantom = test::CylinderPhantom;
-const Phantom& phantom() { return test::cylinderPhantom(); }
+const Phantom& phantom()
+{
+  return test::cylinderPhantom();
+}
 
-const ProcedureLibrary& library() { return test::shippedProcedures(); }
+const ProcedureLibrary& library()
+{
+  return test::shippedProcedures();
+}
 
 const SkinPoint zCentre{0.3, -8.0};
 
@@ -110,7 +116,10 @@ std::string refusal(const IncisionPlan& plan, const PlanOperation& operation, in
   return {};
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part)
+{
+  return text.find(part) != std::string::npos;
+}
 
 std::string readFile(const fs::path& file)
 {
@@ -153,9 +162,9 @@ TEST(PlanRecipe, AppliedTwiceGivesTheSamePlanAndPredictionBitForBit)
   const PlanPrediction a = simulatePlan(phantom().skin, phantom().bone, first, options);
   const PlanPrediction b = simulatePlan(phantom().skin, phantom().bone, again, options);
   ASSERT_EQ(a.displacements.size(), b.displacements.size());
-  EXPECT_EQ(std::memcmp(a.displacements.data(), b.displacements.data(),
-                        std::size_t(a.displacements.size()) * sizeof(double)),
-            0);
+  EXPECT_EQ(
+    std::memcmp(a.displacements.data(), b.displacements.data(), std::size_t(a.displacements.size()) * sizeof(double)),
+    0);
   EXPECT_GT(a.displacements.cwiseAbs().maxCoeff(), 1.0); // the flaps moved: not a trivial match
 }
 
@@ -494,7 +503,8 @@ TEST(PlanRecipe, UnderminedRegionsGoThroughPlanJsonTheSceneAndAReplayBitForBit)
   const IncisionPlan z = applyRecipe(recipe, phantom().skin, library());
   auto region = [&](double u, double v) {
     UnderminedRegion r;
-    for (const ChartPoint& p : {ChartPoint(u - 4.1, v - 2.3), ChartPoint(u + 3.7, v - 2.9), ChartPoint(u + 0.3, v + 3.3)})
+    for (const ChartPoint& p :
+         {ChartPoint(u - 4.1, v - 2.3), ChartPoint(u + 3.7, v - 2.9), ChartPoint(u + 0.3, v + 3.3)})
       r.push_back(normalised(z, p));
     return r;
   };
@@ -513,7 +523,8 @@ TEST(PlanRecipe, UnderminedRegionsGoThroughPlanJsonTheSceneAndAReplayBitForBit)
   EXPECT_EQ(written["formatVersion"], 1);
   const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
   EXPECT_EQ(recipeToJson(read), written);
-  EXPECT_EQ(std::get<UndermineRegion>(read.operations[5]).region, std::get<UndermineRegion>(recipe.operations[5]).region);
+  EXPECT_EQ(std::get<UndermineRegion>(read.operations[5]).region,
+            std::get<UndermineRegion>(recipe.operations[5]).region);
 
   const IncisionPlan first = applyRecipe(recipe, phantom().skin, library());
   const IncisionPlan again = applyRecipe(read, phantom().skin, library());
@@ -534,9 +545,9 @@ TEST(PlanRecipe, UnderminedRegionsGoThroughPlanJsonTheSceneAndAReplayBitForBit)
   EXPECT_FALSE(a.continuum.underminedNodes.empty());
   EXPECT_EQ(a.continuum.underminedNodes, b.continuum.underminedNodes);
   ASSERT_EQ(a.displacements.size(), b.displacements.size());
-  EXPECT_EQ(std::memcmp(a.displacements.data(), b.displacements.data(),
-                        std::size_t(a.displacements.size()) * sizeof(double)),
-            0);
+  EXPECT_EQ(
+    std::memcmp(a.displacements.data(), b.displacements.data(), std::size_t(a.displacements.size()) * sizeof(double)),
+    0);
 
   // The scene keeps them through the recipe.
   RecordedPlan recorded(std::string(64, 'd'));

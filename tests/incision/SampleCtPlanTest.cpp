@@ -132,7 +132,8 @@ TEST_F(SampleCtPlan, CheekZPlastyModelAgreesWithCalculix)
   const double relative = (ours - theirs).norm() / ours.norm();
   std::printf("[sample cheek Z vs ccx] %ld DOF, largest displacement %.2f mm, largest difference %.2e mm, "
               "relative %.2e\n",
-              long(p.dofCount), ours.colwise().norm().maxCoeff(), (ours - theirs).colwise().norm().maxCoeff(), relative);
+              long(p.dofCount), ours.colwise().norm().maxCoeff(), (ours - theirs).colwise().norm().maxCoeff(),
+              relative);
   EXPECT_LT(relative, 1e-5); // ccx's .dat keeps 7 significant digits
 }
 
@@ -148,8 +149,8 @@ TEST_F(SampleCtPlan, PlansAcrossTheSeamAndNearTheTopOfTheScanClose)
     const char* name;
     double thetaDeg, z;
   };
-  for (const Where w : {Where{"occiput across the seam", 180.0, 40.0},
-                        Where{"near the top of the scan", -90.0, frame.zMax() - 25.0}})
+  for (const Where w :
+       {Where{"occiput across the seam", 180.0, 40.0}, Where{"near the top of the scan", -90.0, frame.zMax() - 25.0}})
   {
     SCOPED_TRACE(w.name);
     const IncisionPlan plan = place("elliptical-excision", w.thetaDeg, w.z, {{"length", 20.0}});

@@ -18,11 +18,9 @@ namespace caps::test {
 struct EllipsoidShell : seg::test::Shape
 {
   seg::test::Ellipsoid outer, inner;
-  EllipsoidShell(const Eigen::Vector3d& centre, const Eigen::Vector3d& outerAxes,
-                 const Eigen::Vector3d& innerAxes)
+  EllipsoidShell(const Eigen::Vector3d& centre, const Eigen::Vector3d& outerAxes, const Eigen::Vector3d& innerAxes)
     : outer(centre, outerAxes), inner(centre, innerAxes)
-  {
-  }
+  {}
   double implicit(const Eigen::Vector3d& p) const override
   {
     // < 1 inside the shell: inside the outer and outside the inner ellipsoid.
@@ -38,9 +36,9 @@ struct HeadPhantom
 {
   // Semi-axes (mm) along patient x (left), y (posterior), z (superior).
   static constexpr double skinA = 70, skinB = 85, skinC = 100;
-  static constexpr double boneA = 62, boneB = 77, boneC = 92; // 8 mm of tissue on the axes
+  static constexpr double boneA = 62, boneB = 77, boneC = 92;    // 8 mm of tissue on the axes
   static constexpr double innerA = 56, innerB = 71, innerC = 86; // 6 mm of skull
-  static constexpr double spacing = 2.0;                          // mm, isotropic voxels
+  static constexpr double spacing = 2.0;                         // mm, isotropic voxels
 
   Eigen::Vector3d centre{3.0, -2.0, 40.0};
   seg::test::Ellipsoid skin{centre, {skinA, skinB, skinC}};
@@ -54,8 +52,8 @@ struct HeadPhantom
     const Eigen::Vector3i dims(static_cast<int>(2 * (skinA + 10) / spacing),
                                static_cast<int>(2 * (skinB + 10) / spacing),
                                static_cast<int>(2 * (skinC + 10) / spacing));
-    const auto geometry = seg::test::centredGeometry(dims, Eigen::Vector3d::Constant(spacing),
-                                                     Eigen::Matrix3d::Identity(), centre);
+    const auto geometry =
+      seg::test::centredGeometry(dims, Eigen::Vector3d::Constant(spacing), Eigen::Matrix3d::Identity(), centre);
     // 0.6 mm point spread and 15 HU noise: a sharp head CT.
     images = seg::test::makePhantom(geometry, skin, skull, {}, 0.6, 15.0, VTK_SHORT);
   }
@@ -84,8 +82,7 @@ struct HeadPhantom
   {
     const Eigen::Vector3d q = p - centre;
     const Eigen::Vector3d n =
-      Eigen::Vector3d(q.x() / (skinA * skinA), q.y() / (skinB * skinB), q.z() / (skinC * skinC))
-        .normalized();
+      Eigen::Vector3d(q.x() / (skinA * skinA), q.y() / (skinB * skinB), q.z() / (skinC * skinC)).normalized();
     // |(q − t n) / axes|² = 1 for the bone: a t² + b t + c = 0, smallest root.
     const Eigen::Vector3d axes(boneA, boneB, boneC);
     const Eigen::Vector3d qa = q.cwiseQuotient(axes), na = n.cwiseQuotient(axes);
@@ -96,16 +93,12 @@ struct HeadPhantom
     return (-b - std::sqrt(disc)) / (2 * a);
   }
 
-  static double ellipsoidVolume(double a, double b, double c)
-  {
-    return 4.0 / 3.0 * std::numbers::pi * a * b * c;
-  }
+  static double ellipsoidVolume(double a, double b, double c) { return 4.0 / 3.0 * std::numbers::pi * a * b * c; }
   /// Knud Thomsen's approximation of an ellipsoid's area (within 1.1 %).
   static double ellipsoidArea(double a, double b, double c)
   {
     const double p = 1.6075;
-    return 4 * std::numbers::pi *
-           std::pow((std::pow(a * b, p) + std::pow(a * c, p) + std::pow(b * c, p)) / 3, 1 / p);
+    return 4 * std::numbers::pi * std::pow((std::pow(a * b, p) + std::pow(a * c, p) + std::pow(b * c, p)) / 3, 1 / p);
   }
 };
 

@@ -98,9 +98,9 @@ TEST(ModuleCommands, SegmentWritesLabelsAndSurfaces)
   EXPECT_NE(header.find("space: left-posterior-superior"), std::string::npos) << header;
   int dims[3];
   caps::test::HeadPhantom::instance().images.ct->GetDimensions(dims);
-  EXPECT_NE(header.find("sizes: " + std::to_string(dims[0]) + " " + std::to_string(dims[1]) + " " +
-                        std::to_string(dims[2])),
-            std::string::npos)
+  EXPECT_NE(
+    header.find("sizes: " + std::to_string(dims[0]) + " " + std::to_string(dims[1]) + " " + std::to_string(dims[2])),
+    std::string::npos)
     << header;
   const auto labels = caps::NrrdIO::readImage(out / "labels.nrrd");
   double range[2];
@@ -122,14 +122,12 @@ TEST(ModuleCommands, SegmentWithoutSurfaceFiles)
   const fs::path folder = caps::test::scratchFolder();
   const fs::path ct = phantomCt(folder);
   const fs::path out = folder / "out";
-  auto r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) +
-                   " --surfaces none");
+  auto r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) + " --surfaces none");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_TRUE(fs::exists(out / "labels.nrrd"));
   for (const char* file : {"skin.vtp", "bone.vtp", "skin.stl", "bone.stl"})
     EXPECT_FALSE(fs::exists(out / file)) << file;
-  r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) +
-              " --surfaces obj");
+  r = runCaps("segment " + quoted(ct.string()) + " --out " + quoted(out.string()) + " --surfaces obj");
   EXPECT_EQ(r.exitCode, 2) << r.output;
 }
 
@@ -138,15 +136,14 @@ TEST(ModuleCommands, RangeMapWritesMapsAndPreviews)
   const fs::path folder = caps::test::scratchFolder();
   const fs::path ct = phantomCt(folder);
   const fs::path out = folder / "rangemap";
-  const auto r = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
-                         " --size 360x120 --smooth");
+  const auto r =
+    runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) + " --size 360x120 --smooth");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("360 x 120, smoothed"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("Axis: through"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("radial r_skin - r_bone"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("along the skin normal"), std::string::npos) << r.output;
-  for (const char* file : {"skin-range.nrrd", "bone-range.nrrd", "thickness.nrrd",
-                           "thickness-normal.nrrd"})
+  for (const char* file : {"skin-range.nrrd", "bone-range.nrrd", "thickness.nrrd", "thickness-normal.nrrd"})
   {
     ASSERT_TRUE(fs::exists(out / file)) << file;
     const std::string header = nrrdHeader(out / file);
@@ -185,17 +182,16 @@ TEST(ModuleCommands, RangeMapWithTheUsersAxisAndLandmarks)
   const Eigen::Vector3d front = phantom.centre - Eigen::Vector3d(0, phantom.skinB, 0); // on the skin
   const fs::path landmarks = folder / "mine.csv";
   std::ofstream(landmarks) << "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm\n"
-                           << "front_point,0,0," << front.x() << "," << front.y() << ","
-                           << front.z() << ",,\n"
+                           << "front_point,0,0," << front.x() << "," << front.y() << "," << front.z() << ",,\n"
                            << "front_ray,-90,0,,,,,\n";
   std::ostringstream axis;
   axis << axisPoint.x() << "," << axisPoint.y() << "," << axisPoint.z() << ",0,0,-1";
-  const auto r = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
-                         " --axis " + axis.str() + " --landmarks " + quoted(landmarks.string()));
+  const auto r = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) + " --axis " +
+                         axis.str() + " --landmarks " + quoted(landmarks.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("set by the user"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("direction (0.000, 0.000, 1.000)"), std::string::npos)
-    << "the axis points superior\n" << r.output;
+  EXPECT_NE(r.output.find("direction (0.000, 0.000, 1.000)"), std::string::npos) << "the axis points superior\n"
+                                                                                 << r.output;
   EXPECT_NE(r.output.find("landmarks of"), std::string::npos) << r.output;
 
   // rangemap segments with the default thresholds (-400, 250 HU), not the
@@ -212,15 +208,15 @@ TEST(ModuleCommands, RangeMapWithTheUsersAxisAndLandmarks)
   // By (theta, z): straight to the front from the axis point.
   EXPECT_EQ(rows[1].landmark.name, "front_ray");
   EXPECT_NEAR(rows[1].radial, phantom.radialThickness(axisPoint, -Eigen::Vector3d::UnitY()), tolerance);
-  EXPECT_NEAR((rows[1].position - (axisPoint - phantom.skin.outermostHit(axisPoint, -Eigen::Vector3d::UnitY()) *
-                                                  Eigen::Vector3d::UnitY()))
+  EXPECT_NEAR((rows[1].position -
+               (axisPoint - phantom.skin.outermostHit(axisPoint, -Eigen::Vector3d::UnitY()) * Eigen::Vector3d::UnitY()))
                 .norm(),
               0.0, 1.0);
 
   // A landmark file that cannot be read stops the command before the long part.
   std::ofstream(folder / "bad.csv") << "name,theta\nnasion,3\n";
-  const auto bad = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) +
-                           " --landmarks " + quoted((folder / "bad.csv").string()));
+  const auto bad = runCaps("rangemap " + quoted(ct.string()) + " --out " + quoted(out.string()) + " --landmarks " +
+                           quoted((folder / "bad.csv").string()));
   EXPECT_EQ(bad.exitCode, 1) << bad.output;
   EXPECT_NE(bad.output.find("bad.csv"), std::string::npos) << bad.output;
   EXPECT_EQ(bad.output.find("Range maps of"), std::string::npos) << bad.output;
@@ -237,10 +233,11 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
                    "--element-size 2.5 --out " + quoted(out.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("Wound ([0-9.]+) mm wide before, sutures within ([0-9.e+-]+) mm")))
+  ASSERT_TRUE(
+    std::regex_search(r.output, m, std::regex("Wound ([0-9.]+) mm wide before, sutures within ([0-9.e+-]+) mm")))
     << r.output;
-  EXPECT_GT(std::stod(m[1]), 2.0) << r.output;   // the excision is open before
-  EXPECT_LT(std::stod(m[2]), 1e-9) << r.output;  // and closed after
+  EXPECT_GT(std::stod(m[1]), 2.0) << r.output;  // the excision is open before
+  EXPECT_LT(std::stod(m[2]), 1e-9) << r.output; // and closed after
   for (const char* file : {"measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
   std::ifstream csv(out / "measurements.csv");
@@ -375,8 +372,7 @@ TEST(ModuleCommands, BadInputAndUsage)
     EXPECT_NE(r.output.find("caps " + name + ": "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("is not an image CAPS can read"), std::string::npos) << r.output;
 
-    r = runCaps(name + " " + quoted((folder / "missing").string()) + " --out " +
-                quoted((folder / "o").string()));
+    r = runCaps(name + " " + quoted((folder / "missing").string()) + " --out " + quoted((folder / "o").string()));
     EXPECT_EQ(r.exitCode, 1) << name << ": " << r.output;
 
     r = runCaps(name + " " + quoted(text.string()));
@@ -484,11 +480,10 @@ TEST(ModuleCommands, PlanReplaysToTheSamePredictionBitForBit)
   voxels->SetComponent(1000, 0, voxels->GetComponent(1000, 0) + 1.0);
   const fs::path otherCt = folder / "other-ct.nrrd";
   caps::NrrdIO::writeImage(changed, otherCt);
-  r = runCaps("plan " + quoted(otherCt.string()) + " --replay " + quoted((first / "plan.json").string()) +
-              " --out " + quoted((folder / "other").string()));
+  r = runCaps("plan " + quoted(otherCt.string()) + " --replay " + quoted((first / "plan.json").string()) + " --out " +
+              quoted((folder / "other").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_NE(r.output.find("was made on a CT of SHA-256 " + recipe["ctSha256"].get<std::string>() +
-                          ", not on this CT"),
+  EXPECT_NE(r.output.find("was made on a CT of SHA-256 " + recipe["ctSha256"].get<std::string>() + ", not on this CT"),
             std::string::npos)
     << r.output;
   EXPECT_NE(r.output.find("give --other-ct"), std::string::npos) << r.output;
@@ -510,7 +505,8 @@ TEST(ModuleCommands, PlanRefusesBadPlansAndBadReplayFiles)
   EXPECT_NE(r.output.find("notes.json is not a plan file: it is not JSON"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("Reading"), std::string::npos) << "stops before reading the CT\n" << r.output;
   const std::string head = R"({"format": "caps-plan", "formatVersion": 1, "softwareVersion": "0.0.1", )"
-                           R"("ctSha256": ")" + std::string(64, 'a') + R"(", "operations": [)";
+                           R"("ctSha256": ")" +
+                           std::string(64, 'a') + R"(", "operations": [)";
   const std::string placeZ = R"({"operation": "place", "procedure": "z-plasty", "theta": -1.5707963267948966, )"
                              R"("z": 0, "values": {"central_length": 16}})";
   r = replay("rotate.json", head + placeZ + R"(, {"operation": "rotate", "degrees": 15}]})");
@@ -541,8 +537,7 @@ TEST(ModuleCommands, PlanRefusesBadPlansAndBadReplayFiles)
   r = runCaps("plan " + quoted(ct.string()) + " --procedure z-plasty --at -90,0 --param central_length=16 " +
               "--move 3=-96,8" + out);
   EXPECT_EQ(r.exitCode, 1) << r.output;
-  EXPECT_NE(r.output.find("operation 2 (move cut point 3): limb 0 (cut points 0–1) crosses limb 2"),
-            std::string::npos)
+  EXPECT_NE(r.output.find("operation 2 (move cut point 3): limb 0 (cut points 0–1) crosses limb 2"), std::string::npos)
     << r.output;
   // A procedure file with inconsistent sutures (a copy of the Z whose third
   // suture sews edge (2,3) again), in a data folder of its own: left out of

@@ -91,8 +91,7 @@ TEST(RangeMapLogic, PhantomMapsMatchTheAnalyticThickness)
   const std::pair<std::string, const char*> expected[] = {{result.skinId, "skin"},
                                                           {result.boneId, "bone"},
                                                           {result.thicknessId, "thickness"},
-                                                          {result.thicknessNormalId,
-                                                           "thickness-normal"}};
+                                                          {result.thicknessNormalId, "thickness-normal"}};
   for (const auto& [id, role] : expected)
   {
     auto* node = scene.nodeAs<caps::RangeMapNode>(id);
@@ -137,10 +136,10 @@ TEST(RangeMapLogic, PhantomMapsMatchTheAnalyticThickness)
   const double zLimit = 0.7 * HeadPhantom::boneC;
   const Error radialError = compare(radial, phantom.centre.z(), zLimit, radialExpected);
   const Error normalError = compare(normal, phantom.centre.z(), zLimit, normalExpected);
-  std::printf("[ phantom  ] radial thickness: rms %.3f mm, max %.3f mm over %zu samples, %zu NaN\n",
-              radialError.rms, radialError.max, radialError.compared, radialError.missing);
-  std::printf("[ phantom  ] normal thickness: rms %.3f mm, max %.3f mm over %zu samples, %zu NaN\n",
-              normalError.rms, normalError.max, normalError.compared, normalError.missing);
+  std::printf("[ phantom  ] radial thickness: rms %.3f mm, max %.3f mm over %zu samples, %zu NaN\n", radialError.rms,
+              radialError.max, radialError.compared, radialError.missing);
+  std::printf("[ phantom  ] normal thickness: rms %.3f mm, max %.3f mm over %zu samples, %zu NaN\n", normalError.rms,
+              normalError.max, normalError.compared, normalError.missing);
   // Tolerance: 0.3 voxel RMS (the sub-voxel target; 2 mm voxels).
   EXPECT_LT(radialError.rms, 0.3 * HeadPhantom::spacing);
   EXPECT_LT(normalError.rms, 0.3 * HeadPhantom::spacing);
@@ -192,10 +191,8 @@ TEST(RangeMapLogic, SmoothingAndBadInput)
   EXPECT_NEAR(smooth.radialStatistics.median, rough.radialStatistics.median, 0.5);
 
   parameters.nTheta = 2;
-  EXPECT_THROW(caps::RangeMapLogic::compute(volume->image(), labelImage, parameters),
-               std::invalid_argument);
-  EXPECT_THROW(caps::RangeMapLogic::compute(volume->image(), nullptr, parameters),
-               std::invalid_argument);
+  EXPECT_THROW(caps::RangeMapLogic::compute(volume->image(), labelImage, parameters), std::invalid_argument);
+  EXPECT_THROW(caps::RangeMapLogic::compute(volume->image(), nullptr, parameters), std::invalid_argument);
 }
 
 namespace {

@@ -83,6 +83,5 @@ TEST(RangeMapPreview, FaceInTheMiddleZUpNanGrey)
   EXPECT_EQ(read[0], dims[0]);
   EXPECT_EQ(read[1], dims[1]);
 
-  EXPECT_THROW(caps::renderRangeMapPreview(Eigen::MatrixXf(0, 0), 0, 1, style),
-               std::invalid_argument);
+  EXPECT_THROW(caps::renderRangeMapPreview(Eigen::MatrixXf(0, 0), 0, 1, style), std::invalid_argument);
 }

@@ -83,8 +83,7 @@ Eigen::Index columnOf(const caps::RangeMapNode& node, double z)
 }
 
 // Median of the finite samples within θ0 ± dTheta, z0 ± dz; NaN if none.
-double patchMedian(const caps::RangeMapNode& node, double theta0, double dTheta, double z0,
-                   double dz)
+double patchMedian(const caps::RangeMapNode& node, double theta0, double dTheta, double z0, double dz)
 {
   std::vector<float> v;
   const Eigen::Index n = node.values().rows();
@@ -116,9 +115,7 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
 {
   caps::Scene scene;
   const auto t0 = std::chrono::steady_clock::now();
-  auto seconds = [&t0]() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  };
+  auto seconds = [&t0]() { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   caps::VolumesLogic volumes(scene);
   std::vector<std::string> warnings;
   caps::VolumeNode* volume = volumes.load(caps::test::sampleCt(), {}, warnings);
@@ -159,8 +156,7 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
 
   // The landmarks, placed automatically from the skin and bone maps.
   const caps::seg::RangeMap skinMap = caps::RangeMapLogic::toRangeMap(skin);
-  const caps::seg::RangeMap boneMap =
-    caps::RangeMapLogic::toRangeMap(*scene.nodeAs<caps::RangeMapNode>(maps.boneId));
+  const caps::seg::RangeMap boneMap = caps::RangeMapLogic::toRangeMap(*scene.nodeAs<caps::RangeMapNode>(maps.boneId));
   const caps::seg::LandmarkPlacement placed = caps::seg::placeLandmarks(skinMap, boneMap);
   for (const auto& warning : placed.warnings)
     std::printf("[ landmark ] %s\n", warning.c_str());
@@ -178,8 +174,7 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   for (Eigen::Index j = first; j <= columnOf(skin, zNose + 90); ++j)
     if ((j - first) % 3 == 0 || j == nose || j == chin || j == jaw)
       std::printf("[ profile  ] z %7.1f mm  r %6.1f mm%s%s%s\n", skin.zAt(j), profile[j],
-                  j == nose ? "  <- nose tip" : "", j == chin ? "  <- chin" : "",
-                  j == jaw ? "  <- under the jaw" : "");
+                  j == nose ? "  <- nose tip" : "", j == chin ? "  <- chin" : "", j == jaw ? "  <- under the jaw" : "");
   ASSERT_GE(chin, 0) << "no chin found below the nose tip";
   const double zChin = skin.zAt(chin);
   // The nose tip lies in front of the chin, and the chin 30-110 mm under it.
@@ -202,8 +197,8 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   {
     const double r = patchMedian(radial, p.theta, dTheta, p.z, dz);
     const double n = patchMedian(normal, p.theta, dTheta, p.z, dz);
-    std::printf("[ thickness] %-11s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm\n",
-                p.name, degrees(p.theta), p.z, r, n);
+    std::printf("[ thickness] %-11s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm\n", p.name,
+                degrees(p.theta), p.z, r, n);
     EXPECT_GE(r, p.radialMin) << p.name;
     EXPECT_LE(r, p.radialMax) << p.name;
     EXPECT_GE(n, p.normalMin) << p.name;
@@ -214,18 +209,15 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   // command writes them, and every landmark placed with its thickness.
   const auto folder = caps::test::artifacts() / "modules";
   std::filesystem::create_directories(folder);
-  const auto table = caps::seg::landmarkThickness(placed.landmarks, skinMap,
-                                                  caps::RangeMapLogic::toRangeMap(radial),
+  const auto table = caps::seg::landmarkThickness(placed.landmarks, skinMap, caps::RangeMapLogic::toRangeMap(radial),
                                                   caps::RangeMapLogic::toRangeMap(normal));
   for (const auto& row : table)
     std::printf("[ landmark ] %-17s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm\n",
-                row.landmark.name.c_str(), degrees(row.landmark.theta), row.landmark.z, row.radial,
-                row.normal);
+                row.landmark.name.c_str(), degrees(row.landmark.theta), row.landmark.z, row.radial, row.normal);
   caps::seg::writeLandmarkCsv(folder / "sample-landmarks.csv", table);
   caps::PreviewStyle style;
   style.title = "Sample CT: radial soft-tissue thickness";
-  caps::writeRangeMapPreview(radial.values(), radial.zMin(), radial.zMax(), style,
-                             folder / "sample-thickness.png");
+  caps::writeRangeMapPreview(radial.values(), radial.zMin(), radial.zMax(), style, folder / "sample-thickness.png");
   style.title = "Sample CT: soft-tissue thickness along the skin normal";
   caps::writeRangeMapPreview(normal.values(), normal.zMin(), normal.zMax(), style,
                              folder / "sample-thickness-normal.png");

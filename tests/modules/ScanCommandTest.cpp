@@ -29,7 +29,10 @@ caps::test::ProcessResult runCaps(const std::string& args)
 
 // An egg of revolution about the z axis through (5, -3, 0): r(z) =
 // 80 sqrt(1 - (z/100)^2) for z in [-90, 90], a stand-in for a face scan.
-double trueRadius(double z) { return 80.0 * std::sqrt(1.0 - (z / 100.0) * (z / 100.0)); }
+double trueRadius(double z)
+{
+  return 80.0 * std::sqrt(1.0 - (z / 100.0) * (z / 100.0));
+}
 const Eigen::Vector3d kAxisPoint(5, -3, 0);
 
 // The scan as a scanner with wrong scale factors would give it: r times sh, z times sv.
@@ -55,8 +58,8 @@ TEST(ScanCommand, WritesRangeAndColourPicturesThatReadBack)
   const fs::path folder = caps::test::scratchFolder();
   const fs::path ply = writeScan(folder, 1.0, 1.0);
   const fs::path out = folder / "scan";
-  const auto r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted(out.string()) +
-                         " --size 360x90 --axis 5,-3,0,0,0,1");
+  const auto r =
+    runCaps("scan " + quoted(ply.string()) + " --out " + quoted(out.string()) + " --size 360x90 --axis 5,-3,0,0,0,1");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("coloured"), std::string::npos) << r.output;
   for (const char* file : {"range.png", "colour.png", "range.nrrd", "range-preview.png"})
@@ -106,17 +109,16 @@ TEST(ScanCommand, CalibrationByMeasuredDistancesUndoesTheScannersScale)
     file << "name,direction,from_theta_deg,from_z_mm,to_theta_deg,to_z_mm,measured_mm\n";
     file.precision(17);
     for (int k = 0; k < 4; ++k)
-      file << names[k] << "," << classes[k] << "," << pairs[k].first.thetaDeg << ","
-           << pairs[k].first.z * sv << "," << pairs[k].second.thetaDeg << "," << pairs[k].second.z * sv
-           << "," << (truePoint(pairs[k].first) - truePoint(pairs[k].second)).norm() << "\n";
+      file << names[k] << "," << classes[k] << "," << pairs[k].first.thetaDeg << "," << pairs[k].first.z * sv << ","
+           << pairs[k].second.thetaDeg << "," << pairs[k].second.z * sv << ","
+           << (truePoint(pairs[k].first) - truePoint(pairs[k].second)).norm() << "\n";
   }
   const fs::path out = folder / "scan";
   const auto r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted(out.string()) +
                          " --size 720x180 --axis 5,-3,0,0,0,1 --calibrate " + quoted(csv.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("horizontal ([0-9.]+), vertical ([0-9.]+);")))
-    << r.output;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("horizontal ([0-9.]+), vertical ([0-9.]+);"))) << r.output;
   EXPECT_NEAR(std::stod(m[1]), 1.0 / sh, 2e-3) << r.output;
   EXPECT_NEAR(std::stod(m[2]), 1.0 / sv, 2e-3) << r.output;
   EXPECT_NE(r.output.find("upper face height"), std::string::npos) << r.output;
@@ -149,20 +151,18 @@ TEST(ScanCommand, BadInput)
 
   // A distances file with a wrong class stops before any work, naming the line.
   const fs::path ply = writeScan(folder, 1.0, 1.0);
-  std::ofstream(folder / "d.csv")
-    << "name,direction,from_theta_deg,from_z_mm,to_theta_deg,to_z_mm,measured_mm\n"
-    << "mouth,sideways,-110,-30,-70,-30,50\n";
-  r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted((folder / "o").string()) +
-              " --calibrate " + quoted((folder / "d.csv").string()));
+  std::ofstream(folder / "d.csv") << "name,direction,from_theta_deg,from_z_mm,to_theta_deg,to_z_mm,measured_mm\n"
+                                  << "mouth,sideways,-110,-30,-70,-30,50\n";
+  r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted((folder / "o").string()) + " --calibrate " +
+              quoted((folder / "d.csv").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
   EXPECT_NE(r.output.find("line 2"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("horizontal or vertical"), std::string::npos) << r.output;
   // Only horizontal distances: the vertical factor is not determined.
-  std::ofstream(folder / "h.csv")
-    << "name,direction,from_theta_deg,from_z_mm,to_theta_deg,to_z_mm,measured_mm\n"
-    << "mouth,horizontal,-110,-30,-70,-30,50\n";
-  r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted((folder / "o").string()) +
-              " --calibrate " + quoted((folder / "h.csv").string()));
+  std::ofstream(folder / "h.csv") << "name,direction,from_theta_deg,from_z_mm,to_theta_deg,to_z_mm,measured_mm\n"
+                                  << "mouth,horizontal,-110,-30,-70,-30,50\n";
+  r = runCaps("scan " + quoted(ply.string()) + " --out " + quoted((folder / "o").string()) + " --calibrate " +
+              quoted((folder / "h.csv").string()));
   EXPECT_EQ(r.exitCode, 1) << r.output;
   EXPECT_FALSE(r.crashed);
 }

@@ -85,8 +85,7 @@ TEST(SegmentLogic, PhantomLabelsVolumesAndSurfaces)
   // Voxel volumes within 2 % of the ellipsoids' (the mask of a blurred,
   // noisy partial-volume edge cut at its middle).
   const double head = HeadPhantom::ellipsoidVolume(70, 85, 100);
-  const double skull =
-    HeadPhantom::ellipsoidVolume(62, 77, 92) - HeadPhantom::ellipsoidVolume(56, 71, 86);
+  const double skull = HeadPhantom::ellipsoidVolume(62, 77, 92) - HeadPhantom::ellipsoidVolume(56, 71, 86);
   EXPECT_NEAR(caps::SegmentLogic::volumeMm3(image, 1), head, 0.02 * head);
   EXPECT_NEAR(caps::SegmentLogic::volumeMm3(image, 2), skull, 0.04 * skull);
 
@@ -101,8 +100,7 @@ TEST(SegmentLogic, PhantomLabelsVolumesAndSurfaces)
   EXPECT_EQ(skin->sourceLabelMapId(), labels->id());
   EXPECT_GT(skin->polyData()->GetNumberOfPolys(), 1000);
   const double skinArea = HeadPhantom::ellipsoidArea(70, 85, 100);
-  const double skullArea =
-    HeadPhantom::ellipsoidArea(62, 77, 92) + HeadPhantom::ellipsoidArea(56, 71, 86);
+  const double skullArea = HeadPhantom::ellipsoidArea(62, 77, 92) + HeadPhantom::ellipsoidArea(56, 71, 86);
   EXPECT_NEAR(caps::SegmentLogic::surfaceAreaMm2(skin->polyData()), skinArea, 0.05 * skinArea);
   EXPECT_NEAR(caps::SegmentLogic::surfaceAreaMm2(bone->polyData()), skullArea, 0.05 * skullArea);
   // The full-resolution surface has more triangles than the display one.
@@ -124,8 +122,7 @@ TEST(SegmentLogic, CancelAndBadInput)
   caps::SegmentLogic logic(scene);
   caps::VolumeNode* volume = addPhantomVolume(scene);
   int calls = 0;
-  EXPECT_THROW(logic.segment(*volume, midThresholds(),
-                             [&calls](double, const std::string&) { return ++calls < 3; }),
+  EXPECT_THROW(logic.segment(*volume, midThresholds(), [&calls](double, const std::string&) { return ++calls < 3; }),
                caps::seg::Cancelled);
   EXPECT_EQ(scene.size(), 1u); // nothing added
 

@@ -20,7 +20,10 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-double skinRadius(double z) { return 80.0 + 0.1 * z; }
+double skinRadius(double z)
+{
+  return 80.0 + 0.1 * z;
+}
 constexpr double kBoneRadius = 70.0;
 
 caps::ThicknessReview makeReview(caps::seg::CylindricalFrame& frame)
@@ -117,8 +120,8 @@ TEST(ThicknessReview, LandmarksCsvHasOneRowPerLandmarkWithItsThickness)
   caps::seg::CylindricalFrame frame;
   const caps::ThicknessReview review = makeReview(frame);
   const Eigen::Vector3d nasion = frame.toWorld(skinRadius(30.0), -kPi / 2, 30.0);
-  std::vector<caps::LandmarksNode::Landmark> landmarks{
-    {"nasion", {nasion.x(), nasion.y(), nasion.z()}}, {"far, \"away\"", {0.0, 0.0, 500.0}}};
+  std::vector<caps::LandmarksNode::Landmark> landmarks{{"nasion", {nasion.x(), nasion.y(), nasion.z()}},
+                                                       {"far, \"away\"", {0.0, 0.0, 500.0}}};
   std::istringstream csv(review.landmarksCsv(landmarks));
   std::string header, first, second;
   std::getline(csv, header);

@@ -14,8 +14,14 @@ using namespace caps::incision;
 
 namespace {
 
-std::vector<SutureEdges> thesisSimpleExcision() { return {{{0, 1}, {0, 5}}, {{1, 2}, {5, 4}}, {{2, 3}, {4, 3}}}; }
-std::vector<SutureEdges> thesisZPlasty() { return {{{5, 0}, {5, 4}}, {{2, 1}, {2, 3}}, {{0, 1}, {3, 4}}}; }
+std::vector<SutureEdges> thesisSimpleExcision()
+{
+  return {{{0, 1}, {0, 5}}, {{1, 2}, {5, 4}}, {{2, 3}, {4, 3}}};
+}
+std::vector<SutureEdges> thesisZPlasty()
+{
+  return {{{5, 0}, {5, 4}}, {{2, 1}, {2, 3}}, {{0, 1}, {3, 4}}};
+}
 
 std::set<std::set<int>> asSets(const std::vector<std::vector<int>>& classes)
 {

@@ -31,9 +31,15 @@ namespace caps::incision {
 namespace {
 
 using Phantom = test::CylinderPhantom;
-const Phantom& phantom() { return test::cylinderPhantom(); }
+const Phantom& phantom()
+{
+  return test::cylinderPhantom();
+}
 
-SimulationOptions testOptions() { return test::phantomSimulationOptions(); }
+SimulationOptions testOptions()
+{
+  return test::phantomSimulationOptions();
+}
 
 /// The symmetric ellipse of PlanSimulationTest: 24 mm, 3:1, along θ at (0, 0).
 const PlanPrediction& ellipse()
@@ -47,7 +53,10 @@ const PlanPrediction& ellipse()
   return p;
 }
 
-double radius(const Eigen::Vector3d& x) { return std::hypot(x.x(), x.y()); }
+double radius(const Eigen::Vector3d& x)
+{
+  return std::hypot(x.x(), x.y());
+}
 
 /// Mesh nodes carrying the weight of vertex v.
 std::vector<int> supportOf(const fem::DisplaySurface& s, Eigen::Index v)
@@ -232,8 +241,8 @@ TEST(PlanDisplay, ASymmetricEllipseGivesAMirrorSymmetricStressField)
     std::printf("[mirror %s] %d of %ld vertices have a mirror vertex; largest relative asymmetry of von Mises, "
                 "mean stress and strain %.3g; of the deformed surface %.3g mm (von Mises up to %.3g kPa, mean stress "
                 "up to %.3g kPa)\n",
-                mirror == 0 ? "θ → −θ" : "z → −z", matched, long(x.cols()), worstStress, worstShape,
-                1e3 * scaleVm, 1e3 * scaleMean);
+                mirror == 0 ? "θ → −θ" : "z → −z", matched, long(x.cols()), worstStress, worstShape, 1e3 * scaleVm,
+                1e3 * scaleMean);
     EXPECT_EQ(matched, int(x.cols()));
     EXPECT_LT(worstStress, 1e-6);
     EXPECT_LT(worstShape, 1e-6);
@@ -274,10 +283,12 @@ TEST(PlanDisplay, PolyDataCarriesEveryArrayAndIsWrittenAsVtp)
     for (vtkIdType v = 0; v < read->GetNumberOfPoints(); ++v)
       worst = std::max(worst, (Eigen::Vector3d(read->GetPoint(v)) - x.col(v)).norm());
     EXPECT_LT(worst, 1e-12);
-    const std::map<std::string, int> expected = {
-      {"displacement_mm", 3}, {"displacement_magnitude_mm", 1}, {"von_mises_kPa", 1}, {"mean_stress_kPa", 1},
-      {"stress_kPa", 6},      {"strain", 6},                    {"equivalent_strain", 1}, {"volumetric_strain", 1},
-      {"range_detail_mm", 3}, {"skin_shade", 3},                {"element", 1},           {"rst", 3}};
+    const std::map<std::string, int> expected = {{"displacement_mm", 3},   {"displacement_magnitude_mm", 1},
+                                                 {"von_mises_kPa", 1},     {"mean_stress_kPa", 1},
+                                                 {"stress_kPa", 6},        {"strain", 6},
+                                                 {"equivalent_strain", 1}, {"volumetric_strain", 1},
+                                                 {"range_detail_mm", 3},   {"skin_shade", 3},
+                                                 {"element", 1},           {"rst", 3}};
     for (const auto& [name, components] : expected)
     {
       vtkDataArray* a = read->GetPointData()->GetArray(name.c_str());

@@ -20,9 +20,15 @@ namespace {
 using test::degree;
 
 using Phantom = test::CylinderPhantom;
-const Phantom& phantom() { return test::cylinderPhantom(); }
+const Phantom& phantom()
+{
+  return test::cylinderPhantom();
+}
 
-SimulationOptions testOptions() { return test::phantomSimulationOptions(); }
+SimulationOptions testOptions()
+{
+  return test::phantomSimulationOptions();
+}
 
 /// §4.5.2: N_l(2N_v + N_e) + N_v + N_e nodes, N_l N_p elements.
 void expectThesisCounts(const PlanPrediction& p, int layers)
@@ -56,7 +62,8 @@ TEST(PlanSimulation, RefineHoleCutsSuturedEdgesIntoEqualPieces)
 {
   // A Z: every segment tied to the others by the sutures, so all get the
   // pieces of the longest side.
-  const IncisionPlan z = test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0}, {{"central_length", 10.0}});
+  const IncisionPlan z =
+    test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0}, {{"central_length", 10.0}});
   const SkinChart chart = z.chart(phantom().skin);
   const RefinedHole r = refineHole(z.chartPath(chart), z.borderOffsets(), z.sutures(), 2.0);
   ASSERT_EQ(r.piecesPerSegment.size(), 3u);
@@ -75,8 +82,9 @@ TEST(PlanSimulation, RefineHoleCutsSuturedEdgesIntoEqualPieces)
 
 TEST(PlanSimulation, EllipticalExcisionClosesIntoASymmetricLine)
 {
-  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
-                              .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision")
+      .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   ASSERT_TRUE(plan.isExcision());
   const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
   printSummary("ellipse 24 mm 3:1", p);
@@ -140,8 +148,9 @@ TEST(PlanSimulation, ShortEllipsesMakeBiggerDogEars)
   {
     const double ratio = i == 0 ? 2.0 : 4.0;
     const double length = ratio * width;
-    const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
-                                .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", ratio}, {"axis_angle", 0.0}});
+    const IncisionPlan plan =
+      test::shippedProcedure("elliptical-excision")
+        .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", ratio}, {"axis_angle", 0.0}});
     const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
     printSummary(i == 0 ? "ellipse 2:1" : "ellipse 4:1", p);
     expectThesisCounts(p, 3);
@@ -167,8 +176,9 @@ TEST(PlanSimulation, ZPlastyGainGrowsWithTheLimbAngle)
   for (const double angle : {30.0, 45.0, 60.0, 75.0, 90.0})
   {
     const IncisionPlan plan =
-      test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0},
-                                  {{"central_length", 16.0}, {"limb_angle", angle * degree}, {"axis_angle", 90.0 * degree}});
+      test::shippedProcedure("z-plasty")
+        .place(phantom().skin, {0.0, 0.0},
+               {{"central_length", 16.0}, {"limb_angle", angle * degree}, {"axis_angle", 90.0 * degree}});
     const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, testOptions());
     char name[32];
     std::snprintf(name, sizeof name, "Z %.0f°", angle);
@@ -207,7 +217,8 @@ TEST(PlanSimulation, EveryShippedProcedureClosesIncludingAcrossTheSeam)
 
 TEST(PlanSimulation, LayersFollowTheBoneAndTheStatedFractions)
 {
-  const IncisionPlan plan = test::shippedProcedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
   SimulationOptions o = testOptions();
   o.layerFractions = {0.2, 0.4, 0.4}; // skin, fat, muscle
   const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, o);
@@ -249,8 +260,9 @@ double distanceToSegment(const ChartPoint& c, const ChartPoint& a, const ChartPo
 
 PlanPrediction ellipseClosure(double underminingWidth, double length, double regionRadius)
 {
-  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
-                              .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision")
+      .place(phantom().skin, {0.0, 0.0}, {{"length", length}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   SimulationOptions o = testOptions();
   o.regionRadius = regionRadius;
   o.underminingWidth = underminingWidth;
@@ -452,8 +464,9 @@ TEST(PlanSimulation, ExcisedVolumeFromTheElementsIsTheAnalyticShell)
   // with the cut through the skin layer only (one layer of three equal
   // ones), from r = 80 to 80 − 10 / 3. The elements are quadratic, the
   // cylinder is not, but along the rays they meet it to 4e-10 here.
-  const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
-                              .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision")
+      .place(phantom().skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
   const double r0 = plan.chart(phantom().skin).radius();
   for (const int cutLayers : {0, 1})
   {
@@ -466,8 +479,7 @@ TEST(PlanSimulation, ExcisedVolumeFromTheElementsIsTheAnalyticShell)
                 cutLayers == 0 ? 3 : cutLayers, p.excisedVolume, analytic, p.excisedVolume / analytic - 1.0,
                 excisedVolume(plan, phantom().skin, phantom().bone));
     EXPECT_NEAR(p.excisedVolume, analytic, 1e-6 * analytic);
-    EXPECT_EQ(p.excisedTissue.mesh.elements.size(),
-              std::size_t(cutLayers == 0 ? 3 : 1) * (p.hole.points.size() - 2));
+    EXPECT_EQ(p.excisedTissue.mesh.elements.size(), std::size_t(cutLayers == 0 ? 3 : 1) * (p.hole.points.size() - 2));
     EXPECT_LT(p.maxSutureGap, 1e-9);
     if (cutLayers == 0)
     { // the second method, over the plan's own hole polygon
@@ -482,8 +494,9 @@ TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
   // to the tissue below, so transposing them lengthens the central axis
   // less than the full-thickness cut does; only the cut layer is sutured.
   const IncisionPlan plan =
-    test::shippedProcedure("z-plasty").place(phantom().skin, {0.0, 0.0},
-                                {{"central_length", 16.0}, {"limb_angle", 60.0 * degree}, {"axis_angle", 90.0 * degree}});
+    test::shippedProcedure("z-plasty")
+      .place(phantom().skin, {0.0, 0.0},
+             {{"central_length", 16.0}, {"limb_angle", 60.0 * degree}, {"axis_angle", 90.0 * degree}});
   SimulationOptions o = testOptions();
   const PlanPrediction full = simulatePlan(phantom().skin, phantom().bone, plan, o);
   o.cutLayers = 1;
@@ -499,7 +512,7 @@ TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
   EXPECT_LT(partial.zPlasty->predicted.fraction, full.zPlasty->predicted.fraction);
   EXPECT_LT(partial.continuum.sutures.size(), full.continuum.sutures.size());
   EXPECT_LT(partial.continuum.mesh.nodeCount(), full.continuum.mesh.nodeCount()); // the twins below are one
-  EXPECT_EQ(partial.excisedVolume, 0.0); // a Z-plasty removes nothing
+  EXPECT_EQ(partial.excisedVolume, 0.0);                                          // a Z-plasty removes nothing
 
   o.cutLayers = 4;
   EXPECT_THROW(simulatePlan(phantom().skin, phantom().bone, plan, o), std::invalid_argument);
@@ -523,7 +536,8 @@ TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
         if (std::abs(holed.frame().indexToTheta(i)) < 0.1)
           holed.at(i, j) = seg::RangeMap::quietNaN();
   }
-  const IncisionPlan plan = test::shippedProcedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision").place(ph.skin, {0.0, 0.0}, {{"length", 20.0}});
   {
     // Rows with no skin across the plan's width are where the scan ends: the
     // region stops at the last measured row.

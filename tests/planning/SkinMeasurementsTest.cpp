@@ -122,7 +122,8 @@ TEST(ExcisedArea, RhombusAndSlits)
   EXPECT_NEAR(excisedArea(plan, skin), 15.0 * 15.0 * std::sin(60.0 * degree), 1e-3); // the flap's cuts add nothing
   const IncisionPlan z = test::shippedProcedures().find("z-plasty")->place(skin, {0.0, 0.0});
   EXPECT_EQ(excisedArea(z, skin), 0.0);
-  const IncisionPlan zx = test::shippedProcedures().find("multiple-z-plasty-with-excision")
+  const IncisionPlan zx = test::shippedProcedures()
+                            .find("multiple-z-plasty-with-excision")
                             ->place(skin, {0.0, 0.0}, {{"central_length", 24.0}, {"excision_width", 4.0}});
   EXPECT_NEAR(excisedArea(zx, skin), 0.5 * 24.0 * 4.0, 1e-3); // rhombus of diagonals 24 and 4
 }
@@ -131,8 +132,7 @@ TEST(MeasurePlan, ZPlastyOnACylinder)
 {
   const auto skin = test::cylinderSkin(80.0);
   const auto* z = test::shippedProcedures().find("z-plasty");
-  const IncisionPlan plan =
-    z->place(skin, {-pi / 2, 0.0}, {{"central_length", 20.0}, {"limb_angle", 45.0 * degree}});
+  const IncisionPlan plan = z->place(skin, {-pi / 2, 0.0}, {{"central_length", 20.0}, {"limb_angle", 45.0 * degree}});
   const PlanMeasurements m = measurePlan(plan, skin);
   ASSERT_EQ(m.limbs.size(), 3u);
   for (const auto& limb : m.limbs)

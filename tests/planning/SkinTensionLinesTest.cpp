@@ -28,9 +28,10 @@ constexpr double kRadius = 90.0;
 
 std::vector<seg::Landmark> adultLandmarks()
 {
-  return {{"glabella", kFront, 62.0},         {"nasion", kFront, 50.0},          {"pronasale", kFront, 20.0},
-          {"subnasale", kFront, -3.0},        {"labrale_superius", kFront, -14.0}, {"labrale_inferius", kFront, -28.0},
-          {"pogonion", kFront, -45.0},        {"menton", kFront, -57.0}};
+  return {{"glabella", kFront, 62.0},          {"nasion", kFront, 50.0},
+          {"pronasale", kFront, 20.0},         {"subnasale", kFront, -3.0},
+          {"labrale_superius", kFront, -14.0}, {"labrale_inferius", kFront, -28.0},
+          {"pogonion", kFront, -45.0},         {"menton", kFront, -57.0}};
 }
 
 class SkinTensionLinesTest : public ::testing::Test
@@ -100,10 +101,10 @@ TEST_F(SkinTensionLinesTest, VerticalAtTheGlabellaAndOnTheUpperLip)
 TEST_F(SkinTensionLinesTest, AlongTheLidsRadiatingAtTheCanthusAcrossTheNose)
 {
   const double eye = layout.eyeOffset;
-  EXPECT_LT(elevation(eye, layout.eyeZ - 10.0), 10.0);     // lower lid
-  EXPECT_LT(elevation(eye + 25.0, layout.eyeZ), 10.0);     // lateral canthus, level
+  EXPECT_LT(elevation(eye, layout.eyeZ - 10.0), 10.0);        // lower lid
+  EXPECT_LT(elevation(eye + 25.0, layout.eyeZ), 10.0);        // lateral canthus, level
   EXPECT_GT(elevation(eye + 24.0, layout.eyeZ + 12.0), 15.0); // crow's feet fan upwards above it
-  EXPECT_LT(elevation(0.0, 32.0), 10.0);                   // nasal dorsum
+  EXPECT_LT(elevation(0.0, 32.0), 10.0);                      // nasal dorsum
 }
 
 TEST_F(SkinTensionLinesTest, CheekLinesRunDownAndOutAlongTheNasolabialFold)
@@ -168,8 +169,8 @@ TEST_F(SkinTensionLinesTest, TracedLinesFollowTheFieldAndKeepApart)
     for (std::size_t b = a + 1; b < traced.size(); ++b)
       for (std::size_t i = 0; i < traced[a].size(); i += 3)
         for (std::size_t j = 0; j < traced[b].size(); j += 3)
-          closest = std::min(closest, std::hypot(kRadius * (traced[a][i].theta - traced[b][j].theta),
-                                                 traced[a][i].z - traced[b][j].z));
+          closest = std::min(
+            closest, std::hypot(kRadius * (traced[a][i].theta - traced[b][j].theta), traced[a][i].z - traced[b][j].z));
   EXPECT_GT(closest, 0.5 * spacing - 1.5);
   // Nothing outside the face: forehead to neck, ear to ear in front.
   EXPECT_FALSE(lines.covers(theta(0.0), 200.0));
@@ -180,9 +181,7 @@ TEST_F(SkinTensionLinesTest, PlanAxisAgainstTheLines)
 {
   // A horizontal cut on the forehead lies along the lines; a vertical one across them.
   const seg::CylindricalFrame& frame = skin.frame();
-  auto normalized = [&frame](double x, double z) {
-    return incision::normalizedFromSkinPoint(frame, {theta(x), z});
-  };
+  auto normalized = [&frame](double x, double z) { return incision::normalizedFromSkinPoint(frame, {theta(x), z}); };
   incision::IncisionPlan along({normalized(-10.0, 90.0), normalized(0.0, 90.0), normalized(10.0, 90.0)},
                                {theta(0.0), 90.0});
   incision::IncisionPlan across({normalized(0.0, 80.0), normalized(0.0, 90.0), normalized(0.0, 100.0)},
@@ -192,9 +191,9 @@ TEST_F(SkinTensionLinesTest, PlanAxisAgainstTheLines)
   EXPECT_LT(a.degrees, 3.0);
   EXPECT_GT(incision::axisToTensionLines(across, lines).degrees, 87.0);
   // A Z-plasty is judged by its central limb p1–p2.
-  incision::IncisionPlan z({normalized(-10.0, 100.0), normalized(-5.0, 90.0), normalized(5.0, 90.0),
-                            normalized(10.0, 80.0)},
-                           {theta(0.0), 90.0});
+  incision::IncisionPlan z(
+    {normalized(-10.0, 100.0), normalized(-5.0, 90.0), normalized(5.0, 90.0), normalized(10.0, 80.0)},
+    {theta(0.0), 90.0});
   z.setGenerator("z");
   const auto c = incision::axisToTensionLines(z, lines);
   EXPECT_EQ(c.axis, "p1–p2");

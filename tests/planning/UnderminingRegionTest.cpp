@@ -33,8 +33,14 @@ namespace {
 using test::pi;
 
 using Phantom = test::CylinderPhantom;
-const Phantom& phantom() { return test::cylinderPhantom(); }
-const ProcedureLibrary& library() { return test::shippedProcedures(); }
+const Phantom& phantom()
+{
+  return test::cylinderPhantom();
+}
+const ProcedureLibrary& library()
+{
+  return test::shippedProcedures();
+}
 
 /// The symmetric ellipse of PlanSimulationTest: 24 mm, 3:1, along θ, centred at (θ, 0).
 PlaceProcedure placeEllipse(double theta = 0.0)
@@ -151,7 +157,10 @@ IncisionPlan planWith(const std::vector<std::vector<ChartPoint>>& regions, doubl
   return recorded.plan();
 }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part)
+{
+  return text.find(part) != std::string::npos;
+}
 
 } // namespace
 
@@ -214,8 +223,8 @@ TEST(UnderminingRegion, RegionsAndTheBandAddUp)
   }
   std::printf("[undermined union] band %ld vertices, regions %ld, both %ld, union %ld\n", inBand, inRegions, inBoth,
               long(std::count(expected.begin(), expected.end(), true)));
-  EXPECT_GT(inBoth, 0);           // they overlap: the union is not a sum
-  EXPECT_GT(inRegions, inBoth);   // and the regions reach beyond the band
+  EXPECT_GT(inBoth, 0);         // they overlap: the union is not a sum
+  EXPECT_GT(inRegions, inBoth); // and the regions reach beyond the band
   EXPECT_EQ(flagsOf(both.underminedVertices), expected);
   EXPECT_EQ(both.continuum.underminedNodes, releasedFor(both, expected));
   EXPECT_GT(both.continuum.underminedNodes.size(), band.continuum.underminedNodes.size());
@@ -252,7 +261,8 @@ TEST(UnderminingRegion, AFarRegionEasesTheClosureLessThanOneBesideTheWound)
 {
   // The same 10 × 6 mm rectangle beside the wound and out at the rim.
   auto rectangle = [](double u, double v) {
-    return std::vector<ChartPoint>{{u - 5.03, v - 3.07}, {u + 5.01, v - 3.03}, {u + 4.97, v + 2.93}, {u - 4.99, v + 3.01}};
+    return std::vector<ChartPoint>{
+      {u - 5.03, v - 3.07}, {u + 5.01, v - 3.03}, {u + 4.97, v + 2.93}, {u - 4.99, v + 3.01}};
   };
   const PlanPrediction none = simulatePlan(phantom().skin, phantom().bone, planWith({}), options());
   // Out at the rim: where the mesh ends along u beside the wound.
@@ -260,8 +270,7 @@ TEST(UnderminingRegion, AFarRegionEasesTheClosureLessThanOneBesideTheWound)
   for (const ChartPoint& x : none.surface.mesh.vertices)
     if (std::abs(x.y() - 7.6) < 3.0)
       rim = std::max(rim, x.x());
-  const PlanPrediction near =
-    simulatePlan(phantom().skin, phantom().bone, planWith({rectangle(0.0, 7.6)}), options());
+  const PlanPrediction near = simulatePlan(phantom().skin, phantom().bone, planWith({rectangle(0.0, 7.6)}), options());
   const PlanPrediction far =
     simulatePlan(phantom().skin, phantom().bone, planWith({rectangle(rim - 4.0, 7.6)}), options());
   const double f0 = none.closure.magnitudeSum, fNear = near.closure.magnitudeSum, fFar = far.closure.magnitudeSum;
@@ -278,10 +287,12 @@ TEST(UnderminingRegion, AFarRegionEasesTheClosureLessThanOneBesideTheWound)
   for (int v = 0; v < none.skin.holeVertexCount; ++v)
   {
     const int node = none.skin.nodes[std::size_t(v)];
-    change = std::max(change, (far.displacements.segment<3>(3 * node) - none.displacements.segment<3>(3 * node)).norm());
+    change =
+      std::max(change, (far.displacements.segment<3>(3 * node) - none.displacements.segment<3>(3 * node)).norm());
     largest = std::max(largest, none.displacements.segment<3>(3 * node).norm());
   }
-  std::printf("[undermined region] at the wound the far region moves the skin by %.3g mm of %.3g mm\n", change, largest);
+  std::printf("[undermined region] at the wound the far region moves the skin by %.3g mm of %.3g mm\n", change,
+              largest);
   EXPECT_LT(change, 0.02 * largest);
 }
 
@@ -303,8 +314,8 @@ TEST(UnderminingRegion, BadRegionsAreRefusedAndThePlanKeptAsItWas)
     {
       std::printf("[refused] %s\n", e.what());
       EXPECT_EQ(e.operation(), 3);
-      EXPECT_TRUE(contains(e.what(), "operation 3 (undermine a region of " + std::to_string(region.size()) +
-                                       " points): "))
+      EXPECT_TRUE(
+        contains(e.what(), "operation 3 (undermine a region of " + std::to_string(region.size()) + " points): "))
         << e.what();
       EXPECT_TRUE(contains(e.what(), expected)) << e.what();
     }
@@ -352,9 +363,9 @@ TEST(UnderminingRegion, BadRegionsAreRefusedAndThePlanKeptAsItWas)
   }
 
   // Nothing to undermine before there is a plan.
-  EXPECT_THROW(applyOperation(IncisionPlan(), UndermineRegion{before.underminedRegions().front()}, 1, phantom().skin,
-                              library()),
-               RecipeError);
+  EXPECT_THROW(
+    applyOperation(IncisionPlan(), UndermineRegion{before.underminedRegions().front()}, 1, phantom().skin, library()),
+    RecipeError);
   // What was refused left nothing behind; clearing works and is recorded.
   recorded.apply(ClearUndermining{}, phantom().skin, library());
   EXPECT_TRUE(recorded.plan().underminedRegions().empty());
@@ -385,8 +396,9 @@ TEST(UnderminingRegion, TheDisplayIsOneOverTheRegionAndZeroAwayFromIt)
     const double u = d.undermined[std::size_t(v)];
     ASSERT_GE(u, 0.0);
     ASSERT_LE(u, 1.0);
-    const auto& corners = p.surface.mesh.polygons[std::size_t(
-      p.continuum.elementPolygon[std::size_t(d.surface.bodyPoints()[std::size_t(v)].element)])];
+    const auto& corners =
+      p.surface.mesh
+        .polygons[std::size_t(p.continuum.elementPolygon[std::size_t(d.surface.bodyPoints()[std::size_t(v)].element)])];
     const long in = std::count_if(corners.begin(), corners.end(), [&](int c) { return vertexInside[std::size_t(c)]; });
     if (in == long(corners.size()))
     {

@@ -28,8 +28,9 @@ const PlanPrediction& ellipse()
 {
   static const PlanPrediction p = [] {
     const auto& phantom = test::cylinderPhantom();
-    const IncisionPlan plan = test::shippedProcedure("elliptical-excision")
-                                .place(phantom.skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
+    const IncisionPlan plan =
+      test::shippedProcedure("elliptical-excision")
+        .place(phantom.skin, {0.0, 0.0}, {{"length", 24.0}, {"ratio", 3.0}, {"axis_angle", 0.0}});
     return simulatePlan(phantom.skin, phantom.bone, plan, test::phantomSimulationOptions());
   }();
   return p;
@@ -91,8 +92,8 @@ fem::Vector6d secondRouteNodalStress(const PlanPrediction& p, int node)
     else
     {
       for (double t : {-h, 0.0, h})
-        for (const auto& rs : {Eigen::Vector2d(1.0 / 6, 1.0 / 6), Eigen::Vector2d(2.0 / 3, 1.0 / 6),
-                               Eigen::Vector2d(1.0 / 6, 2.0 / 3)})
+        for (const auto& rs :
+             {Eigen::Vector2d(1.0 / 6, 1.0 / 6), Eigen::Vector2d(2.0 / 3, 1.0 / 6), Eigen::Vector2d(1.0 / 6, 2.0 / 3)})
           points.emplace_back(rs.x(), rs.y(), t);
     }
     auto basis = [brick](const Eigen::Vector3d& x) {
@@ -138,10 +139,10 @@ TEST(WoundStress, PeakAgreesWithASecondStressRecovery)
   EXPECT_LE(w.distance, 10.0);
 
   const fem::Vector6d sigma = secondRouteNodalStress(p, w.node);
-  const double vonMises = std::sqrt(0.5 * ((sigma[0] - sigma[1]) * (sigma[0] - sigma[1]) +
-                                           (sigma[1] - sigma[2]) * (sigma[1] - sigma[2]) +
-                                           (sigma[2] - sigma[0]) * (sigma[2] - sigma[0])) +
-                                    3.0 * (sigma[3] * sigma[3] + sigma[4] * sigma[4] + sigma[5] * sigma[5]));
+  const double vonMises =
+    std::sqrt(0.5 * ((sigma[0] - sigma[1]) * (sigma[0] - sigma[1]) + (sigma[1] - sigma[2]) * (sigma[1] - sigma[2]) +
+                     (sigma[2] - sigma[0]) * (sigma[2] - sigma[0])) +
+              3.0 * (sigma[3] * sigma[3] + sigma[4] * sigma[4] + sigma[5] * sigma[5]));
   std::printf("[wound stress] second route at node %d: von Mises %.6g kPa (reported %.6g kPa)\n", w.node,
               1e3 * vonMises, 1e3 * w.peakVonMises);
   EXPECT_GT(w.peakVonMises, 0.0);
@@ -161,8 +162,7 @@ TEST(WoundStress, PeakAgreesWithASecondStressRecovery)
 TEST(WoundStress, NoVertexOfTheBandExceedsThePeak)
 {
   const PlanPrediction& p = ellipse();
-  const fem::NodalStressField field =
-    fem::recoverNodalStresses(p.continuum.mesh, p.materials, p.displacements);
+  const fem::NodalStressField field = fem::recoverNodalStresses(p.continuum.mesh, p.materials, p.displacements);
   for (const double radius : {3.0, 10.0})
   {
     const WoundStress w = woundSkinStress(p, radius);
@@ -222,8 +222,7 @@ TEST(WoundStress, SymmetricPlanHasAMirrorSymmetricPeak)
 {
   const PlanPrediction& p = ellipse();
   const WoundStress w = woundSkinStress(p, 10.0);
-  const fem::NodalStressField field =
-    fem::recoverNodalStresses(p.continuum.mesh, p.materials, p.displacements);
+  const fem::NodalStressField field = fem::recoverNodalStresses(p.continuum.mesh, p.materials, p.displacements);
   // The ellipse is symmetric about u = 0 (θ → −θ) and v = 0 (z → −z): the
   // mirror images of the peak's vertex carry the same von Mises stress.
   for (const Eigen::Vector2d& flip : {Eigen::Vector2d(-1, 1), Eigen::Vector2d(1, -1), Eigen::Vector2d(-1, -1)})
@@ -236,9 +235,9 @@ TEST(WoundStress, SymmetricPlanHasAMirrorSymmetricPeak)
         // Twins of an excision's border share no position; of the vertices
         // at this point take the one with the peak's value, if any.
         const double vm = fem::vonMisesStress(field.stress.col(p.skin.nodes[v]));
-        if (found < 0 || std::abs(vm - w.peakVonMises) <
-                           std::abs(fem::vonMisesStress(field.stress.col(p.skin.nodes[std::size_t(found)])) -
-                                    w.peakVonMises))
+        if (found < 0 ||
+            std::abs(vm - w.peakVonMises) <
+              std::abs(fem::vonMisesStress(field.stress.col(p.skin.nodes[std::size_t(found)])) - w.peakVonMises))
           found = int(v);
       }
     ASSERT_GE(found, 0) << "no vertex at the mirror image (" << mirror.transpose() << ") of the peak";

@@ -110,13 +110,16 @@ vtkSmartPointer<vtkPolyData> headPhantom(double cheekBulge = 0.0)
   colour->SetNumberOfComponents(3);
   vtkNew<vtkFloatArray> stress;
   stress->SetName("stress");
-  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i) {
+  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i)
+  {
     double p[3];
     points->GetPoint(i, p);
     Eigen::Vector3d x(p[0], p[1], p[2]);
-    if (cheekBulge != 0.0) {
+    if (cheekBulge != 0.0)
+    {
       const double w = std::exp(-(x - cheek).squaredNorm() / (2.0 * 25.0 * 25.0));
-      const Eigen::Vector3d outward = Eigen::Vector3d(x.x() / (kA * kA), x.y() / (kB * kB), x.z() / (kC * kC)).normalized();
+      const Eigen::Vector3d outward =
+        Eigen::Vector3d(x.x() / (kA * kA), x.y() / (kB * kB), x.z() / (kC * kC)).normalized();
       x += cheekBulge * w * outward;
       points->SetPoint(i, x.data());
     }
@@ -134,7 +137,8 @@ vtkSmartPointer<vtkPolyData> headPhantom(double cheekBulge = 0.0)
 std::vector<Eigen::Vector3d> cheekEllipse(int n = 24)
 {
   std::vector<Eigen::Vector3d> loop;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < n; ++i)
+  {
     const double t = 2.0 * kPi * i / n;
     loop.push_back(onHead(-kPi / 3.0 + 0.22 * std::cos(t), -15.0 + 9.0 * std::sin(t)));
   }
@@ -254,10 +258,13 @@ TEST(OffscreenDisplay, WithoutXvfbTheMessageSaysWhatToDo)
   const std::string saved = outer ? outer : "";
   ::unsetenv("DISPLAY");
   ::setenv("CAPS_XVFB", "/nonexistent/Xvfb", 1);
-  try {
+  try
+  {
     OffscreenDisplay::ensure();
     ADD_FAILURE() << "no exception without DISPLAY and without Xvfb";
-  } catch (const std::runtime_error& e) {
+  }
+  catch (const std::runtime_error& e)
+  {
     const std::string message = e.what();
     EXPECT_NE(message.find("install the Debian package xvfb"), std::string::npos) << message;
     EXPECT_NE(message.find("xvfb-run -a"), std::string::npos) << message;
@@ -291,8 +298,10 @@ TEST(OffscreenDisplay, ARenderingThreadMayStartTheServerAndRender)
   double variance = 0.0;
   std::string error;
   std::thread worker([&] {
-    try {
-      for (int i = 0; i < 3; ++i) {
+    try
+    {
+      for (int i = 0; i < 3; ++i)
+      {
         Figure f;
         f.width = 320;
         f.height = 240;
@@ -300,7 +309,9 @@ TEST(OffscreenDisplay, ARenderingThreadMayStartTheServerAndRender)
         f.camera = lookAtCamera(Eigen::Vector3d::Zero(), {0, -1, 0}, {0, 0, 1}, 120.0, 320.0 / 240.0);
         variance = pixelVariance(renderFigure(f));
       }
-    } catch (const std::exception& e) {
+    }
+    catch (const std::exception& e)
+    {
       error = e.what();
     }
   });
@@ -363,7 +374,8 @@ TEST_F(ReportFigures, FrontRenderHasTheRequestedSizeIsNotBlankAndFillsTheFrame)
 
 TEST_F(ReportFigures, OtherPixelSizesAreHonoured)
 {
-  for (const auto& [w, h] : {std::pair{640, 480}, std::pair{900, 1200}, std::pair{1201, 333}}) {
+  for (const auto& [w, h] : {std::pair{640, 480}, std::pair{900, 1200}, std::pair{1201, 333}})
+  {
     vtkSmartPointer<vtkImageData> image = renderFigure(headFigure(View::ObliqueLeft, w, h));
     int dims[3];
     image->GetDimensions(dims);
@@ -404,7 +416,8 @@ TEST_F(ReportFigures, TheLineIsDrawnWhereItsPointsProject)
   writePng(image, artifacts() / "head-front-line.png");
 
   int checked = 0;
-  for (std::size_t i = 2; i + 2 < line.points.size(); i += 3) {
+  for (std::size_t i = 2; i + 2 < line.points.size(); i += 3)
+  {
     const Eigen::Vector3d mid = 0.5 * (line.points[i] + line.points[i + 1]);
     const Eigen::Vector2d expected = pinhole(f.camera, f.width, f.height, mid);
     const Eigen::Vector2d library = projectToPixel(f, mid);
@@ -446,11 +459,13 @@ TEST_F(ReportFigures, NumberedPointsHaveLabelsBesideThem)
   // Around each numbered point, within a label's reach, dark text pixels that
   // the unlabelled render does not have.
   const double reach = 1.1 * line.widthPixels + 1.6 * f.textPoints * f.pixelsPerPoint();
-  for (const std::size_t i : {0, 6, 12, 18}) {
+  for (const std::size_t i : {0, 6, 12, 18})
+  {
     const Eigen::Vector2d c = projectToPixel(f, line.points[i]);
     int dark = 0, darkBefore = 0;
     for (int y = int(c.y() - reach); y <= int(c.y() + reach); ++y)
-      for (int x = int(c.x() - reach); x <= int(c.x() + reach); ++x) {
+      for (int x = int(c.x() - reach); x <= int(c.x() + reach); ++x)
+      {
         if (x < 0 || y < 0 || x >= f.width || y >= f.height)
           continue;
         const auto a = pixelAt(image, x, y), b = pixelAt(without, x, y);
@@ -477,7 +492,8 @@ TEST_F(ReportFigures, LabelsOfHiddenPointsAreLeftOut)
     const Eigen::Vector2d c = projectToPixel(f, point);
     int count = 0;
     for (int y = int(c.y() - reach); y <= int(c.y() + reach); ++y)
-      for (int x = int(c.x() - reach); x <= int(c.x() + reach); ++x) {
+      for (int x = int(c.x() - reach); x <= int(c.x() + reach); ++x)
+      {
         const auto a = pixelAt(image, x, y), b = pixelAt(without, x, y);
         count += ((a[0] < 70 && a[1] < 70 && a[2] < 70) && !(b[0] < 70 && b[1] < 70 && b[2] < 70)) ? 1 : 0;
       }
@@ -506,12 +522,15 @@ TEST_F(ReportFigures, ColourBarDrawsOnTheRightAndShowsTheMap)
   // The bar's column: well inked; the strip between the scene and the bar: empty.
   const int column = int(viewport[2] * f.width) + 1;
   int ink = 0, strip = 0;
-  for (int y = 0; y < f.height; ++y) {
-    for (int x = column; x < f.width; ++x) {
+  for (int y = 0; y < f.height; ++y)
+  {
+    for (int x = column; x < f.width; ++x)
+    {
       const auto a = pixelAt(withBar, x, y);
       ink += (a[0] < 240 || a[1] < 240 || a[2] < 240) ? 1 : 0;
     }
-    for (int x = column - 8; x < column; ++x) {
+    for (int x = column - 8; x < column; ++x)
+    {
       const auto a = pixelAt(withBar, x, y);
       strip += (a[0] < 250 || a[1] < 250 || a[2] < 250) ? 1 : 0;
     }
@@ -545,7 +564,8 @@ TEST_F(ReportFigures, ColourBarDrawsOnTheRightAndShowsTheMap)
   auto darkNear = [&](int yc) {
     int dark = 0;
     for (int y = yc - band; y <= yc + band; ++y)
-      for (int x = barX + 40; x < std::min(f.width, barX + 250); ++x) {
+      for (int x = barX + 40; x < std::min(f.width, barX + 250); ++x)
+      {
         const auto a = pixelAt(withBar, x, y);
         dark += (a[0] < 80 && a[1] < 80 && a[2] < 80) ? 1 : 0;
       }
@@ -573,7 +593,8 @@ TEST_F(ReportFigures, ScalarColouringMapsTheRangeEndsToTheMapEnds)
     value->InsertNextValue(float(plate->GetPoint(i)[0]));
   plate->GetPointData()->AddArray(value);
 
-  for (const ColourMap map : {ColourMap::Viridis, ColourMap::Thickness, ColourMap::CoolWarm}) {
+  for (const ColourMap map : {ColourMap::Viridis, ColourMap::Thickness, ColourMap::CoolWarm})
+  {
     Figure f;
     f.width = 800;
     f.height = 600;
@@ -584,7 +605,8 @@ TEST_F(ReportFigures, ScalarColouringMapsTheRangeEndsToTheMapEnds)
     vtkSmartPointer<vtkImageData> image = renderFigure(f);
     writePng(image, artifacts() / ("plate-" + std::to_string(int(map)) + ".png"));
     for (const auto& [x, t] : {std::pair{-45.0, 0.0}, std::pair{-30.0 - 5.0, 0.0}, std::pair{0.0, 0.5},
-                               std::pair{15.0, 0.75}, std::pair{45.0, 1.0}}) {
+                               std::pair{15.0, 0.75}, std::pair{45.0, 1.0}})
+    {
       const Eigen::Vector2d p = projectToPixel(f, {x, 0.0, 0.0});
       const auto pixel = pixelAt(image, int(p.x()), int(p.y()));
       EXPECT_LT(colourDistance(pixel, colourMapColour(map, t)), 6.0)
@@ -600,10 +622,13 @@ TEST_F(ReportFigures, ScalarColouringMapsTheRangeEndsToTheMapEnds)
 
   Figure missing;
   missing.surfaces.push_back(SurfaceLayer::scalars(plate, "no-such-array", 0.0, 1.0, ColourMap::Viridis));
-  try {
+  try
+  {
     renderFigure(missing);
     FAIL() << "no exception";
-  } catch (const std::invalid_argument& e) {
+  }
+  catch (const std::invalid_argument& e)
+  {
     EXPECT_NE(std::string(e.what()).find("no-such-array"), std::string::npos) << e.what();
   }
   Figure badRange;
@@ -633,14 +658,14 @@ TEST_F(ReportFigures, FrontObliqueAndProfileDiffer)
   const auto frontBox = boundingBoxOfNonBackground(front);
   const auto profileBox = boundingBoxOfNonBackground(profile);
   ASSERT_TRUE(frontBox && profileBox);
-  EXPECT_GT(double(profileBox->width()) / profileBox->height(),
-            1.1 * double(frontBox->width()) / frontBox->height());
+  EXPECT_GT(double(profileBox->width()) / profileBox->height(), 1.1 * double(frontBox->width()) / frontBox->height());
 }
 
 TEST_F(ReportFigures, PreAndPostWithTheSameCameraKeepTheFraming)
 {
   vtkSmartPointer<vtkPolyData> post = headPhantom(6.0);
-  for (const View view : {View::Front, View::ObliqueLeft}) {
+  for (const View view : {View::Front, View::ObliqueLeft})
+  {
     Figure pre;
     pre.surfaces.push_back(SurfaceLayer::pointColours(head_));
     pre.camera = headCamera(seg::CylindricalFrame(), view, {head_.Get(), post.Get()}, pre.sceneAspect());
@@ -664,7 +689,8 @@ TEST_F(ReportFigures, PreAndPostWithTheSameCameraKeepTheFraming)
     const RgbBytes x = rgbBytesTopDown(a), y = rgbBytesTopDown(b);
     double near = 0.0, far = 0.0;
     for (int r = 0; r < x.height; ++r)
-      for (int c = 0; c < x.width; ++c) {
+      for (int c = 0; c < x.width; ++c)
+      {
         const std::size_t i = (std::size_t(r) * std::size_t(x.width) + std::size_t(c)) * 3;
         const int d = std::abs(int(x.bytes[i]) - int(y.bytes[i])) + std::abs(int(x.bytes[i + 1]) - int(y.bytes[i + 1]));
         (Eigen::Vector2d(c, r) - cheek).norm() < 300.0 ? near += d : far += d;
@@ -698,8 +724,7 @@ TEST(ReportCameras, HeadCamerasLookFromTheCylindricalFrame)
   EXPECT_TRUE(direction(front).isApprox(Eigen::Vector3d(0, -1, 0), 1e-12)); // anterior
   const Camera left = fitCamera(ball, frame.radialDirection(viewTheta(View::ProfileLeft)), frame.direction(), 1.0);
   EXPECT_TRUE(direction(left).isApprox(Eigen::Vector3d(1, 0, 0), 1e-12)); // patient left
-  const Camera oblique =
-    fitCamera(ball, frame.radialDirection(viewTheta(View::ObliqueLeft)), frame.direction(), 1.0);
+  const Camera oblique = fitCamera(ball, frame.radialDirection(viewTheta(View::ObliqueLeft)), frame.direction(), 1.0);
   EXPECT_NEAR(direction(oblique).dot(Eigen::Vector3d(0, -1, 0)), std::cos(kPi / 4.0), 1e-12);
   EXPECT_NEAR(front.viewUp[2], 1.0, 1e-12);
 

@@ -37,11 +37,9 @@ namespace {
 TEST(DemoOutput, TheDemoWritesItsFilesAndItsSceneLoadsBack)
 {
   const fs::path& out = caps::test::reportDemoFolder();
-  for (const char* file : {"info.txt", "axial.png", "coronal.png", "sagittal.png",
-                           "thickness.png", "landmarks.csv", "sample.caps/scene.json",
-                           "z-plasty/skin-after.vtp", "z-plasty/measurements.csv",
-                           "elliptical-excision/skin-after.vtp", "elliptical-excision/model.vtu",
-                           "plan-report.pdf"})
+  for (const char* file : {"info.txt", "axial.png", "coronal.png", "sagittal.png", "thickness.png", "landmarks.csv",
+                           "sample.caps/scene.json", "z-plasty/skin-after.vtp", "z-plasty/measurements.csv",
+                           "elliptical-excision/skin-after.vtp", "elliptical-excision/model.vtu", "plan-report.pdf"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
   // The landmark table: the nose tip and the chin are placed, with a
   // thickness in the plausible range (see tests/modules/SampleThicknessTest).
@@ -94,9 +92,9 @@ TEST(DemoOutput, TheDemoWritesItsFilesAndItsSceneLoadsBack)
     ASSERT_NE(u, nullptr);
     double largest = 0.0;
     for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i)
-      largest = std::max(largest, std::sqrt(u->GetTuple3(i)[0] * u->GetTuple3(i)[0] +
-                                            u->GetTuple3(i)[1] * u->GetTuple3(i)[1] +
-                                            u->GetTuple3(i)[2] * u->GetTuple3(i)[2]));
+      largest =
+        std::max(largest, std::sqrt(u->GetTuple3(i)[0] * u->GetTuple3(i)[0] + u->GetTuple3(i)[1] * u->GetTuple3(i)[1] +
+                                    u->GetTuple3(i)[2] * u->GetTuple3(i)[2]));
     EXPECT_GT(largest, 2.0) << "the wound closes by millimetres";
   }
   int skins = 0;

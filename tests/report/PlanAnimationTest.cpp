@@ -50,9 +50,15 @@ caps::test::ProcessResult runCaps(const std::string& args)
   return caps::test::runProcess(quoted(CAPS_EXECUTABLE) + " " + args);
 }
 
-const fs::path& demoFolder() { return caps::test::reportDemoFolder(); }
+const fs::path& demoFolder()
+{
+  return caps::test::reportDemoFolder();
+}
 
-fs::path sceneBundle() { return demoFolder() / "sample.caps"; }
+fs::path sceneBundle()
+{
+  return demoFolder() / "sample.caps";
+}
 
 /// The demo scene, loaded once.
 caps::Scene& demoScene()
@@ -305,9 +311,9 @@ TEST(PlanAnimation, TheCommandWritesTheFramesAndSaysHowToMakeTheVideosWithoutFfm
 {
   const fs::path out = caps::test::scratchFolder() / "animation";
   const std::string missing = (out / "no-such-ffmpeg").string();
-  const auto r = caps::test::runProcess("CAPS_FFMPEG=" + quoted(missing) + " " + quoted(CAPS_EXECUTABLE) +
-                                        " animate " + quoted(sceneBundle().string()) + " --out " +
-                                        quoted(out.string()) + " --frames 3 --turntable-frames 4 --size 161x120");
+  const auto r = caps::test::runProcess("CAPS_FFMPEG=" + quoted(missing) + " " + quoted(CAPS_EXECUTABLE) + " animate " +
+                                        quoted(sceneBundle().string()) + " --out " + quoted(out.string()) +
+                                        " --frames 3 --turntable-frames 4 --size 161x120");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_NE(r.output.find("Debian package ffmpeg"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(missing), std::string::npos) << r.output;
@@ -361,10 +367,10 @@ TEST(PlanAnimation, WithFfmpegTheVideosAreWritten)
     const fs::path video = out / v.video;
     ASSERT_TRUE(fs::exists(video)) << v.video << "\n" << r.output;
     EXPECT_NE(r.output.find(v.video), std::string::npos) << r.output;
-    const auto probe = caps::test::runProcess(
-      "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
-      "stream=codec_name,pix_fmt,width,height,nb_read_frames -of default=noprint_wrappers=1 " +
-      quoted(video.string()));
+    const auto probe =
+      caps::test::runProcess("ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+                             "stream=codec_name,pix_fmt,width,height,nb_read_frames -of default=noprint_wrappers=1 " +
+                             quoted(video.string()));
     ASSERT_EQ(probe.exitCode, 0) << probe.output;
     std::string frameCount = "nb_read_frames=";
     frameCount += std::to_string(v.count);
@@ -386,8 +392,8 @@ TEST(PlanAnimation, WithFfmpegTheVideosAreWritten)
       EXPECT_LT(loss, 6.0) << v.video << " frame " << k;
       if (k > 0) // and it is that frame, not a neighbour: the sequence moves more than the codec loses
       {
-        EXPECT_LT(meanDifference(original, back),
-                  meanDifference(readPng(out / v.frames / frameName(k - 1)), back)) << v.video << " frame " << k;
+        EXPECT_LT(meanDifference(original, back), meanDifference(readPng(out / v.frames / frameName(k - 1)), back))
+          << v.video << " frame " << k;
       }
     }
   }
@@ -405,8 +411,8 @@ TEST(PlanAnimation, TheVideoCommandRunsAsPrintedAndItsFailureIsReported)
   }
   fs::permissions(fake, fs::perms::owner_all);
   const fs::path out = folder / "animation";
-  auto r = caps::test::runProcess("CAPS_FFMPEG=" + quoted(fake.string()) + " " + quoted(CAPS_EXECUTABLE) +
-                                  " animate " + quoted(sceneBundle().string()) + " --out " + quoted(out.string()) +
+  auto r = caps::test::runProcess("CAPS_FFMPEG=" + quoted(fake.string()) + " " + quoted(CAPS_EXECUTABLE) + " animate " +
+                                  quoted(sceneBundle().string()) + " --out " + quoted(out.string()) +
                                   " --frames 2 --turntable-frames 2 --size 64x48 --fps 12");
   ASSERT_EQ(r.exitCode, 0) << r.output;
   EXPECT_EQ(r.output.find("no MP4 written"), std::string::npos) << r.output;
@@ -468,8 +474,7 @@ TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
   const fs::path out = caps::test::scratchFolder();
   render::AnimationOptions options = smallOptions();
   const Eigen::Vector3d toCamera(0.0, -1.0, 0.0), up(0.0, 0.0, 1.0);
-  const auto r = render::writeMorphAnimation(before, after, "there-and-back", toCamera, up,
-                                             out, 4, true, options);
+  const auto r = render::writeMorphAnimation(before, after, "there-and-back", toCamera, up, out, 4, true, options);
   EXPECT_EQ(r.prePost.frames, 6);
   EXPECT_EQ(r.framesRendered, 6);
   const fs::path folder = out / "there-and-back";
@@ -480,8 +485,7 @@ TEST(PlanAnimation, AMorphThereAndBackReturnsThroughTheSameFrames)
   // The peak is the after surface: the same as a one-way morph's last frame.
   render::writeMorphAnimation(before, after, "one-way", toCamera, up, out, 4, false, options);
   EXPECT_EQ(meanDifference(readPng(folder / frameName(3)), readPng(out / "one-way" / frameName(3))), 0.0);
-  EXPECT_THROW(render::writeMorphAnimation(before, after, "a/b", toCamera, up, out, 4, true,
-                                           options),
+  EXPECT_THROW(render::writeMorphAnimation(before, after, "a/b", toCamera, up, out, 4, true, options),
                std::invalid_argument);
 }
 

@@ -76,7 +76,8 @@ vtkSmartPointer<vtkPolyData> skinMesh(const seg::RangeMap& skin, const seg::Rang
   std::vector<vtkIdType> id(std::size_t(nt) * std::size_t(nz), -1);
   const seg::CylindricalFrame& frame = skin.frame();
   for (int j = 0; j < nz; ++j)
-    for (int i = 0; i < nt; ++i) {
+    for (int i = 0; i < nt; ++i)
+    {
       const Eigen::Vector3d p = skin.surfacePoint(i, j);
       if (!p.allFinite())
         continue;
@@ -87,7 +88,8 @@ vtkSmartPointer<vtkPolyData> skinMesh(const seg::RangeMap& skin, const seg::Rang
     }
   vtkNew<vtkCellArray> triangles;
   for (int j = 0; j + 1 < nz; ++j)
-    for (int i = 0; i < nt; ++i) {
+    for (int i = 0; i < nt; ++i)
+    {
       const int k = (i + 1) % nt;
       const vtkIdType a = id[std::size_t(j) * std::size_t(nt) + std::size_t(i)];
       const vtkIdType b = id[std::size_t(j) * std::size_t(nt) + std::size_t(k)];
@@ -126,7 +128,8 @@ TEST(ReportFiguresOnTheSample, TheSampleFaceInTheReportViews)
   const double zc = 0.5 * (frame.zMin() + frame.zMax()) - 20.0;
   LineLayer incision;
   incision.closed = true;
-  for (int i = 0; i < 32; ++i) {
+  for (int i = 0; i < 32; ++i)
+  {
     const double t = 2.0 * kPi * i / 32;
     const double theta = -kPi / 3.0 + 0.20 * std::cos(t), z = zc + 9.0 * std::sin(t);
     const double r = maps.skin.sample(theta, z);
@@ -137,7 +140,8 @@ TEST(ReportFiguresOnTheSample, TheSampleFaceInTheReportViews)
   incision.numberPoints({0, 8, 16, 24});
 
   for (const auto& [view, name] : {std::pair{View::Front, "front"}, std::pair{View::ObliqueLeft, "oblique"},
-                                   std::pair{View::ProfileLeft, "profile"}}) {
+                                   std::pair{View::ProfileLeft, "profile"}})
+  {
     Figure f;
     f.surfaces.push_back(SurfaceLayer::pointColours(face));
     f.lines.push_back(incision);

@@ -19,7 +19,9 @@ using test::TempDir;
 
 std::map<std::string, double> smile()
 {
-  return {{"zygomaticus_major_left", 1.0}, {"zygomaticus_major_right", 1.0}, {"risorius_left", 0.5},
+  return {{"zygomaticus_major_left", 1.0},
+          {"zygomaticus_major_right", 1.0},
+          {"risorius_left", 0.5},
           {"levator_labii_superioris_left", 0.125}};
 }
 

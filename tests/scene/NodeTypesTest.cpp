@@ -25,12 +25,13 @@ namespace {
 using test::TempDir;
 
 // Copies small fields through JSON and bulk data through a file into a fresh node.
-template <class T>
-std::unique_ptr<T> roundTrip(const T& node, const std::filesystem::path& dir) {
+template <class T> std::unique_ptr<T> roundTrip(const T& node, const std::filesystem::path& dir)
+{
   auto copy = std::make_unique<T>();
   copy->fromJson(nlohmann::json::parse(node.toJson().dump()));
   const std::string ext = node.bulkFileExtension();
-  if (!ext.empty()) {
+  if (!ext.empty())
+  {
     const auto file = dir / (std::string("bulk") + ext);
     node.writeBulk(file);
     copy->readBulk(file);
@@ -38,18 +39,22 @@ std::unique_ptr<T> roundTrip(const T& node, const std::filesystem::path& dir) {
   return copy;
 }
 
-TEST(NodeTypes, TypeNamesRoundTrip) {
+TEST(NodeTypes, TypeNamesRoundTrip)
+{
   for (NodeType t : {NodeType::Volume, NodeType::LabelMap, NodeType::Surface, NodeType::RangeMap, NodeType::Plan,
-                     NodeType::FeMesh, NodeType::Solution, NodeType::Snapshot}) {
+                     NodeType::FeMesh, NodeType::Solution, NodeType::Snapshot})
+  {
     EXPECT_EQ(nodeTypeFromString(nodeTypeToString(t)), t);
     EXPECT_EQ(Node::create(t)->type(), t);
   }
   EXPECT_FALSE(nodeTypeFromString("Hologram").has_value());
 }
 
-class VolumeScalarTypes : public ::testing::TestWithParam<int> {};
+class VolumeScalarTypes : public ::testing::TestWithParam<int>
+{};
 
-TEST_P(VolumeScalarTypes, RoundTripKeepsVoxelsGeometryAndDirection) {
+TEST_P(VolumeScalarTypes, RoundTripKeepsVoxelsGeometryAndDirection)
+{
   TempDir tmp;
   VolumeNode v;
   v.setName("CT head");
@@ -68,14 +73,17 @@ TEST_P(VolumeScalarTypes, RoundTripKeepsVoxelsGeometryAndDirection) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllTypes, VolumeScalarTypes,
-                         ::testing::Values(VTK_SHORT, VTK_UNSIGNED_SHORT, VTK_UNSIGNED_CHAR, VTK_INT, VTK_FLOAT, VTK_DOUBLE));
+                         ::testing::Values(VTK_SHORT, VTK_UNSIGNED_SHORT, VTK_UNSIGNED_CHAR, VTK_INT, VTK_FLOAT,
+                                           VTK_DOUBLE));
 
-TEST(NodeTypes, VolumeWithoutImageHasNoBulkFile) {
+TEST(NodeTypes, VolumeWithoutImageHasNoBulkFile)
+{
   VolumeNode v;
   EXPECT_EQ(v.bulkFileExtension(), "");
 }
 
-TEST(NodeTypes, LabelMapRoundTripKeepsTableAndGeometry) {
+TEST(NodeTypes, LabelMapRoundTripKeepsTableAndGeometry)
+{
   TempDir tmp;
   LabelMapNode l;
   l.setImage(test::makeImage(VTK_UNSIGNED_CHAR));
@@ -94,20 +102,25 @@ TEST(NodeTypes, LabelMapRoundTripKeepsTableAndGeometry) {
   test::expectSameImage(l.image(), copy->image());
 }
 
-TEST(NodeTypes, LabelMapRefusesThresholdsWithTheBoneBelowTheSkin) {
+TEST(NodeTypes, LabelMapRefusesThresholdsWithTheBoneBelowTheSkin)
+{
   LabelMapNode l;
   nlohmann::json j = l.toJson();
   j["thresholdsHu"] = {{"skin", 300.0}, {"bone", -400.0}};
   LabelMapNode read;
-  try {
+  try
+  {
     read.fromJson(j);
     FAIL() << "swapped thresholds were accepted";
-  } catch (const SceneError& e) {
+  }
+  catch (const SceneError& e)
+  {
     EXPECT_NE(std::string(e.what()).find("segment again"), std::string::npos) << e.what();
   }
 }
 
-TEST(NodeTypes, LabelMapRejectsNonByteImages) {
+TEST(NodeTypes, LabelMapRejectsNonByteImages)
+{
   LabelMapNode l;
   EXPECT_THROW(l.setImage(test::makeImage(VTK_SHORT)), SceneError);
   TempDir tmp;
@@ -117,7 +130,8 @@ TEST(NodeTypes, LabelMapRejectsNonByteImages) {
   EXPECT_THROW(l.readBulk(tmp.path() / "f.nrrd"), SceneError);
 }
 
-TEST(NodeTypes, SurfaceRoundTripKeepsPointsCellsAndArrays) {
+TEST(NodeTypes, SurfaceRoundTripKeepsPointsCellsAndArrays)
+{
   TempDir tmp;
   SurfaceNode s;
   s.setPolyData(test::makeSurface());
@@ -136,7 +150,8 @@ TEST(NodeTypes, SurfaceRoundTripKeepsPointsCellsAndArrays) {
   ASSERT_TRUE(b);
   ASSERT_EQ(b->GetNumberOfPoints(), 4);
   for (vtkIdType i = 0; i < 4; ++i)
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(a->GetPoint(i)[c], b->GetPoint(i)[c]);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(a->GetPoint(i)[c], b->GetPoint(i)[c]);
   EXPECT_EQ(b->GetNumberOfPolys(), 2);
   EXPECT_EQ(b->GetNumberOfLines(), 1);
   auto* thickness = b->GetPointData()->GetArray("thickness");
@@ -144,20 +159,23 @@ TEST(NodeTypes, SurfaceRoundTripKeepsPointsCellsAndArrays) {
   EXPECT_EQ(thickness->GetTuple1(3), 5.0);
   auto* region = b->GetCellData()->GetArray("region");
   ASSERT_TRUE(region);
-  for (vtkIdType c = 0; c < 3; ++c) EXPECT_EQ(region->GetTuple1(c), a->GetCellData()->GetArray("region")->GetTuple1(c));
+  for (vtkIdType c = 0; c < 3; ++c)
+    EXPECT_EQ(region->GetTuple1(c), a->GetCellData()->GetArray("region")->GetTuple1(c));
   vtkIdType npts;
   const vtkIdType* pts;
-  b->GetCellPoints(2, npts, pts);  // second triangle (after the line)
+  b->GetCellPoints(2, npts, pts); // second triangle (after the line)
   ASSERT_EQ(npts, 3);
   EXPECT_EQ(pts[2], 3);
 }
 
-TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame) {
+TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame)
+{
   TempDir tmp;
   RangeMapNode r;
   Eigen::MatrixXf values(36, 7);
   for (int i = 0; i < 36; ++i)
-    for (int j = 0; j < 7; ++j) values(i, j) = 80.0f + static_cast<float>(i) * 0.25f + static_cast<float>(j);
+    for (int j = 0; j < 7; ++j)
+      values(i, j) = 80.0f + static_cast<float>(i) * 0.25f + static_cast<float>(j);
   values(3, 4) = std::numeric_limits<float>::quiet_NaN();
   values(35, 0) = std::numeric_limits<float>::quiet_NaN();
   r.setValues(values);
@@ -167,9 +185,9 @@ TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame) {
   r.setSourceVolumeId("Volume2");
   r.setSourceLabelMapId("LabelMap3");
   r.setSkinMapId("RangeMap7");
-  EXPECT_EQ(r.axisDirection(), Eigen::Vector3d::UnitZ());  // normalised
+  EXPECT_EQ(r.axisDirection(), Eigen::Vector3d::UnitZ()); // normalised
   EXPECT_DOUBLE_EQ(r.thetaAt(0), -M_PI);
-  EXPECT_DOUBLE_EQ(r.thetaAt(9), -M_PI / 2);  // front of the face
+  EXPECT_DOUBLE_EQ(r.thetaAt(9), -M_PI / 2); // front of the face
   EXPECT_DOUBLE_EQ(r.zAt(6), 90.0);
   auto copy = roundTrip(r, tmp.path());
   EXPECT_EQ(copy->role(), "bone");
@@ -189,7 +207,8 @@ TEST(NodeTypes, RangeMapRoundTripKeepsNaNAndFrame) {
             values.unaryExpr([](float v) { return std::isnan(v) ? -1.0f : v; }));
 }
 
-TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
+TEST(NodeTypes, PlanJsonRoundTripAndNoBulk)
+{
   PlanNode p;
   p.setProcedure("z-plasty");
   p.setParameters({{"angle", 1.047}, {"limbLength", 15.0}});
@@ -214,7 +233,7 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
   EXPECT_EQ(q.notes(), "left cheek");
   EXPECT_EQ(q.rangeMapId(), "RangeMap1");
   EXPECT_EQ(q.generator(), "z");
-  EXPECT_EQ(q.centre(), p.centre());  // exact: JSON keeps doubles to the last bit
+  EXPECT_EQ(q.centre(), p.centre()); // exact: JSON keeps doubles to the last bit
   EXPECT_EQ(q.borderOffsets(), p.borderOffsets());
   EXPECT_EQ(q.toJson(), p.toJson());
   EXPECT_THROW(q.fromJson({{"centre", {1.0}}}), SceneError);
@@ -223,17 +242,19 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk) {
 
 // A missing or null key keeps the field (the JsonFields rule) for lists too,
 // and numbers that do not fit an int throw SceneError instead of being cast.
-TEST(NodeTypes, NullKeepsListsAndOutOfRangeNumbersThrow) {
+TEST(NodeTypes, NullKeepsListsAndOutOfRangeNumbersThrow)
+{
   LabelMapNode l;
   l.setLabels({{1, {"skin", {1.0, 0.8, 0.7}}}});
   l.fromJson({{"labels", nullptr}});
   EXPECT_EQ(l.labels().size(), 1u);
   for (const auto& value : {nlohmann::json(1e20), nlohmann::json(2.5), nlohmann::json(4294967296LL),
-                            nlohmann::json(18446744073709551615ULL), nlohmann::json("1")}) {
+                            nlohmann::json(18446744073709551615ULL), nlohmann::json("1")})
+  {
     nlohmann::json j{{"labels", {{{"value", value}, {"name", "x"}, {"color", {0, 0, 0}}}}}};
     EXPECT_THROW(l.fromJson(j), std::exception) << value;
   }
-  EXPECT_THROW(l.fromJson({{"labels", {{"value", 1}}}}), std::exception);  // not a list of labels
+  EXPECT_THROW(l.fromJson({{"labels", {{"value", 1}}}}), std::exception); // not a list of labels
   EXPECT_EQ(l.labels().size(), 1u);
   l.fromJson({{"labels", {{{"value", 7.0}, {"name", "x"}, {"color", {0, 0, 0}}}}}});
   ASSERT_EQ(l.labels().count(7), 1u);
@@ -251,7 +272,8 @@ TEST(NodeTypes, NullKeepsListsAndOutOfRangeNumbersThrow) {
   EXPECT_EQ(p.sutures(), (std::vector<std::array<int, 4>>{{-4, 5, 6, 2147483647}}));
 }
 
-TEST(NodeTypes, FeMeshAndSolutionRoundTripKeepArrays) {
+TEST(NodeTypes, FeMeshAndSolutionRoundTripKeepArrays)
+{
   TempDir tmp;
   FeMeshNode m;
   m.setMesh(test::makeQuadraticHexMesh());
@@ -280,17 +302,19 @@ TEST(NodeTypes, FeMeshAndSolutionRoundTripKeepArrays) {
   EXPECT_DOUBLE_EQ(stress->GetComponent(4, 5), 10.0);
 }
 
-TEST(NodeTypes, SnapshotRoundTripWithAndWithoutImage) {
+TEST(NodeTypes, SnapshotRoundTripWithAndWithoutImage)
+{
   TempDir tmp;
   SnapshotNode s;
   s.setCaption("Before: frontal");
   s.setCamera({{10, -400, 20}, {0, 0, 15}, {0, 0, 1}, 25.0});
-  EXPECT_EQ(s.bulkFileExtension(), "");  // no image: no file
+  EXPECT_EQ(s.bulkFileExtension(), ""); // no image: no file
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(8, 6, 1);
   image->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
   auto* px = static_cast<unsigned char*>(image->GetScalarPointer());
-  for (int i = 0; i < 8 * 6 * 3; ++i) px[i] = static_cast<unsigned char>(i * 5);
+  for (int i = 0; i < 8 * 6 * 3; ++i)
+    px[i] = static_cast<unsigned char>(i * 5);
   s.setImage(image);
   EXPECT_EQ(s.bulkFileExtension(), ".png");
   auto copy = roundTrip(s, tmp.path());
@@ -301,7 +325,8 @@ TEST(NodeTypes, SnapshotRoundTripWithAndWithoutImage) {
   EXPECT_EQ(0, std::memcmp(copy->image()->GetScalarPointer(), px, 8 * 6 * 3));
 }
 
-TEST(NodeTypes, AllTypesSurviveABundle) {
+TEST(NodeTypes, AllTypesSurviveABundle)
+{
   TempDir tmp;
   Scene scene;
   auto* v = scene.add<VolumeNode>();
@@ -317,7 +342,8 @@ TEST(NodeTypes, AllTypesSurviveABundle) {
   Scene loaded;
   loadSceneBundle(loaded, tmp.path() / "all.caps");
   ASSERT_EQ(loaded.size(), scene.size());
-  for (std::size_t i = 0; i < scene.size(); ++i) {
+  for (std::size_t i = 0; i < scene.size(); ++i)
+  {
     EXPECT_EQ(loaded.nodes()[i]->id(), scene.nodes()[i]->id());
     EXPECT_EQ(loaded.nodes()[i]->toJson(), scene.nodes()[i]->toJson());
   }
@@ -327,5 +353,5 @@ TEST(NodeTypes, AllTypesSurviveABundle) {
   EXPECT_FALSE(std::filesystem::exists(tmp.path() / "all.caps" / "Snapshot1.png"));
 }
 
-}  // namespace
-}  // namespace caps
+} // namespace
+} // namespace caps

@@ -17,14 +17,19 @@ namespace {
 
 using test::TempDir;
 
-std::string slurp(const std::filesystem::path& p) {
+std::string slurp(const std::filesystem::path& p)
+{
   std::ifstream in(p, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-std::string headerOf(const std::string& bytes) { return bytes.substr(0, bytes.find("\n\n") + 2); }
+std::string headerOf(const std::string& bytes)
+{
+  return bytes.substr(0, bytes.find("\n\n") + 2);
+}
 
-TEST(NrrdIO, HeaderIsWhatSlicerExpects) {
+TEST(NrrdIO, HeaderIsWhatSlicerExpects)
+{
   TempDir tmp;
   auto image = test::makeImage(VTK_SHORT);
   NrrdIO::writeImage(image, tmp.path() / "v.nrrd");
@@ -44,7 +49,8 @@ TEST(NrrdIO, HeaderIsWhatSlicerExpects) {
   EXPECT_NE(h.find(") (0,0,2.5)\n"), std::string::npos) << h;
 }
 
-TEST(NrrdIO, GzipPayloadDecompressesWithZlibToTheVoxels) {
+TEST(NrrdIO, GzipPayloadDecompressesWithZlibToTheVoxels)
+{
   TempDir tmp;
   auto image = test::makeImage(VTK_FLOAT, 17, 9, 5);
   NrrdIO::writeImage(image, tmp.path() / "v.nrrd");
@@ -52,7 +58,7 @@ TEST(NrrdIO, GzipPayloadDecompressesWithZlibToTheVoxels) {
   const std::size_t start = headerOf(bytes).size();
   std::vector<float> out(17 * 9 * 5);
   z_stream zs{};
-  ASSERT_EQ(inflateInit2(&zs, 15 + 16), Z_OK);  // gzip wrapper only
+  ASSERT_EQ(inflateInit2(&zs, 15 + 16), Z_OK); // gzip wrapper only
   zs.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data() + start));
   zs.avail_in = static_cast<uInt>(bytes.size() - start);
   zs.next_out = reinterpret_cast<Bytef*>(out.data());
@@ -63,7 +69,8 @@ TEST(NrrdIO, GzipPayloadDecompressesWithZlibToTheVoxels) {
   EXPECT_EQ(0, std::memcmp(out.data(), image->GetScalarPointer(), out.size() * sizeof(float)));
 }
 
-TEST(NrrdIO, RawFileReadsInVtkNrrdReader) {
+TEST(NrrdIO, RawFileReadsInVtkNrrdReader)
+{
   TempDir tmp;
   // vtkNrrdReader takes a first axis of 9 samples or fewer for vector
   // components, and ignores rotation: give it 12 samples and no rotation.
@@ -83,7 +90,8 @@ TEST(NrrdIO, RawFileReadsInVtkNrrdReader) {
   EXPECT_EQ(dims[2], 4);
   EXPECT_EQ(out->GetScalarType(), VTK_UNSIGNED_SHORT);
   EXPECT_EQ(out->GetNumberOfScalarComponents(), 1);
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 3; ++i)
+  {
     EXPECT_NEAR(out->GetSpacing()[i], image->GetSpacing()[i], 1e-9);
     EXPECT_NEAR(out->GetOrigin()[i], image->GetOrigin()[i], 1e-9);
   }
@@ -92,28 +100,30 @@ TEST(NrrdIO, RawFileReadsInVtkNrrdReader) {
   test::expectSameImage(image, NrrdIO::readImage(tmp.path() / "raw.nrrd"));
 }
 
-TEST(NrrdIO, ReadsRasBigEndianRawFromOtherTools) {
+TEST(NrrdIO, ReadsRasBigEndianRawFromOtherTools)
+{
   TempDir tmp;
   std::ofstream f(tmp.path() / "ras.nrrd", std::ios::binary);
   f << "NRRD0005\n# from another tool\ntype: int16\ndimension: 3\nspace: right-anterior-superior\n"
        "sizes: 2 1 1\nspace directions: (-1,0,0) (0,-2,0) (0,0,3)\nkinds: domain domain domain\n"
        "endian: big\nencoding: raw\nspace origin: (10,20,30)\nkey:=value\n\n";
-  const unsigned char data[4] = {0x01, 0x02, 0xFF, 0xFE};  // 258, -2
+  const unsigned char data[4] = {0x01, 0x02, 0xFF, 0xFE}; // 258, -2
   f.write(reinterpret_cast<const char*>(data), 4);
   f.close();
   auto image = NrrdIO::readImage(tmp.path() / "ras.nrrd");
   EXPECT_EQ(image->GetScalarType(), VTK_SHORT);
   EXPECT_EQ(*static_cast<short*>(image->GetScalarPointer(0, 0, 0)), 258);
   EXPECT_EQ(*static_cast<short*>(image->GetScalarPointer(1, 0, 0)), -2);
-  EXPECT_DOUBLE_EQ(image->GetOrigin()[0], -10);  // RAS -> LPS flips x and y
+  EXPECT_DOUBLE_EQ(image->GetOrigin()[0], -10); // RAS -> LPS flips x and y
   EXPECT_DOUBLE_EQ(image->GetOrigin()[1], -20);
   EXPECT_DOUBLE_EQ(image->GetOrigin()[2], 30);
   EXPECT_DOUBLE_EQ(image->GetSpacing()[1], 2);
-  EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(0, 0), 1);  // -1 in RAS is +1 in LPS
+  EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(0, 0), 1); // -1 in RAS is +1 in LPS
   EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(1, 1), 1);
 }
 
-TEST(NrrdIO, MatrixKeepsNaNAndThetaFastest) {
+TEST(NrrdIO, MatrixKeepsNaNAndThetaFastest)
+{
   TempDir tmp;
   Eigen::MatrixXf m(3, 2);
   m << 1, 4, 2, std::numeric_limits<float>::quiet_NaN(), 3, 6;
@@ -121,23 +131,27 @@ TEST(NrrdIO, MatrixKeepsNaNAndThetaFastest) {
   const std::string bytes = slurp(tmp.path() / "m.nrrd");
   EXPECT_NE(bytes.find("sizes: 3 2\n"), std::string::npos);
   const float* raw = reinterpret_cast<const float*>(bytes.data() + headerOf(bytes).size());
-  EXPECT_EQ(raw[1], 2.0f);  // second θ sample at the first z
+  EXPECT_EQ(raw[1], 2.0f); // second θ sample at the first z
   EXPECT_EQ(raw[3], 4.0f);
   Eigen::MatrixXf back = NrrdIO::readMatrix(tmp.path() / "m.nrrd");
   EXPECT_TRUE(std::isnan(back(1, 1)));
   EXPECT_EQ(back(2, 1), 6.0f);
 }
 
-TEST(NrrdIO, TruncatedOrForeignFilesThrowNamingTheFile) {
+TEST(NrrdIO, TruncatedOrForeignFilesThrowNamingTheFile)
+{
   TempDir tmp;
   const auto good = tmp.path() / "good.nrrd";
   NrrdIO::writeImage(test::makeImage(VTK_FLOAT, 30, 30, 30), good);
   const std::string bytes = slurp(good);
   auto expectError = [&](const std::filesystem::path& p, const std::string& what) {
-    try {
+    try
+    {
       NrrdIO::readImage(p);
       ADD_FAILURE() << "no error for " << p;
-    } catch (const SceneError& e) {
+    }
+    catch (const SceneError& e)
+    {
       EXPECT_NE(std::string(e.what()).find(p.filename().string()), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
     }
@@ -161,16 +175,23 @@ TEST(NrrdIO, TruncatedOrForeignFilesThrowNamingTheFile) {
 
 // Writes @a header followed by @a payloadBytes zero bytes (sparse on disk, so
 // a file of gigabytes costs nothing).
-void writeHeaderAndZeros(const std::filesystem::path& p, const std::string& header, std::uintmax_t payloadBytes) {
-  { std::ofstream(p, std::ios::binary) << header; }
+void writeHeaderAndZeros(const std::filesystem::path& p, const std::string& header, std::uintmax_t payloadBytes)
+{
+  {
+    std::ofstream(p, std::ios::binary) << header;
+  }
   std::filesystem::resize_file(p, header.size() + payloadBytes);
 }
 
-void expectReadError(const std::filesystem::path& p, const std::string& what) {
-  try {
+void expectReadError(const std::filesystem::path& p, const std::string& what)
+{
+  try
+  {
     NrrdIO::readImage(p);
     ADD_FAILURE() << "no error for " << p;
-  } catch (const SceneError& e) {
+  }
+  catch (const SceneError& e)
+  {
     EXPECT_NE(std::string(e.what()).find(p.filename().string()), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
   }
@@ -178,7 +199,8 @@ void expectReadError(const std::filesystem::path& p, const std::string& what) {
 
 // A size above INT_MAX used to be cast to int for vtkImageData and the whole
 // payload then copied into the smaller image: a heap overflow.
-TEST(NrrdIO, SizesAboveIntMaxAreRejected) {
+TEST(NrrdIO, SizesAboveIntMaxAreRejected)
+{
   TempDir tmp;
   const auto p = tmp.path() / "wide.nrrd";
   writeHeaderAndZeros(p, "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2147483648 1 1\nencoding: raw\n\n", 2147483648u);
@@ -188,11 +210,13 @@ TEST(NrrdIO, SizesAboveIntMaxAreRejected) {
 // Sizes come from the file: they must be whole numbers >= 1 whose product
 // does not overflow, and the file must be able to hold that much data before
 // anything is allocated (a 200-byte header must not claim terabytes).
-TEST(NrrdIO, HeaderSizesAreCheckedBeforeAllocating) {
+TEST(NrrdIO, HeaderSizesAreCheckedBeforeAllocating)
+{
   TempDir tmp;
   const std::string head = "NRRD0004\ntype: float\ndimension: 3\nencoding: raw\n";
   int i = 0;
-  for (const char* sizes : {"-1 2 2", "nan 2 2", "1e30 2 2", "2.5 2 2", "0 2 2", "2 2"}) {
+  for (const char* sizes : {"-1 2 2", "nan 2 2", "1e30 2 2", "2.5 2 2", "0 2 2", "2 2"})
+  {
     const auto p = tmp.path() / ("bad" + std::to_string(i++) + ".nrrd");
     writeHeaderAndZeros(p, head + "sizes: " + sizes + "\n\n", 64);
     expectReadError(p, "NRRD");
@@ -211,15 +235,19 @@ TEST(NrrdIO, HeaderSizesAreCheckedBeforeAllocating) {
 
 // "space dimension" and "space directions" without "space": the frame is
 // unknown, so do not silently load at 1 mm identity.
-TEST(NrrdIO, SpaceDirectionsWithoutSpaceAreRejected) {
+TEST(NrrdIO, SpaceDirectionsWithoutSpaceAreRejected)
+{
   TempDir tmp;
   const auto p = tmp.path() / "nospace.nrrd";
-  writeHeaderAndZeros(p, "NRRD0004\ntype: uchar\ndimension: 3\nspace dimension: 3\nsizes: 2 1 1\n"
-                         "space directions: (2,0,0) (0,2,0) (0,0,2)\nencoding: raw\n\n", 2);
+  writeHeaderAndZeros(p,
+                      "NRRD0004\ntype: uchar\ndimension: 3\nspace dimension: 3\nsizes: 2 1 1\n"
+                      "space directions: (2,0,0) (0,2,0) (0,0,2)\nencoding: raw\n\n",
+                      2);
   expectReadError(p, "no 'space'");
 }
 
-TEST(NrrdIO, Reads2DImageWithSpaceAndTwoDirections) {
+TEST(NrrdIO, Reads2DImageWithSpaceAndTwoDirections)
+{
   TempDir tmp;
   const auto p = tmp.path() / "slice.nrrd";
   {
@@ -237,11 +265,12 @@ TEST(NrrdIO, Reads2DImageWithSpaceAndTwoDirections) {
   EXPECT_DOUBLE_EQ(image->GetSpacing()[0], 2);
   EXPECT_DOUBLE_EQ(image->GetSpacing()[1], 3);
   EXPECT_DOUBLE_EQ(image->GetOrigin()[2], 3);
-  const double expected[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}};  // rows; the third column is the normal
+  const double expected[3][3] = {{0, -1, 0}, {1, 0, 0}, {0, 0, 1}}; // rows; the third column is the normal
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(r, c), expected[r][c]);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_DOUBLE_EQ(image->GetDirectionMatrix()->GetElement(r, c), expected[r][c]);
   EXPECT_EQ(*static_cast<unsigned char*>(image->GetScalarPointer(2, 1, 0)), 6);
 }
 
-}  // namespace
-}  // namespace caps
+} // namespace
+} // namespace caps

@@ -26,30 +26,35 @@
 namespace caps::test {
 
 /// A fresh folder under the system temp dir, removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
+class TempDir
+{
+public:
+  TempDir()
+  {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     std::string name = info ? info->name() : "x";
     for (char& c : name)
-      if (c == '/') c = '_';  // parameterised tests are named "Test/0"
+      if (c == '/')
+        c = '_'; // parameterised tests are named "Test/0"
     path_ = std::filesystem::temp_directory_path() / ("caps-scene-" + name + "-" + std::to_string(::getpid()));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
-  ~TempDir() {
+  ~TempDir()
+  {
     std::error_code ec;
     std::filesystem::remove_all(path_, ec);
   }
   const std::filesystem::path& path() const { return path_; }
 
- private:
+private:
   std::filesystem::path path_;
 };
 
 /// A small image of @a vtkType with a non-identity direction matrix (a
 /// rotation about z by 30 degrees) and voxel values i + 10 j + 100 k.
-inline vtkSmartPointer<vtkImageData> makeImage(int vtkType, int nx = 5, int ny = 4, int nz = 3) {
+inline vtkSmartPointer<vtkImageData> makeImage(int vtkType, int nx = 5, int ny = 4, int nz = 3)
+{
   auto image = vtkSmartPointer<vtkImageData>::New();
   image->SetDimensions(nx, ny, nz);
   image->SetSpacing(0.5, 0.75, 2.5);
@@ -59,21 +64,24 @@ inline vtkSmartPointer<vtkImageData> makeImage(int vtkType, int nx = 5, int ny =
   image->SetDirectionMatrix(dir);
   image->AllocateScalars(vtkType, 1);
   vtkDataArray* a = image->GetPointData()->GetScalars();
-  for (vtkIdType i = 0; i < a->GetNumberOfTuples(); ++i) {
+  for (vtkIdType i = 0; i < a->GetNumberOfTuples(); ++i)
+  {
     const int x = static_cast<int>(i % nx), y = static_cast<int>((i / nx) % ny), z = static_cast<int>(i / (nx * ny));
     a->SetTuple1(i, x + 10 * y + 100 * z);
   }
   return image;
 }
 
-inline void expectSameImage(vtkImageData* a, vtkImageData* b) {
+inline void expectSameImage(vtkImageData* a, vtkImageData* b)
+{
   ASSERT_TRUE(a);
   ASSERT_TRUE(b);
   EXPECT_EQ(a->GetScalarType(), b->GetScalarType());
   int da[3], db[3];
   a->GetDimensions(da);
   b->GetDimensions(db);
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < 3; ++i)
+  {
     EXPECT_EQ(da[i], db[i]);
     EXPECT_NEAR(a->GetSpacing()[i], b->GetSpacing()[i], 1e-12);
     EXPECT_NEAR(a->GetOrigin()[i], b->GetOrigin()[i], 1e-12);
@@ -89,7 +97,8 @@ inline void expectSameImage(vtkImageData* a, vtkImageData* b) {
 }
 
 /// Two triangles and a line with a point array "thickness" and a cell array "region".
-inline vtkSmartPointer<vtkPolyData> makeSurface() {
+inline vtkSmartPointer<vtkPolyData> makeSurface()
+{
   auto points = vtkSmartPointer<vtkPoints>::New();
   points->InsertNextPoint(0, 0, 0);
   points->InsertNextPoint(1, 0, 0);
@@ -107,29 +116,36 @@ inline vtkSmartPointer<vtkPolyData> makeSurface() {
   pd->SetLines(lines);
   auto thickness = vtkSmartPointer<vtkFloatArray>::New();
   thickness->SetName("thickness");
-  for (int i = 0; i < 4; ++i) thickness->InsertNextValue(2.0f + static_cast<float>(i));
+  for (int i = 0; i < 4; ++i)
+    thickness->InsertNextValue(2.0f + static_cast<float>(i));
   pd->GetPointData()->AddArray(thickness);
   auto region = vtkSmartPointer<vtkIntArray>::New();
   region->SetName("region");
-  for (int v : {7, 10, 11}) region->InsertNextValue(v);  // line first, then the two triangles
+  for (int v : {7, 10, 11})
+    region->InsertNextValue(v); // line first, then the two triangles
   pd->GetCellData()->AddArray(region);
   return pd;
 }
 
 /// One 20-node hexahedron with a cell array "region", a point vector
 /// "displacement" and a point tensor-ish "stress" (6 components).
-inline vtkSmartPointer<vtkUnstructuredGrid> makeQuadraticHexMesh() {
-  static const double corners[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  static const int edges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6}, {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+inline vtkSmartPointer<vtkUnstructuredGrid> makeQuadraticHexMesh()
+{
+  static const double corners[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                       {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  static const int edges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                   {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
   auto points = vtkSmartPointer<vtkPoints>::New();
-  for (const auto& c : corners) points->InsertNextPoint(c);
+  for (const auto& c : corners)
+    points->InsertNextPoint(c);
   for (const auto& e : edges)
     points->InsertNextPoint(0.5 * (corners[e[0]][0] + corners[e[1]][0]), 0.5 * (corners[e[0]][1] + corners[e[1]][1]),
                             0.5 * (corners[e[0]][2] + corners[e[1]][2]));
   auto grid = vtkSmartPointer<vtkUnstructuredGrid>::New();
   grid->SetPoints(points);
   vtkIdType ids[20];
-  for (int i = 0; i < 20; ++i) ids[i] = i;
+  for (int i = 0; i < 20; ++i)
+    ids[i] = i;
   grid->InsertNextCell(VTK_QUADRATIC_HEXAHEDRON, 20, ids);
   auto region = vtkSmartPointer<vtkIntArray>::New();
   region->SetName("region");
@@ -138,12 +154,14 @@ inline vtkSmartPointer<vtkUnstructuredGrid> makeQuadraticHexMesh() {
   auto disp = vtkSmartPointer<vtkDoubleArray>::New();
   disp->SetName("displacement");
   disp->SetNumberOfComponents(3);
-  for (int i = 0; i < 20; ++i) disp->InsertNextTuple3(0.1 * i, -0.2 * i, 0.05);
+  for (int i = 0; i < 20; ++i)
+    disp->InsertNextTuple3(0.1 * i, -0.2 * i, 0.05);
   grid->GetPointData()->AddArray(disp);
   auto stress = vtkSmartPointer<vtkDoubleArray>::New();
   stress->SetName("stress");
   stress->SetNumberOfComponents(6);
-  for (int i = 0; i < 20; ++i) {
+  for (int i = 0; i < 20; ++i)
+  {
     double t[6] = {1.0 * i, 2.0, 3.0, 4.0, 5.0, 6.0 + i};
     stress->InsertNextTuple(t);
   }
@@ -151,4 +169,4 @@ inline vtkSmartPointer<vtkUnstructuredGrid> makeQuadraticHexMesh() {
   return grid;
 }
 
-}  // namespace caps::test
+} // namespace caps::test

@@ -14,20 +14,24 @@
 namespace caps {
 namespace {
 
-struct UndoFixture : ::testing::Test {
+struct UndoFixture : ::testing::Test
+{
   Scene scene;
   PlanNode* plan = nullptr;
-  void SetUp() override {
+  void SetUp() override
+  {
     plan = scene.add<PlanNode>();
     plan->setCutPath({{0, 0}, {0.1, 0.1}, {0.2, 0.0}, {0.3, -0.1}});
   }
-  void move(std::size_t i, double x) {
+  void move(std::size_t i, double x)
+  {
     ScopedEdit edit(scene, plan->id(), "Move point " + std::to_string(i));
     plan->setCutPoint(i, {x, x});
   }
 };
 
-TEST_F(UndoFixture, UndoRedoRestoresStateAndNotifies) {
+TEST_F(UndoFixture, UndoRedoRestoresStateAndNotifies)
+{
   int modified = 0;
   scene.addObserver([&](SceneEvent e, const Node&) { modified += e == SceneEvent::NodeModified; });
   EXPECT_FALSE(scene.undoStack().canUndo());
@@ -48,8 +52,11 @@ TEST_F(UndoFixture, UndoRedoRestoresStateAndNotifies) {
   EXPECT_FALSE(scene.undoStack().redo());
 }
 
-TEST_F(UndoFixture, NoEntryWhenNothingChanged) {
-  { ScopedEdit edit(scene, plan->id(), "Nothing"); }
+TEST_F(UndoFixture, NoEntryWhenNothingChanged)
+{
+  {
+    ScopedEdit edit(scene, plan->id(), "Nothing");
+  }
   {
     ScopedEdit edit(scene, plan->id(), "Same value");
     plan->setCutPoint(0, {0, 0});
@@ -57,7 +64,8 @@ TEST_F(UndoFixture, NoEntryWhenNothingChanged) {
   EXPECT_FALSE(scene.undoStack().canUndo());
 }
 
-TEST_F(UndoFixture, SeveralEditsUndoInOrder) {
+TEST_F(UndoFixture, SeveralEditsUndoInOrder)
+{
   move(0, 0.5);
   {
     ScopedEdit edit(scene, plan->id(), "Set procedure");
@@ -74,7 +82,8 @@ TEST_F(UndoFixture, SeveralEditsUndoInOrder) {
   EXPECT_EQ(scene.undoStack().redoLabel(), "Set procedure");
 }
 
-TEST_F(UndoFixture, NewEditClearsRedoTail) {
+TEST_F(UndoFixture, NewEditClearsRedoTail)
+{
   move(0, 0.5);
   move(1, 0.6);
   scene.undoStack().undo();
@@ -85,17 +94,21 @@ TEST_F(UndoFixture, NewEditClearsRedoTail) {
   EXPECT_EQ(scene.undoStack().undoLabel(), "Move point 2");
 }
 
-TEST_F(UndoFixture, DepthLimitDropsOldest) {
+TEST_F(UndoFixture, DepthLimitDropsOldest)
+{
   EXPECT_EQ(scene.undoStack().depthLimit(), 100u);
-  for (int i = 0; i < 130; ++i) move(0, 0.001 * (i + 1));
+  for (int i = 0; i < 130; ++i)
+    move(0, 0.001 * (i + 1));
   EXPECT_EQ(scene.undoStack().size(), 100u);
   int undone = 0;
-  while (scene.undoStack().undo()) ++undone;
+  while (scene.undoStack().undo())
+    ++undone;
   EXPECT_EQ(undone, 100);
-  EXPECT_DOUBLE_EQ(plan->cutPath()[0].x(), 0.030);  // state after edit 30
+  EXPECT_DOUBLE_EQ(plan->cutPath()[0].x(), 0.030); // state after edit 30
 }
 
-TEST_F(UndoFixture, RemovingANodeDropsItsEntries) {
+TEST_F(UndoFixture, RemovingANodeDropsItsEntries)
+{
   auto* other = scene.add<PlanNode>();
   move(0, 0.5);
   {
@@ -103,7 +116,7 @@ TEST_F(UndoFixture, RemovingANodeDropsItsEntries) {
     other->setNotes("keep");
   }
   move(1, 0.6);
-  scene.undoStack().undo();  // undo "Move point 1"
+  scene.undoStack().undo(); // undo "Move point 1"
   ASSERT_TRUE(scene.removeNode(plan->id()));
   EXPECT_EQ(scene.undoStack().size(), 1u);
   EXPECT_EQ(scene.undoStack().undoLabel(), "Notes");
@@ -112,11 +125,13 @@ TEST_F(UndoFixture, RemovingANodeDropsItsEntries) {
   EXPECT_EQ(other->notes(), "");
 }
 
-TEST_F(UndoFixture, EditOfAMissingNodeThrows) {
+TEST_F(UndoFixture, EditOfAMissingNodeThrows)
+{
   EXPECT_THROW(ScopedEdit(scene, "Plan99", "x"), SceneError);
 }
 
-TEST_F(UndoFixture, NodeRemovedDuringEditIsNotRecorded) {
+TEST_F(UndoFixture, NodeRemovedDuringEditIsNotRecorded)
+{
   {
     ScopedEdit edit(scene, plan->id(), "Edit then delete");
     plan->setNotes("gone");
@@ -125,7 +140,8 @@ TEST_F(UndoFixture, NodeRemovedDuringEditIsNotRecorded) {
   EXPECT_FALSE(scene.undoStack().canUndo());
 }
 
-TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndState) {
+TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndState)
+{
   std::vector<std::pair<SceneEvent, NodeId>> events;
   scene.addObserver([&](SceneEvent e, const Node& n) { events.emplace_back(e, n.id()); });
   auto* added = scene.add<PlanNode>();
@@ -133,13 +149,13 @@ TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndSta
   added->setCutPath({{0, 0}, {0.5, 0.5}});
   const NodeId id = added->id();
   scene.undoStack().pushAddition(*added, "Add plan");
-  move(1, 0.7);  // an edit of another node after it
+  move(1, 0.7); // an edit of another node after it
   ASSERT_EQ(scene.size(), 2u);
 
-  EXPECT_TRUE(scene.undoStack().undo());  // the move
+  EXPECT_TRUE(scene.undoStack().undo()); // the move
   events.clear();
   EXPECT_EQ(scene.undoStack().undoLabel(), "Add plan");
-  EXPECT_TRUE(scene.undoStack().undo());  // the addition
+  EXPECT_TRUE(scene.undoStack().undo()); // the addition
   EXPECT_EQ(scene.node(id), nullptr);
   EXPECT_EQ(scene.size(), 1u);
   ASSERT_EQ(events.size(), 1u);
@@ -155,7 +171,7 @@ TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndSta
   EXPECT_EQ(back->cutPath()[1], Eigen::Vector2d(0.5, 0.5));
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events[0], std::make_pair(SceneEvent::NodeAdded, id));
-  EXPECT_TRUE(scene.undoStack().redo());  // the move, still there after the addition
+  EXPECT_TRUE(scene.undoStack().redo()); // the move, still there after the addition
   EXPECT_EQ(plan->cutPath()[1], Eigen::Vector2d(0.7, 0.7));
 
   // Removing the node by hand drops its entries, the addition with them.
@@ -164,9 +180,10 @@ TEST_F(UndoFixture, AnAdditionIsUndoneByTakingTheNodeOutAndRedoneWithItsIdAndSta
   EXPECT_EQ(scene.undoStack().undoLabel(), "Move point 1");
 }
 
-TEST_F(UndoFixture, AnAdditionThatCouldNotBePutBackIsRefused) {
+TEST_F(UndoFixture, AnAdditionThatCouldNotBePutBackIsRefused)
+{
   auto* surface = scene.add<SurfaceNode>();
-  surface->setPolyData(vtkSmartPointer<vtkPolyData>::New());  // bulk data: a mesh
+  surface->setPolyData(vtkSmartPointer<vtkPolyData>::New()); // bulk data: a mesh
   EXPECT_THROW(scene.undoStack().pushAddition(*surface, "Add surface"), SceneError);
   Scene other;
   auto* elsewhere = other.add<PlanNode>();
@@ -174,5 +191,5 @@ TEST_F(UndoFixture, AnAdditionThatCouldNotBePutBackIsRefused) {
   EXPECT_FALSE(scene.undoStack().canUndo());
 }
 
-}  // namespace
-}  // namespace caps
+} // namespace
+} // namespace caps

@@ -140,7 +140,8 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
   EXPECT_FALSE(smile->isEnabled()); // nothing to move before the model
 
   QTest::mouseClick(build, Qt::LeftButton);
-  ASSERT_TRUE(workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
+  ASSERT_TRUE(
+    workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
     << workstation.errors() << status->text().toStdString();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   std::cout << "[expression panel] " << status->text().toStdString() << "\n";
@@ -153,8 +154,7 @@ TEST(ExpressionPanel, SmileSavedRecalledPlayedAndKeptInTheScene)
 
   // The same model made here directly from the logic, from the same scene.
   ExpressionLogic logic(scene);
-  const std::unique_ptr<expression::ExpressionModel> model =
-    expression::buildExpressionModel(logic.modelInput());
+  const std::unique_ptr<expression::ExpressionModel> model = expression::buildExpressionModel(logic.modelInput());
   ASSERT_NE(model, nullptr);
   ASSERT_EQ(face->polyData()->GetNumberOfPoints(), model->surface.vertexCount());
   Eigen::Matrix3Xd expected;
@@ -362,12 +362,13 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   auto* travel = workstation.widget<QSlider>("expression.push.travel");
   auto* planStatus = workstation.widget<QLabel>("expression.planStatus");
   auto* info = workstation.widget<QLabel>("expression.info");
-  ASSERT_TRUE(build && smile && plans && studyButton && bumps && fingertip && radius && up && in && corner &&
-              travel && planStatus && info);
+  ASSERT_TRUE(build && smile && plans && studyButton && bumps && fingertip && radius && up && in && corner && travel &&
+              planStatus && info);
   EXPECT_FALSE(plans->isVisible()) << "the plan group shows before the face model";
 
   QTest::mouseClick(build, Qt::LeftButton);
-  ASSERT_TRUE(workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
+  ASSERT_TRUE(
+    workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Face expression") != nullptr; }, 300))
     << workstation.errors();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   ASSERT_TRUE(plans->isVisible());
@@ -379,8 +380,8 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
 
   const auto started = std::chrono::steady_clock::now();
   QTest::mouseClick(studyButton, Qt::LeftButton);
-  ASSERT_TRUE(
-    workstation.waitUntil([&] { return test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression") != nullptr; }, 300))
+  ASSERT_TRUE(workstation.waitUntil(
+    [&] { return test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 under expression") != nullptr; }, 300))
     << workstation.errors() << planStatus->text().toStdString();
   ASSERT_TRUE(workstation.waitUntilIdle(60));
   const double studySeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -532,7 +533,8 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
     ASSERT_FALSE(first.isNull());
     EXPECT_NE(first.convertToFormat(QImage::Format_RGB888), peak.convertToFormat(QImage::Format_RGB888))
       << "the push does not show in the animation";
-    std::filesystem::copy_file(frames / "frame-0023.png", test::workstationArtifacts() / "expression-plan-push-frame.png",
+    std::filesystem::copy_file(frames / "frame-0023.png",
+                               test::workstationArtifacts() / "expression-plan-push-frame.png",
                                std::filesystem::copy_options::overwrite_existing);
   }
 

@@ -182,8 +182,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   const std::size_t plansBefore = scene.nodesOfType(NodeType::Plan).size();
   click(workstation.widget<QPushButton>("incision.place"));
   workstation.clickThreeDView(workstation.threeDViewPointOf({target.x(), target.y(), target.z()}));
-  ASSERT_TRUE(workstation.waitUntil(
-    [&] { return scene.nodesOfType(NodeType::Plan).size() == plansBefore + 1; }, 10))
+  ASSERT_TRUE(workstation.waitUntil([&] { return scene.nodesOfType(NodeType::Plan).size() == plansBefore + 1; }, 10))
     << workstation.errors();
   PlanNode* planNode = test::nodeNamed<PlanNode>(scene, "Z-plasty 2");
   ASSERT_NE(planNode, nullptr) << "the new plan is not named Z-plasty 2";
@@ -194,8 +193,8 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   {
     const double rc = skin.sample(placed.centre().theta, placed.centre().z);
     const Eigen::Vector3d centre = skin.frame().toWorld(rc, placed.centre().theta, placed.centre().z);
-    EXPECT_LT((centre - target).norm(), 1.5) << "centre at theta " << placed.centre().theta / kDegree << " deg, z "
-                                             << placed.centre().z;
+    EXPECT_LT((centre - target).norm(), 1.5)
+      << "centre at theta " << placed.centre().theta / kDegree << " deg, z " << placed.centre().z;
   }
   // The recipe replays to the very same plan, on the CT the demo plan names.
   {
@@ -558,8 +557,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   selectPlan(workstation.widget<QListWidget>("incision.plans"), "Z-plasty 1");
   workstation.settle(200);
   ASSERT_EQ(view->handleCount(), original.cutPath().size());
-  const Eigen::Vector3d lifted0 =
-    frame.toWorld(skin.sample(t0, z0) + incision::kIncisionLineLift, t0, z0);
+  const Eigen::Vector3d lifted0 = frame.toWorld(skin.sample(t0, z0) + incision::kIncisionLineLift, t0, z0);
   const QPoint grip = view->handleOnScreen(0);
   EXPECT_LE((grip - workstation.threeDViewPointOf({lifted0.x(), lifted0.y(), lifted0.z()})).manhattanLength(), 2);
 
@@ -646,7 +644,8 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
   const incision::SkinTensionLines logic(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
   const double expected =
-    incision::axisToTensionLines(IncisionLogic::readPlan(*test::nodeNamed<PlanNode>(scene, "Z-plasty 1")), logic).degrees;
+    incision::axisToTensionLines(IncisionLogic::readPlan(*test::nodeNamed<PlanNode>(scene, "Z-plasty 1")), logic)
+      .degrees;
   EXPECT_NEAR(shown, expected, 0.5);
   EXPECT_GE(shown, 0.0);
   EXPECT_LE(shown, 90.0);

@@ -68,7 +68,10 @@ std::string fixed(double value, int decimals)
   return s.str();
 }
 
-double sceneSnapshots(Scene& scene) { return double(scene.nodesOfType(NodeType::Snapshot).size()); }
+double sceneSnapshots(Scene& scene)
+{
+  return double(scene.nodesOfType(NodeType::Snapshot).size());
+}
 
 TEST(ResultsPanel, ShowsThePredictedZPlasty)
 {
@@ -458,9 +461,11 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   left->renderer()->GetActiveCamera()->Azimuth(20.0);
   workstation.settle(200);
   // Both colour ranges are the union of the two plans' von Mises ranges.
-  const double zMax = ResultsLogic::arrayMaximum(test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after")->polyData(), "von_mises_kPa");
+  const double zMax = ResultsLogic::arrayMaximum(
+    test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin after")->polyData(), "von_mises_kPa");
   const std::string otherName = other->currentText().toStdString();
-  const double oMax = ResultsLogic::arrayMaximum(test::nodeNamed<SurfaceNode>(scene, otherName + " skin after")->polyData(), "von_mises_kPa");
+  const double oMax = ResultsLogic::arrayMaximum(
+    test::nodeNamed<SurfaceNode>(scene, otherName + " skin after")->polyData(), "von_mises_kPa");
   auto* window = left->window();
   const QString text = window->findChild<QLabel*>("results.comparison.rightTitle")->text();
   EXPECT_NE(text.indexOf(QString::fromStdString(otherName)), -1) << text.toStdString();
@@ -479,7 +484,8 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   }
   // The excision's head is cut away inside its hole too: no head vertex is
   // left near the plan's centre (the middle of the excised ellipse).
-  if (PlanNode* excision = test::nodeNamed<PlanNode>(scene, otherName); excision && excision->procedure() == "elliptical-excision")
+  if (PlanNode* excision = test::nodeNamed<PlanNode>(scene, otherName);
+      excision && excision->procedure() == "elliptical-excision")
   {
     const incision::IncisionPlan read = IncisionLogic::readPlan(*excision);
     const seg::RangeMap skinMap = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
@@ -487,7 +493,8 @@ TEST(ResultsPanel, TwoPlansSideBySide)
     const Eigen::Vector3d centre = skinMap.frame().toWorld(skinMap.sample(theta, z), theta, z);
     auto* head = test::nodeNamed<SurfaceNode>(scene, "Skin");
     ASSERT_NE(head, nullptr);
-    const auto cut = ResultsLogic::headWithoutPatch(head->polyData(), test::nodeNamed<SurfaceNode>(scene, otherName + " skin before")->polyData());
+    const auto cut = ResultsLogic::headWithoutPatch(
+      head->polyData(), test::nodeNamed<SurfaceNode>(scene, otherName + " skin before")->polyData());
     // Only the vertices of kept cells count.
     double nearest = 1e9;
     cut->GetPolys()->InitTraversal();

@@ -106,19 +106,18 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   QTest::mouseClick(run, Qt::LeftButton);
   ASSERT_TRUE(w.waitUntilIdle(300));
   ASSERT_TRUE(w.window().reportedErrors().empty()) << w.errors();
-  std::cout << "Run of " << kPlan << " at 3 mm: "
-            << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
+  std::cout << "Run of " << kPlan
+            << " at 3 mm: " << std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()
             << " s from Run to the nodes in the scene; estimate said " << dofs << " DOF\n"
             << w.widget<QLabel>("simulate.summary")->text().toStdString() << "\n";
 
   // Replaced, not piled up: one of each, and the mesh drawing added.
-  for (const auto& [type, suffix] : std::vector<std::pair<NodeType, std::string>>{
-         {NodeType::Plan, ""},
-         {NodeType::FeMesh, " model"},
-         {NodeType::Solution, " closure"},
-         {NodeType::Surface, " skin before"},
-         {NodeType::Surface, " skin after"},
-         {NodeType::Surface, " mesh"}})
+  for (const auto& [type, suffix] : std::vector<std::pair<NodeType, std::string>>{{NodeType::Plan, ""},
+                                                                                  {NodeType::FeMesh, " model"},
+                                                                                  {NodeType::Solution, " closure"},
+                                                                                  {NodeType::Surface, " skin before"},
+                                                                                  {NodeType::Surface, " skin after"},
+                                                                                  {NodeType::Surface, " mesh"}})
     EXPECT_EQ(nodesNamed(scene, type, kPlan + suffix).size(), 1u) << kPlan << suffix;
   EXPECT_EQ(scene.size(), before + 1) << "only the mesh drawing is new";
   auto* planNode = static_cast<PlanNode*>(nodesNamed(scene, NodeType::Plan, kPlan).front());
@@ -134,12 +133,13 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   incision::SimulationOptions options;
   options.elementSize = 3.0;
   options.threads = 2;
-  const incision::PlanPrediction direct = incision::simulatePlan(
-    RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
+  const incision::PlanPrediction direct =
+    incision::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
 
   EXPECT_EQ(dofs, long(direct.dofCount)) << "the estimate before the run is the solved model's size";
 
-  auto* solution = static_cast<SolutionNode*>(nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure").front());
+  auto* solution =
+    static_cast<SolutionNode*>(nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure").front());
   vtkDataArray* u = solution->result()->GetPointData()->GetArray("displacement_mm");
   ASSERT_NE(u, nullptr);
   ASSERT_EQ(3 * u->GetNumberOfTuples(), direct.displacements.size());
@@ -193,7 +193,8 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   w.screenshot("simulate-panel");
   {
     // The model alone: the predicted skin hidden, so the fixed bone nodes and the sutures show.
-    auto* after = static_cast<SurfaceNode*>(nodesNamed(scene, NodeType::Surface, std::string(kPlan) + " skin after").front());
+    auto* after =
+      static_cast<SurfaceNode*>(nodesNamed(scene, NodeType::Surface, std::string(kPlan) + " skin after").front());
     after->setVisible(false);
     w.screenshot("simulate-panel-model");
     after->setVisible(true);
@@ -299,8 +300,7 @@ TEST(SimulatePanel, BadMaterialIsRefusedAndNothingRuns)
   auto* run = w.widget<QPushButton>("simulate.run");
 
   // ν = 0.5 (incompressible) in the fat, then E = 0 in the skin.
-  for (const auto& [row, column, text] :
-       std::vector<std::tuple<int, int, QString>>{{1, 2, "0.5"}, {0, 1, "0"}})
+  for (const auto& [row, column, text] : std::vector<std::tuple<int, int, QString>>{{1, 2, "0.5"}, {0, 1, "0"}})
   {
     const std::size_t errors = w.window().reportedErrors().size();
     table->item(row, column)->setText(text);

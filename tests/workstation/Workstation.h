@@ -34,8 +34,7 @@ namespace caps::test {
 /// Folder of this suite's screenshots.
 /// The first node of @a scene named @a name that is a @a T (SurfaceNode,
 /// PlanNode, ..., or Node for any); nullptr when there is none.
-template <class T = Node>
-T* nodeNamed(Scene& scene, const std::string& name)
+template <class T = Node> T* nodeNamed(Scene& scene, const std::string& name)
 {
   for (Node* node : scene.nodes())
     if (node->name() == name)
@@ -104,7 +103,10 @@ public:
   }
 
   /// Waits until no background work runs (runTask); false on timeout.
-  bool waitUntilIdle(double seconds) { return waitUntil([this] { return !window_->busy(); }, seconds); }
+  bool waitUntilIdle(double seconds)
+  {
+    return waitUntil([this] { return !window_->busy(); }, seconds);
+  }
 
   /// Shows module @a name's panel, as choosing it in the selector does.
   void selectModule(const std::string& name)
@@ -119,8 +121,7 @@ public:
 
   /// The window's child widget of that object name and type; nullptr (and a
   /// test failure) when there is none.
-  template <class T>
-  T* widget(const std::string& objectName)
+  template <class T> T* widget(const std::string& objectName)
   {
     T* found = window_->findChild<T*>(QString::fromStdString(objectName));
     if (!found)

@@ -40,8 +40,7 @@ namespace {
 
 using caps::test::Workstation;
 
-template <class T>
-std::vector<T*> nodesOf(caps::Scene& scene, caps::NodeType type)
+template <class T> std::vector<T*> nodesOf(caps::Scene& scene, caps::NodeType type)
 {
   std::vector<T*> nodes;
   for (caps::Node* node : scene.nodesOfType(type))
@@ -120,8 +119,7 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
 
   // 1. Load: the sample CT's one series loads straight away.
   ws.window().openPath(caps::test::sampleCt());
-  ASSERT_TRUE(ws.waitUntil([&] { return !scene.nodesOfType(caps::NodeType::Volume).empty(); }, 120))
-    << ws.errors();
+  ASSERT_TRUE(ws.waitUntil([&] { return !scene.nodesOfType(caps::NodeType::Volume).empty(); }, 120)) << ws.errors();
   ASSERT_TRUE(ws.waitUntilIdle(120));
   const QImage loaded(QString::fromStdString(ws.screenshot("flow-01-loaded").string()));
   ASSERT_FALSE(loaded.isNull());
@@ -263,8 +261,8 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   ws.screenshot("flow-06-results");
   const size_t snapshotsBefore = scene.nodesOfType(caps::NodeType::Snapshot).size();
   press(ws, "results.snapshot");
-  ASSERT_TRUE(ws.waitUntil(
-    [&] { return scene.nodesOfType(caps::NodeType::Snapshot).size() == snapshotsBefore + 1; }, 10));
+  ASSERT_TRUE(
+    ws.waitUntil([&] { return scene.nodesOfType(caps::NodeType::Snapshot).size() == snapshotsBefore + 1; }, 10));
   auto* snapshot = nodesOf<caps::SnapshotNode>(scene, caps::NodeType::Snapshot).back();
   ASSERT_NE(snapshot->image(), nullptr);
   EXPECT_GT(snapshot->image()->GetDimensions()[0], 200);

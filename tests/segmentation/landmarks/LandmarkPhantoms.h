@@ -56,9 +56,8 @@ struct StylisedHead
     const double base = 50.0 + 30.0 / (1.0 + std::exp(-(z - zMenton) / 1.0));
     const double w = gauss(angleFrom(theta, -kPi / 2), 0.0, 12 * kDeg);
     const double face = 22 * gauss(z, 0, 6) - 6 * gauss(z, zNasion, 4) + 4 * gauss(z, zGlabella, 5) -
-                        4 * gauss(z, zSubnasale, 3) + 6 * gauss(z, zLabraleSuperius, 3) -
-                        3 * gauss(z, -32, 2) + 5 * gauss(z, zLabraleInferius, 3) +
-                        8 * gauss(z, zPogonion, 5);
+                        4 * gauss(z, zSubnasale, 3) + 6 * gauss(z, zLabraleSuperius, 3) - 3 * gauss(z, -32, 2) +
+                        5 * gauss(z, zLabraleInferius, 3) + 8 * gauss(z, zPogonion, 5);
     return base + w * face;
   }
 
@@ -70,10 +69,8 @@ struct StylisedHead
     double r = 1.0 / std::sqrt(c * c / (60.0 * 60.0) + s * s / (70.0 * 70.0));
     for (int side : {-1, 1})
     {
-      r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * zygionFromFront), 0, 8 * kDeg) *
-           gauss(z, zZygion, 5);
-      r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * gonionFromFront), 0, 8 * kDeg) *
-           gauss(z, zGonion, 5);
+      r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * zygionFromFront), 0, 8 * kDeg) * gauss(z, zZygion, 5);
+      r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * gonionFromFront), 0, 8 * kDeg) * gauss(z, zGonion, 5);
     }
     return r;
   }

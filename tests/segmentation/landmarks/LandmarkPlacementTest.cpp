@@ -21,8 +21,7 @@ struct Expected
 };
 
 // The largest lateral extent r·|cos θ| of the analytic bone, by a dense search.
-std::pair<double, double> analyticWidest(double zLow, double zHigh, double fromFront, double toFront,
-                                         int side)
+std::pair<double, double> analyticWidest(double zLow, double zHigh, double fromFront, double toFront, int side)
 {
   double best = -1, bestTheta = 0, bestZ = 0;
   for (double a = fromFront; a <= toFront; a += 0.05 * kDeg)
@@ -97,8 +96,8 @@ TEST_F(StylisedHeadPlacement, MidlineLandmarksAreWithinToleranceOfTheirFeatures)
   {
     const Landmark* l = placed.find(e.name);
     ASSERT_NE(l, nullptr) << e.name;
-    std::printf("[ landmark ] %-17s theta %7.2f deg  z %7.2f mm  (expected z %7.2f)\n", e.name,
-                l->theta / kDeg, l->z, e.z);
+    std::printf("[ landmark ] %-17s theta %7.2f deg  z %7.2f mm  (expected z %7.2f)\n", e.name, l->theta / kDeg, l->z,
+                e.z);
     EXPECT_NEAR(l->z, e.z, e.tolerance) << e.name;
     EXPECT_NEAR(l->theta, -kPi / 2, 1e-9) << e.name;
   }
@@ -122,16 +121,15 @@ TEST_F(StylisedHeadPlacement, ZygionAndGonionAreTheWidestBonePoints)
   {
     const std::string suffix = side > 0 ? "_left" : "_right";
     const auto [zyTheta, zyZ] = analyticWidest(0.0, nasion, 25 * kDeg, 80 * kDeg, side);
-    const auto [goTheta, goZ] =
-      analyticWidest(menton, subnasale, 30 * kDeg, 95 * kDeg, side);
+    const auto [goTheta, goZ] = analyticWidest(menton, subnasale, 30 * kDeg, 95 * kDeg, side);
     const Landmark* zy = placed.find("zygion" + suffix);
     const Landmark* go = placed.find("gonion" + suffix);
     ASSERT_NE(zy, nullptr);
     ASSERT_NE(go, nullptr);
-    std::printf("[ landmark ] zygion%-6s theta %7.2f z %6.2f; analytic %7.2f %6.2f\n",
-                suffix.c_str(), zy->theta / kDeg, zy->z, zyTheta / kDeg, zyZ);
-    std::printf("[ landmark ] gonion%-6s theta %7.2f z %6.2f; analytic %7.2f %6.2f\n",
-                suffix.c_str(), go->theta / kDeg, go->z, goTheta / kDeg, goZ);
+    std::printf("[ landmark ] zygion%-6s theta %7.2f z %6.2f; analytic %7.2f %6.2f\n", suffix.c_str(), zy->theta / kDeg,
+                zy->z, zyTheta / kDeg, zyZ);
+    std::printf("[ landmark ] gonion%-6s theta %7.2f z %6.2f; analytic %7.2f %6.2f\n", suffix.c_str(), go->theta / kDeg,
+                go->z, goTheta / kDeg, goZ);
     // On the sample grid: within a column (0.70°) and a row (0.90 mm).
     EXPECT_NEAR(zy->theta, zyTheta, 1.0 * kDeg);
     EXPECT_NEAR(zy->z, zyZ, 1.0);

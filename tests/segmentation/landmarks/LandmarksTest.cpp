@@ -19,8 +19,7 @@ namespace {
 
 std::filesystem::path scratch(const std::string& name)
 {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("caps-landmarks-" + std::to_string(::getpid()));
+  const auto dir = std::filesystem::temp_directory_path() / ("caps-landmarks-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return dir / name;
 }
@@ -30,10 +29,9 @@ struct SphereMaps
   RangeMap skin, bone, radial, normal;
   SphereMaps()
     : skin(fillMap(ConcentricSpheres::frame(), ConcentricSpheres::skin)),
-      bone(fillMap(ConcentricSpheres::frame(), ConcentricSpheres::bone)),
-      radial(radialThickness(skin, bone)), normal(normalThickness(skin, bone))
-  {
-  }
+      bone(fillMap(ConcentricSpheres::frame(), ConcentricSpheres::bone)), radial(radialThickness(skin, bone)),
+      normal(normalThickness(skin, bone))
+  {}
 };
 
 const SphereMaps& sphereMaps()
@@ -44,9 +42,8 @@ const SphereMaps& sphereMaps()
 
 std::vector<Landmark> someLandmarks()
 {
-  return {{"nasion", -kPi / 2, 40.0},         {"pronasale", -kPi / 2, 0.3},
-          {"zygion_left", -0.4, 12.7},        {"gonion_right", -2.9, -47.1},
-          {"seam", -kPi + 1e-4, -20.0},       {"high", 1.0, 60.0},
+  return {{"nasion", -kPi / 2, 40.0},    {"pronasale", -kPi / 2, 0.3}, {"zygion_left", -0.4, 12.7},
+          {"gonion_right", -2.9, -47.1}, {"seam", -kPi + 1e-4, -20.0}, {"high", 1.0, 60.0},
           {"beyond the scan", 0.0, 88.0}};
 }
 
@@ -76,8 +73,8 @@ TEST(LandmarkThickness, MatchesTheAnalyticThicknessOfConcentricSpheres)
     EXPECT_NEAR(row.position.z(), z, 1e-9);
     EXPECT_NEAR(std::atan2(row.position.y(), row.position.x()), row.landmark.theta, 1e-9);
   }
-  std::printf("[ thickness] worst error: radial %.2e mm, normal %.2e mm, skin point %.2e mm\n",
-              worstRadial, worstNormal, worstPosition);
+  std::printf("[ thickness] worst error: radial %.2e mm, normal %.2e mm, skin point %.2e mm\n", worstRadial,
+              worstNormal, worstPosition);
   // Bilinear reading of a map sampled every 1.34 mm in z: error h²|f''|/8 < 0.005 mm at |z| ≤ 60.
   EXPECT_LT(worstRadial, 0.01);
   EXPECT_LT(worstPosition, 0.01);

@@ -40,8 +40,7 @@ TEST(ThicknessPainting, MatchesTheAnalyticThicknessAtEveryVertex)
   const long long finite = paintThickness(surface, radial);
   EXPECT_EQ(paintThickness(surface, normal, "normal_thickness_mm"), finite);
   auto* painted = vtkFloatArray::SafeDownCast(surface->GetPointData()->GetArray("thickness_mm"));
-  auto* paintedNormal =
-    vtkFloatArray::SafeDownCast(surface->GetPointData()->GetArray("normal_thickness_mm"));
+  auto* paintedNormal = vtkFloatArray::SafeDownCast(surface->GetPointData()->GetArray("normal_thickness_mm"));
   ASSERT_NE(painted, nullptr);
   ASSERT_NE(paintedNormal, nullptr);
   ASSERT_EQ(painted->GetNumberOfTuples(), surface->GetNumberOfPoints());
@@ -68,8 +67,8 @@ TEST(ThicknessPainting, MatchesTheAnalyticThicknessAtEveryVertex)
   }
   std::printf("[ painting ] %lld vertices, %lld finite, %lld compared (|z| <= 75 mm): worst radial "
               "error %.2e mm, normal %.2e mm; %lld of %lld outside the z range are NaN\n",
-              static_cast<long long>(surface->GetNumberOfPoints()), finite, compared, worstRadial,
-              worstNormal, nanOutside, outside);
+              static_cast<long long>(surface->GetNumberOfPoints()), finite, compared, worstRadial, worstNormal,
+              nanOutside, outside);
   EXPECT_GT(compared, 3500);
   EXPECT_LT(worstRadial, 0.02);
   EXPECT_LT(worstNormal, 0.05);

@@ -65,15 +65,14 @@ TEST(HeadSegmentationPhantom, MaskVolumesMatchTheAnalyticVolumes)
   const double skinShift = ph.thresholdShift(-400, ph.airHu, ph.tissueHu);
   const double boneShift = ph.thresholdShift(250, ph.tissueHu, ph.boneHu);
   const double bodyExpected = ph.ellipsoidVolume(ph.head, skinShift);
-  const double boneExpected =
-    ph.ellipsoidVolume(ph.offsetAxes(ph.skullOffset), boneShift) -
-    ph.ellipsoidVolume(ph.offsetAxes(ph.skullOffset + ph.skullThickness), -boneShift);
+  const double boneExpected = ph.ellipsoidVolume(ph.offsetAxes(ph.skullOffset), boneShift) -
+                              ph.ellipsoidVolume(ph.offsetAxes(ph.skullOffset + ph.skullThickness), -boneShift);
   const double body = test::countSet(c.masks.body) * voxel;
   const double bone = test::countSet(c.masks.bone) * voxel;
   std::printf("[ info     ] body %.1f cm³ (expected %.1f, error %+.2f%%), bone %.1f cm³ "
               "(expected %.1f, error %+.2f%%)\n",
-              body / 1e3, bodyExpected / 1e3, 100 * (body / bodyExpected - 1), bone / 1e3,
-              boneExpected / 1e3, 100 * (bone / boneExpected - 1));
+              body / 1e3, bodyExpected / 1e3, 100 * (body / bodyExpected - 1), bone / 1e3, boneExpected / 1e3,
+              100 * (bone / boneExpected - 1));
   for (const auto& note : c.masks.notes)
     std::printf("[ note     ] %s\n", note.c_str());
   EXPECT_NEAR(body / bodyExpected, 1.0, 0.01);
@@ -166,8 +165,7 @@ TEST(HeadSegmentationPhantom, RotatedGridGivesTheSameAnatomy)
   ct->SetDirectionMatrix(direction);
   ct->AllocateScalars(VTK_FLOAT, 1);
   for (vtkIdType n = 0; n < ct->GetNumberOfPoints(); ++n)
-    static_cast<float*>(ct->GetScalarPointer())[n] =
-      static_cast<const short*>(shortCt->GetScalarPointer())[n];
+    static_cast<float*>(ct->GetScalarPointer())[n] = static_cast<const short*>(shortCt->GetScalarPointer())[n];
   const auto masks = segmentHead(ct, SegmentationParameters{});
   EXPECT_EQ(masks.body->GetDirectionMatrix()->GetElement(0, 1), direction->GetElement(0, 1));
 
@@ -185,8 +183,7 @@ TEST(HeadSegmentationPhantom, RotatedGridGivesTheSameAnatomy)
   });
   EXPECT_GT(checked, 1000000u);
   EXPECT_EQ(wrong, 0u);
-  const double expected =
-    ph.ellipsoidVolume(ph.head, ph.thresholdShift(-400, ph.airHu, ph.tissueHu));
+  const double expected = ph.ellipsoidVolume(ph.head, ph.thresholdShift(-400, ph.airHu, ph.tissueHu));
   EXPECT_NEAR(test::countSet(masks.body) * test::voxelVolume(ct) / expected, 1.0, 0.01);
 }
 
@@ -209,8 +206,7 @@ TEST(HeadSegmentationPhantom, ReportsProgressAndHonoursCancel)
   // Cancel at several points: each throws Cancelled, never anything else.
   for (double at : {0.0, 0.1, 0.3, 0.5, 0.7, 0.9})
   {
-    EXPECT_THROW(segmentHead(ct, SegmentationParameters{},
-                             [at](double f, const std::string&) { return f < at; }),
+    EXPECT_THROW(segmentHead(ct, SegmentationParameters{}, [at](double f, const std::string&) { return f < at; }),
                  Cancelled)
       << "cancel at " << at;
   }

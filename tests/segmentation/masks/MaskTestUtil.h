@@ -48,14 +48,12 @@ inline std::array<double, 3> worldOf(vtkImageData* image, int i, int j, int k)
   vtkMatrix3x3* d = image->GetDirectionMatrix();
   std::array<double, 3> p{};
   for (int r = 0; r < 3; ++r)
-    p[r] = o[r] + d->GetElement(r, 0) * s[0] * i + d->GetElement(r, 1) * s[1] * j +
-           d->GetElement(r, 2) * s[2] * k;
+    p[r] = o[r] + d->GetElement(r, 0) * s[0] * i + d->GetElement(r, 1) * s[1] * j + d->GetElement(r, 2) * s[2] * k;
   return p;
 }
 
 /// Calls f(i, j, k, value) for every voxel of a uchar mask.
-template <typename F>
-void forEachVoxel(vtkImageData* mask, F&& f)
+template <typename F> void forEachVoxel(vtkImageData* mask, F&& f)
 {
   int dims[3];
   mask->GetDimensions(dims);
@@ -146,8 +144,8 @@ inline SurfaceStats surfaceStats(vtkPolyData* surface)
 
 /// A grey picture of slice `index` along `axis` of a HU image (window
 /// [-1000, 1500]) with the body tinted green and the bone red.
-inline void writeSlicePicture(vtkImageData* ct, vtkImageData* body, vtkImageData* bone, int axis,
-                              int index, const std::filesystem::path& file)
+inline void writeSlicePicture(vtkImageData* ct, vtkImageData* body, vtkImageData* bone, int axis, int index,
+                              const std::filesystem::path& file)
 {
   int dims[3];
   ct->GetDimensions(dims);
@@ -163,8 +161,8 @@ inline void writeSlicePicture(vtkImageData* ct, vtkImageData* body, vtkImageData
     for (int x = 0; x < dims[u]; ++x)
     {
       const std::int64_t n = index * stride[axis] + x * stride[u] + y * stride[v];
-      const double hu = ct->GetScalarComponentAsDouble(
-        axis == 0 ? index : x, axis == 1 ? index : (axis == 0 ? x : y), axis == 2 ? index : y, 0);
+      const double hu = ct->GetScalarComponentAsDouble(axis == 0 ? index : x, axis == 1 ? index : (axis == 0 ? x : y),
+                                                       axis == 2 ? index : y, 0);
       const double g = std::clamp((hu + 1000.0) / 2500.0, 0.0, 1.0) * 255.0;
       double rgb[3] = {g, g, g};
       if (b && b[n])

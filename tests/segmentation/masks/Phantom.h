@@ -58,9 +58,9 @@ struct Phantom
   std::array<double, 3> islandCentre{15.0, 15.0, -10.0}; ///< relative to centre
   double islandRadius = 3.0;                             ///< 113 mm³ < 500 mm³
   bool table = true;
-  double tableGap = 4.0;       ///< head surface to table top along +y, mm
+  double tableGap = 4.0; ///< head surface to table top along +y, mm
   double tableThickness = 10.0;
-  double postRadius = 1.5;     ///< the thin contact between head and table
+  double postRadius = 1.5; ///< the thin contact between head and table
   double tissueHu = 40, boneHu = 700, airHu = -1000, tableHu = 200;
   double blurSigma = 0.6; ///< mm
   double noiseHu = 20;
@@ -69,8 +69,7 @@ struct Phantom
 
   /// Fraction of a blurred edge inside an ellipsoid of semi-axes s centred at
   /// c, from a first-order signed distance to its surface.
-  double insideEllipsoid(const double p[3], const std::array<double, 3>& c,
-                         const std::array<double, 3>& s) const
+  double insideEllipsoid(const double p[3], const std::array<double, 3>& c, const std::array<double, 3>& s) const
   {
     double q = 0, g[3];
     for (int a = 0; a < 3; ++a)
@@ -114,8 +113,7 @@ struct Phantom
       // Slab: y in [top, top + thickness], all x and z. Post: cylinder along
       // y at the head's back-most point, from inside the head into the slab.
       const double top = centre[1] + head[1] + tableGap;
-      const double fSlab = normalCdf((p[1] - top) / blurSigma) *
-                           normalCdf((top + tableThickness - p[1]) / blurSigma);
+      const double fSlab = normalCdf((p[1] - top) / blurSigma) * normalCdf((top + tableThickness - p[1]) / blurSigma);
       const double dx = p[0] - centre[0], dz = p[2] - centre[2];
       const double fPost = normalCdf((postRadius - std::sqrt(dx * dx + dz * dz)) / blurSigma) *
                            normalCdf((p[1] - (centre[1] + head[1] - 3.0)) / blurSigma) *
@@ -151,11 +149,9 @@ struct Phantom
 
   /// The phantom CT (int16 HU) on a grid of dims voxels with the given
   /// spacing and direction, centred on the head.
-  vtkSmartPointer<vtkImageData> image(const std::array<int, 3>& dims,
-                                      const std::array<double, 3>& spacing,
+  vtkSmartPointer<vtkImageData> image(const std::array<int, 3>& dims, const std::array<double, 3>& spacing,
                                       vtkMatrix3x3* direction = nullptr,
-                                      const std::array<double, 3>& gridCentre = {0, 0, 0},
-                                      unsigned seed = 7) const
+                                      const std::array<double, 3>& gridCentre = {0, 0, 0}, unsigned seed = 7) const
   {
     auto identity = vtkSmartPointer<vtkMatrix3x3>::New();
     if (!direction)

@@ -66,10 +66,8 @@ TEST_F(SampleCt, WritesPictures)
   for (int k : {dims[2] / 8, dims[2] / 4, dims[2] / 2, 3 * dims[2] / 4, dims[2] - 10})
     test::writeSlicePicture(image, masks_->body, masks_->bone, 2, k,
                             folder / ("sample-axial-" + std::to_string(k) + ".png"));
-  test::writeSlicePicture(image, masks_->body, masks_->bone, 0, dims[0] / 2,
-                          folder / "sample-sagittal.png");
-  test::writeSlicePicture(image, masks_->body, masks_->bone, 1, dims[1] / 2,
-                          folder / "sample-coronal.png");
+  test::writeSlicePicture(image, masks_->body, masks_->bone, 0, dims[0] / 2, folder / "sample-sagittal.png");
+  test::writeSlicePicture(image, masks_->body, masks_->bone, 1, dims[1] / 2, folder / "sample-coronal.png");
 }
 
 // The sample's geometry is identity-oriented (rows j run anterior to
@@ -97,8 +95,8 @@ TEST_F(SampleCt, BodyExcludesHeadHolderAndPillow)
         holderVoxels += image->GetScalarComponentAsDouble(i, j, k, 0) > -400;
         bodyInHolderRegion += body[n];
       }
-  std::printf("[ info     ] holder region: %zu voxels above -400 HU, %zu of them body\n",
-              holderVoxels, bodyInHolderRegion);
+  std::printf("[ info     ] holder region: %zu voxels above -400 HU, %zu of them body\n", holderVoxels,
+              bodyInHolderRegion);
   EXPECT_GT(holderVoxels * test::voxelVolume(image), 10000.0); // > 10 cm³ of holder and pillow
   EXPECT_EQ(bodyInHolderRegion, 0u);
 }
@@ -136,8 +134,7 @@ TEST_F(SampleCt, MasksHaveTheCtGeometry)
       EXPECT_DOUBLE_EQ(mask->GetSpacing()[a], ct_->image->GetSpacing()[a]);
     }
     for (int e = 0; e < 9; ++e)
-      EXPECT_DOUBLE_EQ(mask->GetDirectionMatrix()->GetData()[e],
-                       ct_->image->GetDirectionMatrix()->GetData()[e]);
+      EXPECT_DOUBLE_EQ(mask->GetDirectionMatrix()->GetData()[e], ct_->image->GetDirectionMatrix()->GetData()[e]);
   }
 }
 
@@ -172,28 +169,23 @@ TEST_F(SampleCt, SkinAndBoneSurfacesAreClosed)
   SurfaceOptions options; // smoothed, not decimated: the label maps' surfaces
   const auto start = std::chrono::steady_clock::now();
   auto skin = extractSurface(masks_->body, options);
-  const double skinSeconds =
-    std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double skinSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   auto bone = extractSurface(masks_->bone, options);
   const auto skinStats = test::surfaceStats(skin);
   const auto boneStats = test::surfaceStats(bone);
-  std::printf("[ timing   ] skin surface (smoothed): %.2f s, %lld triangles\n",
-              skinSeconds, static_cast<long long>(skin->GetNumberOfCells()));
-  std::printf("[ info     ] skin: %d regions, largest %.4f of the area, %.0f cm², %.3f L\n",
-              skinStats.regions, skinStats.largestRegionAreaFraction, skinStats.area / 100,
-              skinStats.volume * 1e-6);
-  std::printf("[ info     ] bone: %d regions, largest %.4f of the area, %.0f cm², %.3f L\n",
-              boneStats.regions, boneStats.largestRegionAreaFraction, boneStats.area / 100,
-              boneStats.volume * 1e-6);
+  std::printf("[ timing   ] skin surface (smoothed): %.2f s, %lld triangles\n", skinSeconds,
+              static_cast<long long>(skin->GetNumberOfCells()));
+  std::printf("[ info     ] skin: %d regions, largest %.4f of the area, %.0f cm², %.3f L\n", skinStats.regions,
+              skinStats.largestRegionAreaFraction, skinStats.area / 100, skinStats.volume * 1e-6);
+  std::printf("[ info     ] bone: %d regions, largest %.4f of the area, %.0f cm², %.3f L\n", boneStats.regions,
+              boneStats.largestRegionAreaFraction, boneStats.area / 100, boneStats.volume * 1e-6);
   EXPECT_EQ(skinStats.boundaryEdges, 0);
   EXPECT_EQ(skinStats.nonManifoldEdges, 0);
   EXPECT_GE(skinStats.largestRegionAreaFraction, 0.99);
   std::printf("[ info     ] edges: skin %lld boundary %lld non-manifold, bone %lld boundary "
               "%lld non-manifold\n",
-              static_cast<long long>(skinStats.boundaryEdges),
-              static_cast<long long>(skinStats.nonManifoldEdges),
-              static_cast<long long>(boneStats.boundaryEdges),
-              static_cast<long long>(boneStats.nonManifoldEdges));
+              static_cast<long long>(skinStats.boundaryEdges), static_cast<long long>(skinStats.nonManifoldEdges),
+              static_cast<long long>(boneStats.boundaryEdges), static_cast<long long>(boneStats.nonManifoldEdges));
   EXPECT_EQ(boneStats.boundaryEdges, 0);
   EXPECT_EQ(boneStats.nonManifoldEdges, 0);
   EXPECT_GE(boneStats.largestRegionAreaFraction, 0.6);

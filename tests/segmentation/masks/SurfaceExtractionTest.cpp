@@ -33,8 +33,7 @@ double ellipsoidArea(const std::array<double, 3>& s)
     {
       const double p = (j + 0.5) * dp, sp = std::sin(p), cp = std::cos(p);
       area += st * std::sqrt(s[1] * s[1] * s[2] * s[2] * st * st * cp * cp +
-                             s[0] * s[0] * s[2] * s[2] * st * st * sp * sp +
-                             s[0] * s[0] * s[1] * s[1] * ct * ct);
+                             s[0] * s[0] * s[2] * s[2] * st * st * sp * sp + s[0] * s[0] * s[1] * s[1] * ct * ct);
     }
   }
   return area * dt * dp;
@@ -54,16 +53,14 @@ double signedVolume6(vtkPolyData* surface)
     surface->GetPoint(ids[0], a);
     surface->GetPoint(ids[1], b);
     surface->GetPoint(ids[2], c);
-    sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-           a[2] * (b[0] * c[1] - b[1] * c[0]);
+    sum += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
   }
   return sum;
 }
 
 /// Largest |first-order distance| from the surface's points to the phantom
 /// head's ellipsoid, and the fraction of point normals pointing outward.
-std::pair<double, double> distanceAndOrientation(vtkPolyData* surface, const test::Phantom& ph,
-                                                 double expectedShift)
+std::pair<double, double> distanceAndOrientation(vtkPolyData* surface, const test::Phantom& ph, double expectedShift)
 {
   double worst = 0;
   std::size_t outward = 0;
@@ -105,8 +102,8 @@ TEST(SurfaceExtraction, PhantomSkinMatchesTheEllipsoid)
   const double area = ellipsoidArea({ph.head[0] + shift, ph.head[1] + shift, ph.head[2] + shift});
   std::printf("[ info     ] skin volume %.1f cm³ (ellipsoid %.1f, %+.2f%%), area %.1f cm² "
               "(ellipsoid %.1f, %+.2f%%)\n",
-              stats.volume / 1e3, volume / 1e3, 100 * (stats.volume / volume - 1),
-              stats.area / 100, area / 100, 100 * (stats.area / area - 1));
+              stats.volume / 1e3, volume / 1e3, 100 * (stats.volume / volume - 1), stats.area / 100, area / 100,
+              100 * (stats.area / area - 1));
   EXPECT_NEAR(stats.volume / volume, 1.0, 0.01);
   EXPECT_NEAR(stats.area / area, 1.0, 0.02);
   EXPECT_EQ(stats.regions, 1);
@@ -206,8 +203,7 @@ TEST(SurfaceExtraction, EmptyMaskGivesEmptySurface)
   auto mask = vtkSmartPointer<vtkImageData>::New();
   mask->SetDimensions(8, 8, 8);
   mask->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
-  std::fill_n(static_cast<unsigned char*>(mask->GetScalarPointer()), 512,
-              static_cast<unsigned char>(0));
+  std::fill_n(static_cast<unsigned char*>(mask->GetScalarPointer()), 512, static_cast<unsigned char>(0));
   EXPECT_EQ(extractSurface(mask)->GetNumberOfPoints(), 0);
   EXPECT_THROW(extractSurface(nullptr), std::invalid_argument);
 }

@@ -56,8 +56,8 @@ TEST(CylindricalFrame, TiltedAxisIsRightHandedAndFrontStaysAnterior)
   EXPECT_NEAR(frame.xAxis().dot(frame.yAxis()), 0.0, 1e-12);
   EXPECT_NEAR(frame.xAxis().dot(axis), 0.0, 1e-12);
   EXPECT_TRUE(frame.xAxis().cross(frame.yAxis()).isApprox(axis, 1e-12));
-  EXPECT_GT(frame.xAxis().x(), 0.9);  // still patient left
-  EXPECT_GT(frame.yAxis().y(), 0.9);  // still posterior
+  EXPECT_GT(frame.xAxis().x(), 0.9);                   // still patient left
+  EXPECT_GT(frame.yAxis().y(), 0.9);                   // still posterior
   EXPECT_LT(frame.radialDirection(-pi / 2).y(), -0.9); // θ = -π/2 is the face
 }
 
@@ -77,8 +77,7 @@ TEST(CylindricalFrame, RoundTripsBetweenSpaces)
     // normalised cylindrical
     const NormalizedCylindricalPoint nc = frame.toNormalized(c);
     const CylindricalPoint back = frame.fromNormalized(nc);
-    worstNorm = std::max({worstNorm, std::abs(back.r - c.r), std::abs(back.theta - c.theta),
-                          std::abs(back.z - c.z)});
+    worstNorm = std::max({worstNorm, std::abs(back.r - c.r), std::abs(back.theta - c.theta), std::abs(back.z - c.z)});
     // sample indices
     const double uu = frame.thetaToIndex(c.theta), vv = frame.zToIndex(c.z);
     EXPECT_GE(uu, 0.0);
@@ -102,8 +101,8 @@ TEST(ImageGeometry, IndexToWorldAgreesWithVtkForAnObliqueDirection)
   image->SetExtent(2, 40, -3, 30, 0, 20);
   image->SetOrigin(-120.5, 33.0, 510.25);
   image->SetSpacing(0.54, 0.61, 1.25);
-  const Eigen::Matrix3d d =
-    Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * Eigen::Vector3d(1, -1, 1).asDiagonal();
+  const Eigen::Matrix3d d = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
+                            Eigen::Vector3d(1, -1, 1).asDiagonal();
   image->SetDirectionMatrix(d(0, 0), d(0, 1), d(0, 2), d(1, 0), d(1, 1), d(1, 2), d(2, 0), d(2, 1), d(2, 2));
   const ImageGeometry g = ImageGeometry::of(image);
   EXPECT_EQ(g.dimensions()[0], 39);

@@ -36,11 +36,12 @@ struct TiltedHead
 /// wide, 40 mm posterior of the axis, below z = -40.
 vtkSmartPointer<vtkImageData> headMask(const TiltedHead& head, const Eigen::Matrix3d& direction)
 {
-  const ImageGeometry g = centredGeometry(Eigen::Vector3i(200, 160, 150), Eigen::Vector3d(2, 2, 2),
-                                          direction, Eigen::Vector3d(0, 0, 50));
+  const ImageGeometry g =
+    centredGeometry(Eigen::Vector3i(200, 160, 150), Eigen::Vector3d(2, 2, 2), direction, Eigen::Vector3d(0, 0, 50));
   auto mask = makeImage(g, VTK_UNSIGNED_CHAR);
   auto* m = static_cast<unsigned char*>(mask->GetScalarPointer());
-  const Eigen::Vector3d x = (Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(head.axis) * head.axis).normalized();
+  const Eigen::Vector3d x =
+    (Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(head.axis) * head.axis).normalized();
   const Eigen::Vector3d y = head.axis.cross(x);
   const auto dims = g.dimensions();
   std::size_t o = 0;
@@ -51,7 +52,8 @@ vtkSmartPointer<vtkImageData> headMask(const TiltedHead& head, const Eigen::Matr
         const Eigen::Vector3d p = g.indexToWorld(Eigen::Vector3d(i, j, k));
         const Eigen::Vector3d w = p - head.axisPoint;
         const double a = w.dot(x) / 70.0, b = w.dot(y) / 90.0, h = w.dot(head.axis);
-        const bool inHead = h > -100 && (h < 80 ? a * a + b * b < 1.0 : a * a + b * b + (h - 80) * (h - 80) / (50.0 * 50.0) < 1.0);
+        const bool inHead =
+          h > -100 && (h < 80 ? a * a + b * b < 1.0 : a * a + b * b + (h - 80) * (h - 80) / (50.0 * 50.0) < 1.0);
         const bool inShoulders = p.z() < -40 && std::abs(p.x()) < 180 && std::abs(p.y() - 40) < 60;
         m[o] = inHead || inShoulders;
       }
@@ -71,8 +73,8 @@ TEST(HeadAxis, RecoversATiltedAxisAboveShoulders)
     const HeadAxisFit fit = fitHeadAxis(mask);
     const double angle = head.angleDegrees(fit.frame.direction());
     const double offset = head.distanceFromAxis(fit.frame.origin());
-    std::printf("tilted head axis: %.3f deg, origin %.3f mm off the axis, %d slices, rms %.3f mm\n", angle,
-                offset, fit.slicesUsed, fit.rmsResidual);
+    std::printf("tilted head axis: %.3f deg, origin %.3f mm off the axis, %d slices, rms %.3f mm\n", angle, offset,
+                fit.slicesUsed, fit.rmsResidual);
     EXPECT_LT(angle, 0.5);
     EXPECT_LT(offset, 1.0);
     EXPECT_GT(fit.frame.direction().z(), 0.9); // superior

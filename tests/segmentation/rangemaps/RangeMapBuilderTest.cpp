@@ -43,8 +43,8 @@ double analyticBone(double theta, double z)
 
 ImageGeometry anisotropicGrid()
 {
-  return centredGeometry(Eigen::Vector3i(110, 150, 112), Eigen::Vector3d(1.0, 1.0, 1.25),
-                         Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 10, 0));
+  return centredGeometry(Eigen::Vector3i(110, 150, 112), Eigen::Vector3d(1.0, 1.0, 1.25), Eigen::Matrix3d::Identity(),
+                         Eigen::Vector3d(0, 10, 0));
 }
 
 void expectSubVoxel(const SkinBoneRangeMaps& maps, double voxel, const char* label)
@@ -73,7 +73,8 @@ TEST(RangeMapBuilder, EllipsoidPhantomFloatAndInt16)
   {
     const Phantom p = makePhantom(anisotropicGrid(), skinShape, boneShape, {}, sigmaMm, noiseHu, type);
     const SkinBoneRangeMaps maps = buildRangeMaps(p.ct, p.body, p.bone, frame, midThresholds());
-    expectSubVoxel(maps, 1.0, type == VTK_FLOAT ? "ellipsoids, float, 1x1x1.25 mm:" : "ellipsoids, int16, 1x1x1.25 mm:");
+    expectSubVoxel(maps, 1.0,
+                   type == VTK_FLOAT ? "ellipsoids, float, 1x1x1.25 mm:" : "ellipsoids, int16, 1x1x1.25 mm:");
   }
 }
 
@@ -93,14 +94,15 @@ TEST(RangeMapBuilder, ObliqueDirectionMatrixGivesTheSameMaps)
 {
   // The same world-space phantom on an identity grid and on a grid rotated
   // 0.5 rad about (1, 2, 3) and mirrored (a left-handed index frame).
-  const Eigen::Matrix3d oblique =
-    Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() * Eigen::Vector3d(1, -1, 1).asDiagonal();
+  const Eigen::Matrix3d oblique = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix() *
+                                  Eigen::Vector3d(1, -1, 1).asDiagonal();
   const Eigen::Vector3i dims(144, 144, 144);
-  const Phantom a = makePhantom(centredGeometry(dims, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(),
-                                                Eigen::Vector3d::Zero()),
-                                skinShape, boneShape, {}, sigmaMm, noiseHu, VTK_FLOAT);
-  const Phantom b = makePhantom(centredGeometry(dims, Eigen::Vector3d::Ones(), oblique, Eigen::Vector3d(0.3, -0.2, 0.1)),
-                                skinShape, boneShape, {}, sigmaMm, noiseHu, VTK_FLOAT, 8);
+  const Phantom a =
+    makePhantom(centredGeometry(dims, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()),
+                skinShape, boneShape, {}, sigmaMm, noiseHu, VTK_FLOAT);
+  const Phantom b =
+    makePhantom(centredGeometry(dims, Eigen::Vector3d::Ones(), oblique, Eigen::Vector3d(0.3, -0.2, 0.1)), skinShape,
+                boneShape, {}, sigmaMm, noiseHu, VTK_FLOAT, 8);
   const auto ma = buildRangeMaps(a.ct, a.body, a.bone, frame, midThresholds());
   const auto mb = buildRangeMaps(b.ct, b.body, b.bone, frame, midThresholds());
   expectSubVoxel(ma, 1.0, "ellipsoids, identity grid, 1 mm:");

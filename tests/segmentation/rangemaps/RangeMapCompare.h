@@ -45,8 +45,8 @@ inline MapError compare(const RangeMap& map, const std::function<double(double t
 
 inline void print(const char* what, const MapError& e)
 {
-  std::printf("%-44s RMS %.4f mm, max %.4f mm over %zu samples (%zu missing, %zu extra)\n", what, e.rms,
-              e.maxAbs, e.compared, e.missing, e.extra);
+  std::printf("%-44s RMS %.4f mm, max %.4f mm over %zu samples (%zu missing, %zu extra)\n", what, e.rms, e.maxAbs,
+              e.compared, e.missing, e.extra);
 }
 
 } // namespace caps::seg::test

@@ -146,9 +146,8 @@ inline std::vector<float> partialVolume(const ImageGeometry& g, const Shape& sha
         for (int c = 0; c < n; ++c)
           for (int b = 0; b < n; ++b)
             for (int a = 0; a < n; ++a)
-              in += shape.inside(g.indexToWorld(Eigen::Vector3d(i - 0.5 + (a + 0.5) / n,
-                                                               j - 0.5 + (b + 0.5) / n,
-                                                               k - 0.5 + (c + 0.5) / n)));
+              in += shape.inside(g.indexToWorld(
+                Eigen::Vector3d(i - 0.5 + (a + 0.5) / n, j - 0.5 + (b + 0.5) / n, k - 0.5 + (c + 0.5) / n)));
         f[o] = static_cast<float>(in) / (n * n * n);
       }
   return f;
@@ -210,8 +209,8 @@ struct Phantom
 /// Masks: threshold at the mid-levels; the body also near the skin solid only,
 /// so the extras stay out (unless extrasInBody).
 inline Phantom makePhantom(const ImageGeometry& g, const Shape& skin, const Shape& bone,
-                           const std::vector<const Shape*>& extras, double sigmaMm, double noiseHu,
-                           int vtkType, unsigned seed = 7, bool extrasInBody = false)
+                           const std::vector<const Shape*>& extras, double sigmaMm, double noiseHu, int vtkType,
+                           unsigned seed = 7, bool extrasInBody = false)
 {
   std::vector<float> fs = partialVolume(g, skin);
   const std::vector<float> fb = partialVolume(g, bone);

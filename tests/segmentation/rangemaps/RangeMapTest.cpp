@@ -14,8 +14,11 @@ using namespace caps::seg;
 constexpr double pi = std::numbers::pi;
 
 namespace {
-CylindricalFrame smallFrame() { return CylindricalFrame(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::UnitZ(), 0, 90, 64, 10); }
+CylindricalFrame smallFrame()
+{
+  return CylindricalFrame(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d::UnitZ(), 0, 90, 64, 10);
 }
+} // namespace
 
 TEST(RangeMap, BilinearAcrossTheThetaSeam)
 {
@@ -51,11 +54,11 @@ TEST(RangeMap, NextToANaN)
   RangeMap map(smallFrame(), 10.0f);
   map.at(5, 5) = RangeMap::quietNaN();
   map.at(6, 5) = 20.0f;
-  EXPECT_TRUE(std::isnan(map.sampleIndex(5, 5)));       // on the hole
-  EXPECT_NEAR(map.sampleIndex(6, 5), 20.0, 1e-6);       // on a sample next to it
-  EXPECT_NEAR(map.sampleIndex(5.75, 5), 20.0, 1e-6);    // only 6 carries weight there
-  EXPECT_NEAR(map.sampleIndex(5.5, 5), 20.0, 1e-6);     // half the weight is enough
-  EXPECT_TRUE(std::isnan(map.sampleIndex(5.25, 5)));    // the hole dominates
+  EXPECT_TRUE(std::isnan(map.sampleIndex(5, 5)));    // on the hole
+  EXPECT_NEAR(map.sampleIndex(6, 5), 20.0, 1e-6);    // on a sample next to it
+  EXPECT_NEAR(map.sampleIndex(5.75, 5), 20.0, 1e-6); // only 6 carries weight there
+  EXPECT_NEAR(map.sampleIndex(5.5, 5), 20.0, 1e-6);  // half the weight is enough
+  EXPECT_TRUE(std::isnan(map.sampleIndex(5.25, 5))); // the hole dominates
   EXPECT_NEAR(map.sampleIndex(5.5, 5.5), (20.0 * 0.25 + 10.0 * 0.5) / 0.75, 1e-5);
   EXPECT_EQ(map.validCount(), map.values().size() - 1);
 }
@@ -106,7 +109,7 @@ TEST(RangeMapFromPoints, BucketsKeepTheLargestRadius)
   std::vector<Eigen::Vector3d> points;
   points.push_back(frame.toWorld(30, frame.indexToTheta(8) + 0.4 * frame.thetaStep(), 42));
   points.push_back(frame.toWorld(35, frame.indexToTheta(8) - 0.4 * frame.thetaStep(), 38)); // same bucket, larger
-  points.push_back(frame.toWorld(20, frame.indexToTheta(8), 40));                            // same bucket, smaller
+  points.push_back(frame.toWorld(20, frame.indexToTheta(8), 40));                           // same bucket, smaller
   points.push_back(frame.toWorld(50, pi - 0.3 * frame.thetaStep(), 0));                     // wraps to column 0
   points.push_back(frame.toWorld(60, 0.0, 95.1));                                           // beyond zMax + Δz/2
   points.push_back(Eigen::Vector3d::Constant(std::nan("")));

@@ -38,9 +38,8 @@ TEST(Thickness, ConcentricSpheres)
   const auto maps = buildRangeMaps(p.ct, p.body, p.bone, frame, midThresholds());
 
   const RangeMap radial = radialThickness(maps.skin, maps.bone);
-  const MapError radialError = compare(radial, [](double, double z) {
-    return std::sqrt(50.0 * 50.0 - z * z) - std::sqrt(40.0 * 40.0 - z * z);
-  });
+  const MapError radialError =
+    compare(radial, [](double, double z) { return std::sqrt(50.0 * 50.0 - z * z) - std::sqrt(40.0 * 40.0 - z * z); });
   print("spheres: radial thickness", radialError);
   EXPECT_LT(radialError.rms, 0.3);
   EXPECT_EQ(radialError.missing, 0u);
@@ -71,9 +70,9 @@ TEST(Thickness, TiltedCoaxialCylinders)
   const Eigen::Vector3d axis = Eigen::Vector3d(0.1, -0.2, 1.0).normalized();
   const Cylinder skin(point, axis, 50.0);
   const Cylinder bone(point, axis, 38.0);
-  const Phantom p = makePhantom(centredGeometry(Eigen::Vector3i(176, 176, 92), Eigen::Vector3d(0.8, 0.8, 1.5),
-                                                Eigen::Matrix3d::Identity(), point),
-                                skin, bone, {}, 1.0, 20.0, VTK_SHORT);
+  const Phantom p = makePhantom(
+    centredGeometry(Eigen::Vector3i(176, 176, 92), Eigen::Vector3d(0.8, 0.8, 1.5), Eigen::Matrix3d::Identity(), point),
+    skin, bone, {}, 1.0, 20.0, VTK_SHORT);
   const CylindricalFrame frame(point, axis, -40, 40, 360, 81);
   const auto maps = buildRangeMaps(p.ct, p.body, p.bone, frame, midThresholds());
   const MapError skinError = compare(maps.skin, [](double, double) { return 50.0; });

@@ -44,22 +44,25 @@ struct Pair
   MapLandmark a, b;
 };
 const Pair kPairs[] = {
-    {"inter-ocular", CalibrationDirection::Horizontal, {-pi / 2 - 0.30, 35.0}, {-pi / 2 + 0.30, 35.0}},
-    {"outer-canthal", CalibrationDirection::Horizontal, {-pi / 2 - 0.52, 33.0}, {-pi / 2 + 0.52, 33.0}},
-    {"nasal width", CalibrationDirection::Horizontal, {-pi / 2 - 0.20, -5.0}, {-pi / 2 + 0.20, -5.0}},
-    {"mouth width", CalibrationDirection::Horizontal, {-pi / 2 - 0.28, -30.0}, {-pi / 2 + 0.28, -30.0}},
-    {"zygomatic width", CalibrationDirection::Horizontal, {-pi / 2 - 1.2, 20.0}, {-pi / 2 + 1.2, 20.0}},
-    // Vertical ones run over the curved face: they have depth too.
-    {"upper facial height", CalibrationDirection::Vertical, {-pi / 2, 45.0}, {-pi / 2, -12.0}},
-    {"lower facial height", CalibrationDirection::Vertical, {-pi / 2, -12.0}, {-pi / 2, -75.0}},
-    {"upper lip height", CalibrationDirection::Vertical, {-pi / 2, -12.0}, {-pi / 2, -31.0}},
+  {"inter-ocular", CalibrationDirection::Horizontal, {-pi / 2 - 0.30, 35.0}, {-pi / 2 + 0.30, 35.0}},
+  {"outer-canthal", CalibrationDirection::Horizontal, {-pi / 2 - 0.52, 33.0}, {-pi / 2 + 0.52, 33.0}},
+  {"nasal width", CalibrationDirection::Horizontal, {-pi / 2 - 0.20, -5.0}, {-pi / 2 + 0.20, -5.0}},
+  {"mouth width", CalibrationDirection::Horizontal, {-pi / 2 - 0.28, -30.0}, {-pi / 2 + 0.28, -30.0}},
+  {"zygomatic width", CalibrationDirection::Horizontal, {-pi / 2 - 1.2, 20.0}, {-pi / 2 + 1.2, 20.0}},
+  // Vertical ones run over the curved face: they have depth too.
+  {"upper facial height", CalibrationDirection::Vertical, {-pi / 2, 45.0}, {-pi / 2, -12.0}},
+  {"lower facial height", CalibrationDirection::Vertical, {-pi / 2, -12.0}, {-pi / 2, -75.0}},
+  {"upper lip height", CalibrationDirection::Vertical, {-pi / 2, -12.0}, {-pi / 2, -31.0}},
 };
 
 std::vector<LandmarkDistance> locatedOn(double sv)
 {
   std::vector<LandmarkDistance> out;
   for (const Pair& p : kPairs)
-    out.push_back({p.name, p.direction, {p.a.theta, p.a.z / sv}, {p.b.theta, p.b.z / sv},
+    out.push_back({p.name,
+                   p.direction,
+                   {p.a.theta, p.a.z / sv},
+                   {p.b.theta, p.b.z / sv},
                    (truePoint(p.a) - truePoint(p.b)).norm()});
   return out;
 }
@@ -102,18 +105,18 @@ TEST(Calibration, ReproducesTheThesisTables)
   // Tables 4.2 and 4.3: measured mm and model (Cyberware) units; the thesis
   // reports mean scale factors 256.8 (horizontal) and 192.7 (vertical).
   std::vector<CalibrationMeasurement> m = {
-      {"inter-ocular", CalibrationDirection::Horizontal, {0.2604, 0.0}, 56},
-      {"outer-canthal", CalibrationDirection::Horizontal, {0.3398, 0.0}, 96},
-      {"nasal width", CalibrationDirection::Horizontal, {0.1476, 0.0}, 37},
-      {"mouth width", CalibrationDirection::Horizontal, {0.1885, 0.0}, 53},
-      {"zygomatic width", CalibrationDirection::Horizontal, {0.4985, 0.0}, 128},
-      {"upper facial height", CalibrationDirection::Vertical, {0.0, 0.2876}, 57},
-      {"lower facial height", CalibrationDirection::Vertical, {0.0, 0.3207}, 63},
-      {"upper lip height", CalibrationDirection::Vertical, {0.0, 0.1027}, 19},
+    {"inter-ocular", CalibrationDirection::Horizontal, {0.2604, 0.0}, 56},
+    {"outer-canthal", CalibrationDirection::Horizontal, {0.3398, 0.0}, 96},
+    {"nasal width", CalibrationDirection::Horizontal, {0.1476, 0.0}, 37},
+    {"mouth width", CalibrationDirection::Horizontal, {0.1885, 0.0}, 53},
+    {"zygomatic width", CalibrationDirection::Horizontal, {0.4985, 0.0}, 128},
+    {"upper facial height", CalibrationDirection::Vertical, {0.0, 0.2876}, 57},
+    {"lower facial height", CalibrationDirection::Vertical, {0.0, 0.3207}, 63},
+    {"upper lip height", CalibrationDirection::Vertical, {0.0, 0.1027}, 19},
   };
   const CalibrationResult c = fitCalibration(m);
   EXPECT_NEAR(c.thesisHorizontalScale, 256.8, 0.5); // 257.2: the thesis averaged its truncated factors (215, 282, ...)
-  EXPECT_NEAR(c.thesisVerticalScale, 192.7, 0.6); // 193.2 from the unrounded ratios
+  EXPECT_NEAR(c.thesisVerticalScale, 192.7, 0.6);   // 193.2 from the unrounded ratios
   // Pure components: least squares is Σ d D / Σ d² per class.
   double dd = 0, dD = 0;
   for (int k = 0; k < 5; ++k)
@@ -129,8 +132,8 @@ TEST(Calibration, ReproducesTheThesisTables)
 TEST(Calibration, RefusesUnderdeterminedOrInvalidInput)
 {
   std::vector<CalibrationMeasurement> onlyHorizontal = {
-      {"mouth width", CalibrationDirection::Horizontal, {50.0, 0.0}, 53},
-      {"nasal width", CalibrationDirection::Horizontal, {35.0, 0.0}, 37}};
+    {"mouth width", CalibrationDirection::Horizontal, {50.0, 0.0}, 53},
+    {"nasal width", CalibrationDirection::Horizontal, {35.0, 0.0}, 37}};
   EXPECT_THROW(fitCalibration(onlyHorizontal), std::invalid_argument);
   std::vector<CalibrationMeasurement> zero = {{"x", CalibrationDirection::Vertical, {0.0, 10.0}, 0.0}};
   EXPECT_THROW(fitCalibration(zero), std::invalid_argument);

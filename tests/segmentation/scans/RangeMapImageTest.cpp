@@ -29,7 +29,8 @@ std::filesystem::path tempPath(const std::string& name)
 /// top and bottom, so the first and last rows are NaN; plus a hole in the face.
 RangeMap ellipsoidMap()
 {
-  const CylindricalFrame f(Eigen::Vector3d(1.5, -2.25, 30.0), Eigen::Vector3d(0.05, -0.1, 1.0), -120.0, 120.0, 512, 256);
+  const CylindricalFrame f(Eigen::Vector3d(1.5, -2.25, 30.0), Eigen::Vector3d(0.05, -0.1, 1.0), -120.0, 120.0, 512,
+                           256);
   RangeMap map(f);
   for (int j = 0; j < f.nZ(); ++j)
     for (int i = 0; i < f.nTheta(); ++i)
@@ -37,7 +38,8 @@ RangeMap ellipsoidMap()
       const double t = f.indexToTheta(i), z = f.indexToZ(j);
       const double q = 1.0 - z * z / (110.0 * 110.0);
       if (q > 0.0)
-        map.at(i, j) = static_cast<float>(std::sqrt(q / (std::pow(std::cos(t) / 75.0, 2) + std::pow(std::sin(t) / 95.0, 2))));
+        map.at(i, j) =
+          static_cast<float>(std::sqrt(q / (std::pow(std::cos(t) / 75.0, 2) + std::pow(std::sin(t) / 95.0, 2))));
     }
   for (int j = 120; j < 125; ++j)
     for (int i = 120; i < 130; ++i)

@@ -29,7 +29,10 @@ CylindricalFrame tiltedFrame(int nTheta = 256, int nZ = 64)
   return CylindricalFrame(Eigen::Vector3d(10, -5, 3), Eigen::Vector3d(0.1, 0.0, 1.0), -60.0, 60.0, nTheta, nZ);
 }
 
-double sphereRadius(double z) { return std::sqrt(std::max(0.0, R * R - z * z)); }
+double sphereRadius(double z)
+{
+  return std::sqrt(std::max(0.0, R * R - z * z));
+}
 
 vtkSmartPointer<vtkPolyData> sphere(const CylindricalFrame& f)
 {
@@ -97,7 +100,8 @@ TEST(SurfaceScan, ObjFileWithVertexColours)
   const CylindricalFrame f = tiltedFrame(128, 32);
   // A coarse cylinder r = 50 with 90 sides; colours as 0..1 floats on the v lines
   // (colour scale 70 mm so the linear colour is not clamped at z = ±65).
-  auto mesh = revolution(f, 90, 13, -65.0, 65.0, [](double) { return 50.0; }, 70.0);
+  auto mesh = revolution(
+    f, 90, 13, -65.0, 65.0, [](double) { return 50.0; }, 70.0);
   const auto path = tempPath("cylinder.obj");
   {
     std::ofstream out(path);
@@ -142,7 +146,8 @@ TEST(SurfaceScan, ObjFileWithVertexColours)
 TEST(SurfaceScan, VertexBucketingLeavesHolesOnACoarseMeshRayCastingDoesNot)
 {
   const CylindricalFrame f = tiltedFrame(128, 32);
-  auto coarse = revolution(f, 40, 9, -65.0, 65.0, [](double) { return 50.0; }, 50.0);
+  auto coarse = revolution(
+    f, 40, 9, -65.0, 65.0, [](double) { return 50.0; }, 50.0);
   const SurfaceScan vertices = surfaceScanFromMesh(f, coarse, SurfaceScanSampling::Vertices);
   const SurfaceScan rays = surfaceScanFromMesh(f, coarse, SurfaceScanSampling::RayCast);
   const std::size_t all = static_cast<std::size_t>(f.nTheta()) * f.nZ();
@@ -155,7 +160,8 @@ TEST(SurfaceScan, VertexBucketingOnBucketCentresIsExact)
   // One vertex at every sample (θ_i, z_j) on a cylinder r = 50: the §3.2.7 rule
   // gives r = 50 and each vertex's colour exactly.
   const CylindricalFrame f = tiltedFrame(64, 16);
-  auto mesh = revolution(f, f.nTheta(), f.nZ(), f.zMin(), f.zMax(), [](double) { return 50.0; }, 50.0);
+  auto mesh = revolution(
+    f, f.nTheta(), f.nZ(), f.zMin(), f.zMax(), [](double) { return 50.0; }, 50.0);
   const SurfaceScan scan = surfaceScanFromMesh(f, mesh, SurfaceScanSampling::Vertices);
   ASSERT_EQ(scan.range.validCount(), static_cast<std::size_t>(f.nTheta()) * f.nZ());
   for (int j = 0; j < f.nZ(); ++j)
@@ -172,8 +178,10 @@ TEST(SurfaceScan, OutermostCrossingWins)
 {
   // Two concentric cylinders (r = 40 inside r = 60): the map is the outer one.
   const CylindricalFrame f = tiltedFrame(64, 16);
-  auto outer = revolution(f, 180, 5, -65.0, 65.0, [](double) { return 60.0; }, 60.0);
-  auto inner = revolution(f, 180, 5, -65.0, 65.0, [](double) { return 40.0; }, 60.0);
+  auto outer = revolution(
+    f, 180, 5, -65.0, 65.0, [](double) { return 60.0; }, 60.0);
+  auto inner = revolution(
+    f, 180, 5, -65.0, 65.0, [](double) { return 40.0; }, 60.0);
   auto both = vtkSmartPointer<vtkPolyData>::New();
   auto points = vtkSmartPointer<vtkPoints>::New();
   auto polys = vtkSmartPointer<vtkCellArray>::New();
