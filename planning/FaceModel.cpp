@@ -117,20 +117,20 @@ FaceMesh meshFace(const seg::RangeMap& skin, const seg::RangeMap& bone, const st
       centreTheta = tip->theta;
       centreZ = tip->z;
     }
-  const incision::SkinChart chart(skin, centreTheta, centreZ);
+  const planning::SkinChart chart(skin, centreTheta, centreZ);
   out.centreTheta = chart.centreTheta();
   out.centreZ = chart.centreZ();
   out.chartRadius = chart.radius();
 
   // A grid of quadrilaterals in the chart, counter-clockwise (u right, v up).
-  const incision::ChartPoint low = chart.toChart({out.region.thetaMin, out.region.zMin});
-  const incision::ChartPoint high = chart.toChart({out.region.thetaMax, out.region.zMax});
+  const planning::ChartPoint low = chart.toChart({out.region.thetaMin, out.region.zMin});
+  const planning::ChartPoint high = chart.toChart({out.region.thetaMax, out.region.zMax});
   const int nu = std::max(2, int(std::ceil((high.x() - low.x()) / options.elementSize)));
   const int nv = std::max(2, int(std::ceil((high.y() - low.y()) / options.elementSize)));
   const auto gridPoint = [&](int i, int j) {
-    return incision::ChartPoint(low.x() + (high.x() - low.x()) * i / nu, low.y() + (high.y() - low.y()) * j / nv);
+    return planning::ChartPoint(low.x() + (high.x() - low.x()) * i / nu, low.y() + (high.y() - low.y()) * j / nv);
   };
-  const auto hasSkin = [&](const incision::ChartPoint& c) { return chart.lift(c).allFinite(); };
+  const auto hasSkin = [&](const planning::ChartPoint& c) { return chart.lift(c).allFinite(); };
   std::map<int, int> vertexOfGridPoint;
   const auto vertex = [&](int i, int j) {
     const int key = j * (nu + 1) + i;
@@ -142,7 +142,7 @@ FaceMesh meshFace(const seg::RangeMap& skin, const seg::RangeMap& bone, const st
   for (int j = 0; j < nv; ++j)
     for (int i = 0; i < nu; ++i)
     {
-      const incision::ChartPoint corners[4] = {gridPoint(i, j), gridPoint(i + 1, j), gridPoint(i + 1, j + 1),
+      const planning::ChartPoint corners[4] = {gridPoint(i, j), gridPoint(i + 1, j), gridPoint(i + 1, j + 1),
                                                gridPoint(i, j + 1)};
       bool measured = true;
       for (int k = 0; k < 4 && measured; ++k)
@@ -159,8 +159,8 @@ FaceMesh meshFace(const seg::RangeMap& skin, const seg::RangeMap& bone, const st
   out.surface.holeVertexCount = 0;
 
   const seg::RangeMap boneForDepth =
-    incision::boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses);
-  const fem::TissueGeometry geometry = incision::skinToBoneGeometry(chart, skin, boneForDepth);
+    planning::boneForTissueDepth(skin, bone, options.noBoneDepth, options.boneSmoothingPasses);
+  const fem::TissueGeometry geometry = planning::skinToBoneGeometry(chart, skin, boneForDepth);
   fem::ContinuumMeshOptions continuumOptions = options.continuumMeshOptions();
   continuumOptions.rim = fem::RimCondition::Free;
   out.continuum = fem::meshContinuum(out.surface, {}, geometry, continuumOptions);

@@ -18,7 +18,7 @@
 namespace caps::expression {
 
 /// Options of meshFace(). Lengths in mm.
-struct FaceModelOptions : incision::TissueDepthOptions
+struct FaceModelOptions : planning::TissueDepthOptions
 {
   /// Edge length of the quadrilaterals on the skin.
   double elementSize = 5.0;
@@ -50,7 +50,7 @@ FaceRegion faceRegion(const std::vector<seg::Landmark>& landmarks, const seg::Ra
 struct FaceMesh
 {
   FaceRegion region;
-  /// The chart (incision::SkinChart) the surface mesh is drawn in: u = r0 (θ − θc), v = z − zc.
+  /// The chart (planning::SkinChart) the surface mesh is drawn in: u = r0 (θ − θc), v = z − zc.
   double centreTheta = 0.0;
   double centreZ = 0.0;
   double chartRadius = 0.0;

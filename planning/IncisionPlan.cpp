@@ -5,7 +5,7 @@
 #include <numeric>
 #include <sstream>
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -305,4 +305,4 @@ void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSp
   }
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

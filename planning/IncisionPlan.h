@@ -14,7 +14,7 @@
 #include "fem/SurfaceMesh.h"
 #include "planning/SkinChart.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// @name The hole loop of a cut path (Fig. 4.11)
 /// The cut path p0..p(n-1) becomes the loop p0, p1, ..., p(n-1), p(n-2)', ...,
@@ -169,4 +169,4 @@ private:
 /// @throws std::invalid_argument naming the cut point or limb at fault.
 void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSpacing = 0.5);
 
-} // namespace caps::incision
+} // namespace caps::planning

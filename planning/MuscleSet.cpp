@@ -18,7 +18,7 @@ namespace caps::expression {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-/// Adult mean nasion–subnasale height (Farkas 1994), as incision::FaceLayout.
+/// Adult mean nasion–subnasale height (Farkas 1994), as planning::FaceLayout.
 constexpr double kMeanNasionSubnasale = 53.0;
 
 std::string trim(const std::string& s)
@@ -607,14 +607,14 @@ MuscleAnchors muscleAnchors(const std::vector<seg::Landmark>& landmarks, const s
   out.size = faceSize(landmarks);
   const seg::Landmark* nasion = findLandmark(landmarks, "nasion");
   const double rn = skin.sample(nasion->theta, nasion->z);
-  out.arcRadius = std::isfinite(rn) && rn > 20.0 ? rn : 90.0; // as incision::FaceLayout::scale
+  out.arcRadius = std::isfinite(rn) && rn > 20.0 ? rn : 90.0; // as planning::FaceLayout::scale
   for (const auto& l : landmarks)
     if (std::isfinite(l.theta) && std::isfinite(l.z))
       out.anchors.push_back(l);
-  incision::FaceLayout f;
+  planning::FaceLayout f;
   try
   {
-    f = incision::FaceLayout::fromLandmarks(landmarks, skin);
+    f = planning::FaceLayout::fromLandmarks(landmarks, skin);
   }
   catch (const std::invalid_argument&)
   {
@@ -844,7 +844,7 @@ std::vector<FittedMuscle> fitMuscleSet(const MuscleSet& set, const std::vector<s
   {
     try
     {
-      (void)incision::FaceLayout::fromLandmarks(landmarks, skin);
+      (void)planning::FaceLayout::fromLandmarks(landmarks, skin);
     }
     catch (const std::invalid_argument& e)
     {

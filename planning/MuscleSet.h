@@ -125,14 +125,14 @@ MuscleSet readMuscleSet(const std::filesystem::path& path);
 /// The default muscle set, default.muscles in the muscles folder:
 /// $CAPS_DATA_DIR/muscles, else share/caps/data/muscles beside the installed
 /// executable, else the source tree's data/muscles (as
-/// incision::defaultProceduresFolder()).
+/// planning::defaultProceduresFolder()).
 std::filesystem::path defaultMuscleSetPath();
 
 /// The landmark names an attachment may be anchored on: the standard ones
 /// (seg::standardLandmarks()) and the derived ones of derivedAnchorNames().
 std::vector<std::string> muscleAnchorNames();
 
-/// Anchors derived from the landmarks through incision::FaceLayout (average
+/// Anchors derived from the landmarks through planning::FaceLayout (average
 /// adult proportions, Farkas 1994): stomion (mouth centre), cheilion_left/right
 /// (mouth corners), eye_left/right (eye centres), endocanthion_left/right and
 /// exocanthion_left/right (inner and outer eye corners, 16 and 15 mm × size
@@ -140,7 +140,7 @@ std::vector<std::string> muscleAnchorNames();
 std::vector<std::string> derivedAnchorNames();
 
 /// The size of the face against the adult mean: nasion–subnasale height over
-/// its adult mean of 53 mm (Farkas 1994), the measure incision::FaceLayout
+/// its adult mean of 53 mm (Farkas 1994), the measure planning::FaceLayout
 /// scales the eyes and the mouth corners by, so that offsets from the derived
 /// anchors stay in proportion with them.
 /// @throws std::invalid_argument when nasion or subnasale is missing or the
@@ -151,11 +151,11 @@ double faceSize(const std::vector<seg::Landmark>& landmarks);
 struct MuscleAnchors
 {
   /// Every anchor, standard and derived, as landmarks (θ, z). Derived anchors
-  /// are present only when incision::FaceLayout can be made.
+  /// are present only when planning::FaceLayout can be made.
   std::vector<seg::Landmark> anchors;
   double size = 1.0; ///< faceSize()
   /// mm of arc per radian of θ for the offsets across: the skin radius at the
-  /// nasion (90 mm without one), as incision::FaceLayout::scale.
+  /// nasion (90 mm without one), as planning::FaceLayout::scale.
   double arcRadius = 90.0;
 };
 
@@ -225,7 +225,7 @@ struct FittedMuscle
 /// the nasion would end on the nasal side wall) and under the chin (the
 /// menton's radius is a third smaller than the chin's front), and the
 /// derived anchors (mouth corners, eyes) are already placed this way by
-/// incision::FaceLayout. Heights are exact and a mirrored point is exactly
+/// planning::FaceLayout. Heights are exact and a mirrored point is exactly
 /// the mirror in θ about the mirrored anchors.
 /// @throws std::invalid_argument for a missing anchor or a point off the skin map.
 AttachmentPlacement placeAttachment(const AttachmentDefinition& point, bool mirrored, const MuscleAnchors& anchors,

@@ -18,7 +18,7 @@
 
 #include "segmentation/SkinShade.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double kKiloPascalPerMegaPascal = 1000.0;
@@ -240,4 +240,4 @@ void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& b
   seg::writeSurfaceVtp(planDisplayPolyData(display, 1.0), after);
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -20,7 +20,7 @@
 class vtkImageData;
 class vtkPolyData;
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// Options of buildPlanDisplay().
 struct PlanDisplayOptions
@@ -158,4 +158,4 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
 void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& before,
                       const std::filesystem::path& after);
 
-} // namespace caps::incision
+} // namespace caps::planning

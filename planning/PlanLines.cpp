@@ -13,7 +13,7 @@
 
 #include "planning/PlanDisplay.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 /// Builds the polydata: points, their "cut_point" numbers, lines and vertices.
@@ -137,4 +137,4 @@ vtkSmartPointer<vtkPolyData> incisionLinesPolyData(const IncisionPlan& plan, con
   return lines.polyData();
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -13,7 +13,7 @@
 #include "planning/IncisionPlan.h"
 #include "segmentation/RangeMap.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// How far (mm) the lines sit outside the skin by default: enough that the
 /// skin surface, drawn from its own triangles, does not hide them.
@@ -37,4 +37,4 @@ inline constexpr std::array<unsigned char, 3> kIncisionLineColour = {13, 26, 115
 vtkSmartPointer<vtkPolyData> incisionLinesPolyData(const IncisionPlan& plan, const seg::RangeMap& skin,
                                                    double lift = kIncisionLineLift, double step = 0.5);
 
-} // namespace caps::incision
+} // namespace caps::planning

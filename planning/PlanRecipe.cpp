@@ -24,7 +24,7 @@
 
 namespace fs = std::filesystem;
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 using json = nlohmann::json;
@@ -560,4 +560,4 @@ std::string softwareVersion()
   return CAPS_VERSION;
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -23,7 +23,7 @@
 
 class vtkImageData;
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// @name Operations a surgeon makes on a plan
 ///@{
@@ -232,4 +232,4 @@ std::string ctContentHash(vtkImageData* image);
 /// The CAPS version (CMake's project version, "0.1.0").
 std::string softwareVersion();
 
-} // namespace caps::incision
+} // namespace caps::planning

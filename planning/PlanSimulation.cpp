@@ -10,7 +10,7 @@
 #include "fem/StaticAnalysis.h"
 #include "planning/Undermining.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -653,4 +653,4 @@ PlanPrediction meshPlan(const seg::RangeMap& skin, const seg::RangeMap& bone, co
   return PlanModel(skin, bone, plan, options).run(true);
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

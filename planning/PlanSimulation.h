@@ -23,7 +23,7 @@
 #include "segmentation/Progress.h"
 #include "segmentation/RangeMap.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// Default materials of the facial soft tissue, one per layer from the skin
 /// down: region 0 skin (dermis), 1 subcutaneous fat, 2 muscle / SMAS. With
@@ -272,4 +272,4 @@ RefinedHole refineHole(const std::vector<ChartPoint>& path, const std::vector<Ch
                        const std::vector<fem::SutureEdgePair>& sutures, double maxSpacing);
 ///@}
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -15,7 +15,7 @@ namespace caps::expression {
 namespace {
 
 /// The skin vertices of the plan's surface mesh within @a window of a hole-loop vertex.
-std::vector<int> windowVertices(const incision::PlanPrediction& prediction, double window)
+std::vector<int> windowVertices(const planning::PlanPrediction& prediction, double window)
 {
   const fem::SurfaceMesh& surface = prediction.surface.mesh;
   std::vector<int> out;
@@ -29,12 +29,12 @@ std::vector<int> windowVertices(const incision::PlanPrediction& prediction, doub
   return out;
 }
 
-Eigen::Vector3d displaced(const incision::PlanPrediction& prediction, const Eigen::VectorXd& u, int node)
+Eigen::Vector3d displaced(const planning::PlanPrediction& prediction, const Eigen::VectorXd& u, int node)
 {
   return prediction.continuum.mesh.nodes.col(node) + u.segment<3>(3 * Eigen::Index(node));
 }
 
-void checkSize(const incision::PlanPrediction& prediction, const Eigen::VectorXd& u)
+void checkSize(const planning::PlanPrediction& prediction, const Eigen::VectorXd& u)
 {
   if (u.size() != prediction.continuum.mesh.dofCount())
     throw std::invalid_argument("the displacement is not of the plan's model (" + std::to_string(u.size()) +
@@ -43,7 +43,7 @@ void checkSize(const incision::PlanPrediction& prediction, const Eigen::VectorXd
 
 } // namespace
 
-PlanExpressionResponses::PlanExpressionResponses(const incision::PlanPrediction& prediction, const fem::Mesh& faceMesh,
+PlanExpressionResponses::PlanExpressionResponses(const planning::PlanPrediction& prediction, const fem::Mesh& faceMesh,
                                                  const MuscleResponses& faceResponses,
                                                  const std::vector<std::vector<fem::Muscle>>& muscles, int threads)
   : closure_(prediction.displacements)
@@ -123,7 +123,7 @@ Eigen::VectorXd PlanExpressionResponses::displacement(const Eigen::VectorXd& act
   return closure_ + responses_ * activations;
 }
 
-std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const incision::PlanPrediction& prediction,
+std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const planning::PlanPrediction& prediction,
                                                                  int threads)
 {
   fem::AssemblyOptions assembly;
@@ -139,7 +139,7 @@ namespace {
 
 /// The skin nodes of the plan's model within @a radius of @a centre where the
 /// closure put them, sutured nodes left to their sutures.
-std::vector<int> fingertipNodes(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre,
+std::vector<int> fingertipNodes(const planning::PlanPrediction& prediction, const Eigen::Vector3d& centre,
                                 double radius)
 {
   const fem::ContinuumMesh& c = prediction.continuum;
@@ -168,7 +168,7 @@ std::vector<int> fingertipNodes(const incision::PlanPrediction& prediction, cons
 }
 
 /// The plan's constraints with @a nodes held at the closure moved by @a travel.
-fem::Constraints heldBy(const incision::PlanPrediction& prediction, const std::vector<int>& nodes,
+fem::Constraints heldBy(const planning::PlanPrediction& prediction, const std::vector<int>& nodes,
                         const Eigen::Vector3d& travel)
 {
   fem::Constraints constraints = prediction.continuum.constraints();
@@ -180,7 +180,7 @@ fem::Constraints heldBy(const incision::PlanPrediction& prediction, const std::v
 
 } // namespace
 
-Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push, int threads)
+Eigen::VectorXd pushedDisplacement(const planning::PlanPrediction& prediction, const SkinPush& push, int threads)
 {
   if (!push.displacement.allFinite())
     throw std::invalid_argument("a push needs a finite displacement");
@@ -194,7 +194,7 @@ Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, c
   return analysis.solve(fem::LoadCase{});
 }
 
-PushResponses::PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
+PushResponses::PushResponses(const planning::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
                              int threads)
   : closure_(prediction.displacements), pushedNodes_(fingertipNodes(prediction, centre, radius))
 {
@@ -250,7 +250,7 @@ Eigen::Vector3d PushPath::travelAt(double s) const
   return waypoints.back();
 }
 
-ContourBumps contourBumps(const incision::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
+ContourBumps contourBumps(const planning::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
                           const Eigen::VectorXd& u, double window)
 {
   checkSize(prediction, u);
@@ -317,7 +317,7 @@ ContourBumps contourBumps(const incision::PlanPrediction& prediction, const seg:
   return out;
 }
 
-ContourComparison compareContours(const incision::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
+ContourComparison compareContours(const planning::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
                                   const Eigen::VectorXd& rest, const Eigen::VectorXd& loaded, double window)
 {
   ContourComparison out;

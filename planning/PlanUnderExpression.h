@@ -20,7 +20,7 @@ namespace caps::expression {
 /// The plan's finite element model after the operation, factored: its mesh,
 /// materials, fixed bone and sutures (PlanPrediction::continuum).
 /// @throws std::runtime_error when it cannot be factored.
-std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const incision::PlanPrediction& prediction,
+std::unique_ptr<fem::LinearStaticAnalysis> postOperativeAnalysis(const planning::PlanPrediction& prediction,
                                                                  int threads = 2);
 
 /// @class PlanExpressionResponses
@@ -40,7 +40,7 @@ public:
   /// @throws std::invalid_argument when the plan's rim lies outside the face
   /// model (a plan beyond the face region); std::runtime_error when the plan's
   /// model cannot be solved.
-  PlanExpressionResponses(const incision::PlanPrediction& prediction, const fem::Mesh& faceMesh,
+  PlanExpressionResponses(const planning::PlanPrediction& prediction, const fem::Mesh& faceMesh,
                           const MuscleResponses& faceResponses, const std::vector<std::vector<fem::Muscle>>& muscles,
                           int threads = 2);
 
@@ -75,7 +75,7 @@ struct SkinPush
 /// holds the skin where the closure put it).
 /// @throws std::invalid_argument when no skin node lies under the fingertip;
 /// std::runtime_error when the model cannot be solved.
-Eigen::VectorXd pushedDisplacement(const incision::PlanPrediction& prediction, const SkinPush& push, int threads = 2);
+Eigen::VectorXd pushedDisplacement(const planning::PlanPrediction& prediction, const SkinPush& push, int threads = 2);
 
 /// @class PushResponses
 /// @brief The post-operative model under a fingertip for any travel, at
@@ -91,7 +91,7 @@ public:
   /// @throws std::invalid_argument for a radius not above 0, a centre that is
   /// not finite, or no skin node under the fingertip; std::runtime_error when
   /// the model cannot be solved.
-  PushResponses(const incision::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
+  PushResponses(const planning::PlanPrediction& prediction, const Eigen::Vector3d& centre, double radius,
                 int threads = 2);
 
   /// W: 3N × 3, what a unit travel along x, y, z adds to the closure.
@@ -139,7 +139,7 @@ struct ContourBumps
   Eigen::Vector3d where = Eigen::Vector3d::Zero(); ///< displaced vertex of the largest
 };
 
-ContourBumps contourBumps(const incision::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
+ContourBumps contourBumps(const planning::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
                           const Eigen::VectorXd& u, double window = 20.0);
 
 /// The plan at rest and under an expression or a push, compared.
@@ -154,7 +154,7 @@ struct ContourComparison
   double bumpChange() const { return loaded.largest - rest.largest; }
 };
 
-ContourComparison compareContours(const incision::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
+ContourComparison compareContours(const planning::PlanPrediction& prediction, const seg::CylindricalFrame& frame,
                                   const Eigen::VectorXd& rest, const Eigen::VectorXd& loaded, double window = 20.0);
 
 } // namespace caps::expression

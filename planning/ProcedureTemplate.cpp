@@ -13,7 +13,7 @@
 
 namespace fs = std::filesystem;
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -659,4 +659,4 @@ fs::path defaultProceduresFolder()
   return fs::path(CAPS_SOURCE_DATA_DIR) / "procedures";
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

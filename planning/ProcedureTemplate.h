@@ -17,7 +17,7 @@
 
 #include "planning/IncisionPlan.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// A procedure file that cannot be used; what() is "FILE:LINE: what is wrong".
 class ProcedureFileError : public std::runtime_error
@@ -138,4 +138,4 @@ private:
 /// source tree's data/procedures (as app/Paths.cpp finds the sample CT).
 std::filesystem::path defaultProceduresFolder();
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -4,7 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -69,4 +69,4 @@ Eigen::Vector2d normalizedFromSkinPoint(const seg::CylindricalFrame& frame, cons
   return {n.thetaN, n.zN};
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -9,7 +9,7 @@
 #include "fem/SurfaceMesh.h"
 #include "segmentation/RangeMap.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 using fem::ChartPoint;
 
@@ -72,4 +72,4 @@ private:
 SkinPoint skinPointFromNormalized(const seg::CylindricalFrame& frame, const Eigen::Vector2d& thetaZN);
 Eigen::Vector2d normalizedFromSkinPoint(const seg::CylindricalFrame& frame, const SkinPoint& p);
 
-} // namespace caps::incision
+} // namespace caps::planning

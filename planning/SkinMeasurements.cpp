@@ -8,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -305,4 +305,4 @@ Eigen::Vector3d centralAxis(const IncisionPlan& plan, const seg::RangeMap& skin)
     .normalized();
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -11,7 +11,7 @@
 
 #include "planning/IncisionPlan.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// @name On the skin
 /// Chart points are lifted to the skin with SkinChart::lift(). Each function
@@ -132,4 +132,4 @@ std::array<int, 2> zPlastyFlapTips(const IncisionPlan& plan);
 Eigen::Vector3d centralAxis(const IncisionPlan& plan, const seg::RangeMap& skin);
 ///@}
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -15,7 +15,7 @@
 #include "planning/IncisionPlan.h"
 #include "planning/PlanLines.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 namespace {
 
@@ -338,4 +338,4 @@ AxisToTensionLines axisToTensionLines(const IncisionPlan& plan, const SkinTensio
   return result;
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

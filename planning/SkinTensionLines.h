@@ -32,7 +32,7 @@
 
 class vtkPolyData;
 
-namespace caps::incision {
+namespace caps::planning {
 
 class IncisionPlan;
 
@@ -119,4 +119,4 @@ struct AxisToTensionLines
 /// @throws std::invalid_argument when the axis's middle is off the guide.
 AxisToTensionLines axisToTensionLines(const IncisionPlan& plan, const SkinTensionLines& lines);
 
-} // namespace caps::incision
+} // namespace caps::planning

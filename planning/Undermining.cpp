@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double pi = 3.14159265358979323846;
@@ -199,4 +199,4 @@ void addUnderminedRegions(const fem::SurfaceMesh& surface, const IncisionPlan& p
   }
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

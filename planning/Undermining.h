@@ -17,7 +17,7 @@
 #include "planning/IncisionPlan.h"
 #include "planning/SkinChart.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// @brief A region (θn, zn) in @a chart (mm), as one piece.
 ///
@@ -59,4 +59,4 @@ std::vector<char> underminedRegionVertices(const fem::SurfaceMesh& surface, cons
 void addUnderminedRegions(const fem::SurfaceMesh& surface, const IncisionPlan& plan, const SkinChart& chart,
                           std::vector<char>& flags);
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -6,7 +6,7 @@
 
 #include "planning/WoundStress.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 UnderminingStudy studyUndermining(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                                   SimulationOptions options, const std::vector<double>& widths,
@@ -40,4 +40,4 @@ UnderminingStudy studyUndermining(const seg::RangeMap& skin, const seg::RangeMap
   return study;
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

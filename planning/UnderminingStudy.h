@@ -13,7 +13,7 @@
 #include "planning/PlanSimulation.h"
 #include "segmentation/RangeMap.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// The plan predicted with one undermining width.
 struct UnderminingStudyRow
@@ -46,4 +46,4 @@ UnderminingStudy studyUndermining(const seg::RangeMap& skin, const seg::RangeMap
                                   SimulationOptions options, const std::vector<double>& widths,
                                   double woundStressRadius);
 
-} // namespace caps::incision
+} // namespace caps::planning

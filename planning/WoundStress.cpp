@@ -9,7 +9,7 @@
 
 #include "fem/NodalStress.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 double distanceToHoleBorder(const fem::HoleLoop& hole, const fem::ChartPoint& p)
 {
@@ -118,4 +118,4 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
   return out;
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -9,7 +9,7 @@
 #include "fem/SurfaceMesh.h"
 #include "planning/PlanSimulation.h"
 
-namespace caps::incision {
+namespace caps::planning {
 
 /// The stress in the skin within a distance of the wound after the closure.
 /// Stresses in MPa (the model is in mm and N), lengths in mm.
@@ -55,4 +55,4 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius = 10
 /// Chart distance (mm) from @a p to the nearest edge of the closed loop @a hole.
 double distanceToHoleBorder(const fem::HoleLoop& hole, const fem::ChartPoint& p);
 
-} // namespace caps::incision
+} // namespace caps::planning

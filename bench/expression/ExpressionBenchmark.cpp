@@ -211,11 +211,11 @@ int main(int argc, char** argv)
   // on the plan's display skin; the reference factors the plan's model
   // afresh for the same travel, as a push without superposition must.
   IncisionLogic incisionLogic(scene);
-  const incision::IncisionPlan z = incisionLogic.placeProcedure(
-    "z-plasty", maps.skin, incision::SkinPoint{-40.0 * std::numbers::pi / 180.0, -47.0}, {});
-  incision::SimulationOptions simulation;
+  const planning::IncisionPlan z = incisionLogic.placeProcedure(
+    "z-plasty", maps.skin, planning::SkinPoint{-40.0 * std::numbers::pi / 180.0, -47.0}, {});
+  planning::SimulationOptions simulation;
   simulation.threads = 2;
-  const incision::PlanPrediction prediction = incision::simulatePlan(maps.skin, maps.bone, z, simulation);
+  const planning::PlanPrediction prediction = planning::simulatePlan(maps.skin, maps.bone, z, simulation);
   const auto& columns = prediction.continuum.vertexColumns;
   const int tip = columns[columns.size() / 2].front();
   expression::PushPath path;
@@ -225,7 +225,7 @@ int main(int argc, char** argv)
   start = std::chrono::steady_clock::now();
   const expression::PushResponses push(prediction, path.centre, path.radius);
   const double pushSeconds = secondsSince(start);
-  const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, maps.skin);
+  const planning::PlanDisplay display = planning::buildPlanDisplay(prediction, maps.skin);
   const expression::ExpressionSurface pushedSkin(prediction.continuum.mesh, display.surface, push.responses(),
                                                  prediction.displacements);
   std::vector<double> travelMs;

@@ -48,11 +48,11 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 }
 
 /// The plan with cut point @a index moved by (du, dv) mm in its chart.
-incision::IncisionPlan moved(const incision::IncisionPlan& plan, const seg::RangeMap& skin, int index, double du,
+planning::IncisionPlan moved(const planning::IncisionPlan& plan, const seg::RangeMap& skin, int index, double du,
                              double dv)
 {
-  const incision::SkinChart chart = plan.chart(skin);
-  incision::IncisionPlan out = plan;
+  const planning::SkinChart chart = plan.chart(skin);
+  planning::IncisionPlan out = plan;
   const fem::ChartPoint p = chart.fromNormalized(plan.cutPath()[std::size_t(index)]) + fem::ChartPoint(du, dv);
   out.moveCutPoint(index, chart.toNormalized(p));
   return out;
@@ -65,7 +65,7 @@ int main(int argc, char** argv)
   fem::useBestBlasKernels(argv);
   bool runCcx = false;
   double thetaDeg = -40.0, zMm = -47.0, elementSize = 2.0;
-  double regionRadius = incision::SimulationOptions{}.regionRadius;
+  double regionRadius = planning::SimulationOptions{}.regionRadius;
   int repeats = 5;
   for (int a = 1; a < argc; ++a)
   {
@@ -98,30 +98,30 @@ int main(int argc, char** argv)
   RangeMapLogic(scene).run(*volume, RangeMapLogic::Parameters{}, {}, &maps);
   std::printf("sample CT read, segmented and unwrapped in %.2f s (not timed below)\n", secondsSince(prepStart));
 
-  const incision::IncisionPlan plan =
-    logic.placeProcedure("z-plasty", maps.skin, incision::SkinPoint{thetaDeg * kDegree, zMm}, {});
-  incision::SimulationOptions options;
+  const planning::IncisionPlan plan =
+    logic.placeProcedure("z-plasty", maps.skin, planning::SkinPoint{thetaDeg * kDegree, zMm}, {});
+  planning::SimulationOptions options;
   options.elementSize = elementSize;
   options.regionRadius = regionRadius;
   options.threads = 2;
   // Two positions of the first limb tip (loop vertex 0), 1 mm apart.
-  const incision::IncisionPlan edits[2] = {moved(plan, maps.skin, 0, 0.5, 0.0), moved(plan, maps.skin, 0, -0.5, 0.0)};
-  incision::simulatePlan(maps.skin, maps.bone, edits[1], options); // warm caches and threads
+  const planning::IncisionPlan edits[2] = {moved(plan, maps.skin, 0, 0.5, 0.0), moved(plan, maps.skin, 0, -0.5, 0.0)};
+  planning::simulatePlan(maps.skin, maps.bone, edits[1], options); // warm caches and threads
 
   const seg::ColourMap shade = seg::skinShadeFromCt(volume->image(), maps.skin); // once per patient
-  incision::SimulationTimes best;
+  planning::SimulationTimes best;
   double bestDisplay = 0.0;
   Eigen::Index vertices = 0;
   double bestTotal = 1e300;
-  incision::PlanPrediction last;
+  planning::PlanPrediction last;
   for (int r = 0; r < repeats; ++r)
   {
     const auto start = std::chrono::steady_clock::now();
-    incision::PlanPrediction p = incision::simulatePlan(maps.skin, maps.bone, edits[r % 2], options);
+    planning::PlanPrediction p = planning::simulatePlan(maps.skin, maps.bone, edits[r % 2], options);
     // The surface update: the subdivided skin faces (§4.7) with range detail
     // and CT shade, and the deformed positions a view shows.
     const auto displayStart = std::chrono::steady_clock::now();
-    const incision::PlanDisplay display = incision::buildPlanDisplay(p, maps.skin, &shade);
+    const planning::PlanDisplay display = planning::buildPlanDisplay(p, maps.skin, &shade);
     const Eigen::Matrix3Xd shown = display.positions(1.0);
     vertices = shown.cols();
     const double displayTime = secondsSince(displayStart);

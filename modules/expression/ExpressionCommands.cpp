@@ -254,15 +254,15 @@ void printAnimation(const render::AnimationResult& result, std::ostream& out, st
 /// The plan's skin under the expression, played and released, and under the
 /// push along its path and back, from the camera facing the plan.
 void writePlanAnimations(const ExpressionArgs& a, const expression::ExpressionModelInput& input,
-                         const incision::PlanPrediction& prediction, double planTheta,
+                         const planning::PlanPrediction& prediction, double planTheta,
                          const expression::PlanExpressionResponses& onPlan, const Eigen::VectorXd& activations,
                          const expression::PushResponses* pushed, std::ostream& out, std::ostream& err)
 {
-  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  const planning::SkinShade shade = planning::skinShadeOfCt(input.ct, input.skin);
   if (!shade.note.empty())
     err << "The plan's animation: " << shade.note << "\n";
-  const incision::PlanDisplay display = incision::buildPlanDisplay(prediction, input.skin, shade.map());
-  const vtkSmartPointer<vtkPolyData> atRest = incision::planDisplayPolyData(display, 1.0);
+  const planning::PlanDisplay display = planning::buildPlanDisplay(prediction, input.skin, shade.map());
+  const vtkSmartPointer<vtkPolyData> atRest = planning::planDisplayPolyData(display, 1.0);
   const seg::CylindricalFrame& frame = input.skin.frame();
   const Eigen::Vector3d toCamera = frame.radialDirection(planTheta), up = frame.direction();
   render::AnimationOptions options;
@@ -344,11 +344,11 @@ int runExpression(ModuleLogic& base, const std::vector<std::string>& args, std::
           planNode = static_cast<const PlanNode*>(n);
       if (!planNode)
         throw std::invalid_argument("the scene has no plan \"" + a.plan + "\"");
-      incision::SimulationOptions options = IncisionLogic::simulationOptions(*planNode);
+      planning::SimulationOptions options = IncisionLogic::simulationOptions(*planNode);
       options.threads = 2;
       err << "Predicting " << a.plan << "\n";
-      const incision::PlanPrediction prediction =
-        incision::simulatePlan(input.skin, input.bone, IncisionLogic::readPlan(*planNode), options);
+      const planning::PlanPrediction prediction =
+        planning::simulatePlan(input.skin, input.bone, IncisionLogic::readPlan(*planNode), options);
       std::vector<std::vector<fem::Muscle>> functions;
       for (const auto& m : model->muscles)
         functions.push_back(m.functions);

@@ -171,10 +171,10 @@ std::unique_ptr<ExpressionModel> buildExpressionModel(const ExpressionModelInput
   const fem::Mesh& mesh = model->face.continuum.mesh;
   fem::DisplaySurface display(mesh, fem::skinFaces(model->face.continuum), input.resolution);
   // Table 4.9's range displacement and source colour at each vertex's
-  // undeformed (θ, z), by incision::buildPlanDisplay's rules: the face shows
+  // undeformed (θ, z), by planning::buildPlanDisplay's rules: the face shows
   // the scanned skin, not the quadratic element faces.
-  incision::setRangeDetail(display, input.skin, input.maxRangeDetail);
-  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  planning::setRangeDetail(display, input.skin, input.maxRangeDetail);
+  const planning::SkinShade shade = planning::skinShadeOfCt(input.ct, input.skin);
   model->shadeNote = shade.note;
   const Eigen::Matrix3Xd& x = display.undeformedPositions();
   model->shade.assign(std::size_t(x.cols()), seg::kNoSourceColour);

@@ -91,7 +91,7 @@ struct ExpressionModelInput
   FaceModelOptions face;
   /// Display steps per element edge (fem::DisplaySurface).
   int resolution = 3;
-  /// Longest range detail kept (mm), as incision::PlanDisplayOptions.
+  /// Longest range detail kept (mm), as planning::PlanDisplayOptions.
   double maxRangeDetail = 3.0;
 };
 

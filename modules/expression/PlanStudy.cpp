@@ -49,7 +49,7 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   if (!step(0.0, "Predicting " + input.planName + " again"))
     return nullptr;
   auto t = std::chrono::steady_clock::now();
-  incision::SimulationOptions options = input.options;
+  planning::SimulationOptions options = input.options;
   options.threads = 2;
   if (progress)
     options.progress = [&progress](double fraction, const std::string& phase) {
@@ -57,7 +57,7 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
     };
   try
   {
-    study->prediction_ = incision::simulatePlan(input.skin, input.bone, input.plan, options);
+    study->prediction_ = planning::simulatePlan(input.skin, input.bone, input.plan, options);
   }
   catch (const seg::Cancelled&)
   {
@@ -81,13 +81,13 @@ std::unique_ptr<PlanStudy> PlanStudy::build(const PlanStudyInput& input, const T
   if (!step(0.85, "The plan's skin and its shade"))
     return nullptr;
   t = std::chrono::steady_clock::now();
-  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  const planning::SkinShade shade = planning::skinShadeOfCt(input.ct, input.skin);
   study->shadeNote_ = shade.note;
-  incision::PlanDisplayOptions displayOptions;
+  planning::PlanDisplayOptions displayOptions;
   displayOptions.resolution = input.resolution;
   displayOptions.maxRangeDetail = input.maxRangeDetail;
-  incision::PlanDisplay display =
-    incision::buildPlanDisplay(study->prediction_, input.skin, shade.map(), displayOptions);
+  planning::PlanDisplay display =
+    planning::buildPlanDisplay(study->prediction_, input.skin, shade.map(), displayOptions);
   study->shade_ = display.skinShade;
   study->surface_ = ExpressionSurface(study->prediction_.continuum.mesh, std::move(display.surface),
                                       study->responses_->responses(), study->prediction_.displacements);

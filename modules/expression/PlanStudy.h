@@ -37,8 +37,8 @@ namespace caps::expression {
 struct PlanStudyInput
 {
   std::string planName;                ///< "Z-plasty 1"
-  incision::IncisionPlan plan;         ///< IncisionLogic::readPlan()
-  incision::SimulationOptions options; ///< IncisionLogic::simulationOptions(): predicted as it was
+  planning::IncisionPlan plan;         ///< IncisionLogic::readPlan()
+  planning::SimulationOptions options; ///< IncisionLogic::simulationOptions(): predicted as it was
   seg::RangeMap skin;                  ///< the plan's skin map
   seg::RangeMap bone;
   /// The CT the skin's shade is read from (seg::skinShadeFromCt); null: grey.
@@ -47,7 +47,7 @@ struct PlanStudyInput
   std::shared_ptr<const ExpressionModel> model;
   /// Display steps per element edge of the plan's skin.
   int resolution = 3;
-  /// Longest range detail kept (mm), as incision::PlanDisplayOptions.
+  /// Longest range detail kept (mm), as planning::PlanDisplayOptions.
   double maxRangeDetail = 3.0;
   /// Window of the contour bumps around the cut (mm, ContourBumps).
   double window = 20.0;
@@ -83,7 +83,7 @@ public:
   static std::unique_ptr<PlanStudy> build(const PlanStudyInput& input, const TaskProgress& progress = {});
 
   const std::string& planName() const { return planName_; }
-  const incision::PlanPrediction& prediction() const { return prediction_; }
+  const planning::PlanPrediction& prediction() const { return prediction_; }
   const PlanExpressionResponses& responses() const { return *responses_; }
   /// The plan's display skin under the muscles (base: the closure).
   const ExpressionSurface& surface() const { return surface_; }
@@ -158,7 +158,7 @@ public:
 private:
   PlanStudy() = default;
   std::string planName_;
-  incision::PlanPrediction prediction_;
+  planning::PlanPrediction prediction_;
   std::unique_ptr<PlanExpressionResponses> responses_;
   ExpressionSurface surface_;
   std::vector<seg::Rgb8> shade_;

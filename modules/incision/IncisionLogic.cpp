@@ -15,32 +15,32 @@
 
 namespace caps {
 
-const incision::ProcedureLibrary& IncisionLogic::procedures()
+const planning::ProcedureLibrary& IncisionLogic::procedures()
 {
   if (!library_)
-    library_ = incision::ProcedureLibrary::load(incision::defaultProceduresFolder());
+    library_ = planning::ProcedureLibrary::load(planning::defaultProceduresFolder());
   return *library_;
 }
 
-const incision::ProcedureLibrary& IncisionLogic::reloadProcedures(const std::filesystem::path& folder)
+const planning::ProcedureLibrary& IncisionLogic::reloadProcedures(const std::filesystem::path& folder)
 {
-  library_ = incision::ProcedureLibrary::load(folder);
+  library_ = planning::ProcedureLibrary::load(folder);
   return *library_;
 }
 
-incision::IncisionPlan IncisionLogic::placeProcedure(const std::string& id, const seg::RangeMap& skin,
-                                                     const incision::SkinPoint& at,
+planning::IncisionPlan IncisionLogic::placeProcedure(const std::string& id, const seg::RangeMap& skin,
+                                                     const planning::SkinPoint& at,
                                                      const std::map<std::string, double>& values)
 {
-  return incision::findProcedure(procedures(), id).place(skin, at, values);
+  return planning::findProcedure(procedures(), id).place(skin, at, values);
 }
 
-incision::IncisionPlan IncisionLogic::applyRecipe(const incision::PlanRecipe& recipe, const seg::RangeMap& skin)
+planning::IncisionPlan IncisionLogic::applyRecipe(const planning::PlanRecipe& recipe, const seg::RangeMap& skin)
 {
-  return incision::applyRecipe(recipe, skin, procedures());
+  return planning::applyRecipe(recipe, skin, procedures());
 }
 
-void IncisionLogic::writePlan(const incision::IncisionPlan& plan, PlanNode& node)
+void IncisionLogic::writePlan(const planning::IncisionPlan& plan, PlanNode& node)
 {
   node.setProcedure(plan.procedure());
   node.setGenerator(plan.generator());
@@ -56,13 +56,13 @@ void IncisionLogic::writePlan(const incision::IncisionPlan& plan, PlanNode& node
   node.setSutures(std::move(sutures));
 }
 
-incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
+planning::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
 {
-  incision::IncisionPlan plan(node.cutPath(), incision::SkinPoint{node.centre().x(), node.centre().y()});
+  planning::IncisionPlan plan(node.cutPath(), planning::SkinPoint{node.centre().x(), node.centre().y()});
   plan.setProcedure(node.procedure());
   plan.setGenerator(node.generator());
   plan.setParameters(node.parameters());
-  const int loop = incision::holeLoopSize(plan.pointCount());
+  const int loop = planning::holeLoopSize(plan.pointCount());
   const auto& offsets = node.borderOffsets();
   if (!offsets.empty() && int(offsets.size()) != loop)
     throw std::invalid_argument("plan '" + node.name() + "' has " + std::to_string(offsets.size()) +
@@ -71,7 +71,7 @@ incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
   for (int v = 0; v < int(offsets.size()); ++v)
     if (!offsets[std::size_t(v)].isZero(0.0))
       plan.offsetBorderPoint(v, offsets[std::size_t(v)]);
-  std::vector<incision::SutureEdges> written;
+  std::vector<planning::SutureEdges> written;
   for (const auto& s : node.sutures())
     written.push_back({{s[0], s[1]}, {s[2], s[3]}});
   plan.setSutures(std::move(written)); // throws SutureError (an invalid_argument) naming the pair
@@ -89,46 +89,46 @@ incision::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
     else if (*kind == "undermine")
       try
       {
-        const auto operation = incision::operationFromJson(o, int(k + 1));
-        plan.addUnderminedRegion(std::get<incision::UndermineRegion>(operation).region);
+        const auto operation = planning::operationFromJson(o, int(k + 1));
+        plan.addUnderminedRegion(std::get<planning::UndermineRegion>(operation).region);
       }
-      catch (const incision::RecipeError& e)
+      catch (const planning::RecipeError& e)
       {
-        throw incision::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
+        throw planning::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
       }
   }
   return plan;
 }
 
-void IncisionLogic::writeRecipe(const incision::PlanRecipe& recipe, PlanNode& node)
+void IncisionLogic::writeRecipe(const planning::PlanRecipe& recipe, PlanNode& node)
 {
   nlohmann::json operations = nlohmann::json::array();
   for (const auto& o : recipe.operations)
-    operations.push_back(incision::operationToJson(o));
+    operations.push_back(planning::operationToJson(o));
   node.setOperations(std::move(operations));
   node.setCtSha256(recipe.ctSha256);
   node.setSoftwareVersion(recipe.softwareVersion);
-  const nlohmann::json written = incision::recipeToJson(recipe);
+  const nlohmann::json written = planning::recipeToJson(recipe);
   node.setSimulation(written.contains("simulation") ? written["simulation"] : nlohmann::json());
 }
 
-std::optional<incision::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& node)
+std::optional<planning::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& node)
 {
   if (node.operations().empty())
     return std::nullopt;
   // Through the plan file's reader, so the scene and plan.json accept the same.
   try
   {
-    return incision::recipeFromJson({{"format", "caps-plan"},
-                                     {"formatVersion", incision::recipeFormatVersion},
+    return planning::recipeFromJson({{"format", "caps-plan"},
+                                     {"formatVersion", planning::recipeFormatVersion},
                                      {"softwareVersion", node.softwareVersion()},
                                      {"ctSha256", node.ctSha256()},
                                      {"operations", node.operations()},
                                      {"simulation", node.simulation()}});
   }
-  catch (const incision::RecipeError& e)
+  catch (const planning::RecipeError& e)
   {
-    throw incision::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
+    throw planning::RecipeError(e.operation(), "plan '" + node.name() + "': " + e.what());
   }
 }
 
@@ -150,10 +150,10 @@ vtkSmartPointer<vtkUnstructuredGrid> gridOf(const fem::Mesh& mesh, const std::ve
 
 } // namespace
 
-IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& name, const incision::IncisionPlan& plan,
-                                                            const incision::PlanRecipe& recipe,
-                                                            const incision::PlanPrediction& prediction,
-                                                            const incision::PlanDisplay& display,
+IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& name, const planning::IncisionPlan& plan,
+                                                            const planning::PlanRecipe& recipe,
+                                                            const planning::PlanPrediction& prediction,
+                                                            const planning::PlanDisplay& display,
                                                             const NodeId& skinMapId)
 {
   // Everything built first, so a failure leaves the scene as it was.
@@ -161,8 +161,8 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
   vtkSmartPointer<vtkUnstructuredGrid> meshGrid = gridOf(prediction.continuum.mesh, {});
   vtkSmartPointer<vtkUnstructuredGrid> resultGrid =
     gridOf(prediction.continuum.mesh, {{"displacement_mm", Eigen::MatrixXd(u)}});
-  vtkSmartPointer<vtkPolyData> before = incision::planDisplayPolyData(display, 0.0);
-  vtkSmartPointer<vtkPolyData> after = incision::planDisplayPolyData(display, 1.0);
+  vtkSmartPointer<vtkPolyData> before = planning::planDisplayPolyData(display, 0.0);
+  vtkSmartPointer<vtkPolyData> after = planning::planDisplayPolyData(display, 1.0);
 
   PredictionNodes ids;
   auto* planNode = scene().add<PlanNode>();
@@ -198,9 +198,9 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
   return ids;
 }
 
-incision::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& node)
+planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& node)
 {
-  incision::SimulationOptions options;
+  planning::SimulationOptions options;
   const nlohmann::json& s = node.simulation();
   if (!s.is_object())
     return options;
@@ -231,7 +231,7 @@ incision::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
       if (!complete)
         break;
       const double e = m["youngsModulusMPa"].get<double>(), nu = m["poissonRatio"].get<double>();
-      complete = incision::materialProblem(e, nu).empty();
+      complete = planning::materialProblem(e, nu).empty();
       table[int(m["layer"].get<long long>())] = fem::LinearElasticMaterial{e, nu, 1.0e-9};
     }
     for (int layer = 0; layer < options.layerCount; ++layer)
@@ -242,7 +242,7 @@ incision::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
   return options;
 }
 
-nlohmann::json IncisionLogic::simulationRecord(const incision::SimulationOptions& options)
+nlohmann::json IncisionLogic::simulationRecord(const planning::SimulationOptions& options)
 {
   nlohmann::json j = {{"elementSize", options.elementSize},
                       {"cutLayers", options.cutLayers},
@@ -250,7 +250,7 @@ nlohmann::json IncisionLogic::simulationRecord(const incision::SimulationOptions
                       {"layerCount", options.layerCount},
                       {"underminingWidth", options.underminingWidth}};
   const fem::MaterialTable materials =
-    options.materials.empty() ? incision::defaultFacialTissueMaterials(options.layerCount) : options.materials;
+    options.materials.empty() ? planning::defaultFacialTissueMaterials(options.layerCount) : options.materials;
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [layer, m] : materials)
     list.push_back({{"layer", layer}, {"youngsModulusMPa", m.youngsModulus}, {"poissonRatio", m.poissonRatio}});

@@ -30,51 +30,51 @@ class IncisionLogic : public ModuleLogic
 public:
   using ModuleLogic::ModuleLogic;
 
-  /// The procedure library, read from incision::defaultProceduresFolder()
+  /// The procedure library, read from planning::defaultProceduresFolder()
   /// the first time it is asked for.
   /// @throws std::runtime_error when the folder does not exist.
-  const incision::ProcedureLibrary& procedures();
+  const planning::ProcedureLibrary& procedures();
   /// Reads the library again from folder (a surgeon added a procedure file).
-  const incision::ProcedureLibrary& reloadProcedures(const std::filesystem::path& folder);
+  const planning::ProcedureLibrary& reloadProcedures(const std::filesystem::path& folder);
 
   /// The plan of procedure `id` centred at a skin point with the given
   /// parameter values (API units; the rest default).
   /// @throws std::invalid_argument for an unknown procedure, bad values, or
   /// a cut that does not fit on the measured skin.
-  incision::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin, const incision::SkinPoint& at,
+  planning::IncisionPlan placeProcedure(const std::string& id, const seg::RangeMap& skin, const planning::SkinPoint& at,
                                         const std::map<std::string, double>& values = {});
 
   /// @name The plan in the scene (a PlanNode holds everything a plan is)
   ///@{
   /// Writes @a plan into @a node (procedure, generator, parameters, cut path,
   /// chart centre, excision offsets, sutures as written).
-  static void writePlan(const incision::IncisionPlan& plan, PlanNode& node);
+  static void writePlan(const planning::IncisionPlan& plan, PlanNode& node);
   /// The plan a node holds. Its undermined regions come from the node's
   /// recipe (the operations writeRecipe() wrote; PlanNode has no field of its own for them).
   /// @throws std::invalid_argument when its offsets or sutures do not fit its
   /// cut path (a hand-edited scene), or an "undermine" operation cannot be
   /// read, naming what is wrong.
-  static incision::IncisionPlan readPlan(const PlanNode& node);
+  static planning::IncisionPlan readPlan(const PlanNode& node);
   /// Writes the recipe that made the node's plan (operations, CT hash,
   /// software version) beside what writePlan() wrote.
-  static void writeRecipe(const incision::PlanRecipe& recipe, PlanNode& node);
+  static void writeRecipe(const planning::PlanRecipe& recipe, PlanNode& node);
   /// The recipe a node keeps; std::nullopt for a plan saved before plans
   /// kept their recipe (the plan itself still reads with readPlan()).
-  /// @throws incision::RecipeError naming the plan and the operation at fault.
-  static std::optional<incision::PlanRecipe> readRecipe(const PlanNode& node);
+  /// @throws planning::RecipeError naming the plan and the operation at fault.
+  static std::optional<planning::PlanRecipe> readRecipe(const PlanNode& node);
 
   /// The options a node's prediction was made with, so a replay, a report
-  /// or a second look predicts the same thing: incision::SimulationOptions'
+  /// or a second look predicts the same thing: planning::SimulationOptions'
   /// defaults, then what the node's simulation() records: elementSize and
   /// cutLayers (as `caps plan` writes them), and regionRadius, layerCount,
   /// underminingWidth and materials when the Simulate panel wrote them.
   /// Values that do not read are left at the default.
-  static incision::SimulationOptions simulationOptions(const PlanNode& node);
+  static planning::SimulationOptions simulationOptions(const PlanNode& node);
   /// The simulation() record of a prediction made with @a options:
   /// {"elementSize", "cutLayers"} (the plan file's fields, PlanRecipe) and
   /// "regionRadius", "layerCount", "underminingWidth", "materials" ([{layer,
   /// youngsModulusMPa, poissonRatio}]).
-  static nlohmann::json simulationRecord(const incision::SimulationOptions& options);
+  static nlohmann::json simulationRecord(const planning::SimulationOptions& options);
 
   /// The scene nodes of a predicted plan.
   struct PredictionNodes
@@ -85,17 +85,17 @@ public:
   /// (plan and recipe, drawn on @a skinMapId), its FeMesh node, the Solution
   /// node with the displacements, and the display surfaces before and after
   /// the operation (Surface nodes, §4.7). @a name names them ("Z-plasty 1").
-  PredictionNodes addPrediction(const std::string& name, const incision::IncisionPlan& plan,
-                                const incision::PlanRecipe& recipe, const incision::PlanPrediction& prediction,
-                                const incision::PlanDisplay& display, const NodeId& skinMapId);
+  PredictionNodes addPrediction(const std::string& name, const planning::IncisionPlan& plan,
+                                const planning::PlanRecipe& recipe, const planning::PlanPrediction& prediction,
+                                const planning::PlanDisplay& display, const NodeId& skinMapId);
   ///@}
 
   /// The plan a recipe makes on @a skin with this logic's procedures
-  /// (incision::applyRecipe()).
-  incision::IncisionPlan applyRecipe(const incision::PlanRecipe& recipe, const seg::RangeMap& skin);
+  /// (planning::applyRecipe()).
+  planning::IncisionPlan applyRecipe(const planning::PlanRecipe& recipe, const seg::RangeMap& skin);
 
 private:
-  std::optional<incision::ProcedureLibrary> library_;
+  std::optional<planning::ProcedureLibrary> library_;
 };
 
 } // namespace caps

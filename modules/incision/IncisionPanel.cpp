@@ -83,20 +83,20 @@ nlohmann::json planState(const PlanNode& plan)
   return j;
 }
 
-double toUi(incision::ParameterUnit unit, double value)
+double toUi(planning::ParameterUnit unit, double value)
 {
-  return unit == incision::ParameterUnit::Degree ? value / kDegree : value;
+  return unit == planning::ParameterUnit::Degree ? value / kDegree : value;
 }
 
-QString unitSuffix(incision::ParameterUnit unit)
+QString unitSuffix(planning::ParameterUnit unit)
 {
   switch (unit)
   {
-  case incision::ParameterUnit::Millimetre:
+  case planning::ParameterUnit::Millimetre:
     return " mm";
-  case incision::ParameterUnit::Degree:
+  case planning::ParameterUnit::Degree:
     return QString::fromUtf8(" °");
-  case incision::ParameterUnit::Ratio:
+  case planning::ParameterUnit::Ratio:
     return "";
   }
   return "";
@@ -346,7 +346,7 @@ void IncisionPanel::fillProcedures()
   place_->setEnabled(procedure_->count() > 0);
 }
 
-const incision::ProcedureTemplate* IncisionPanel::currentProcedure()
+const planning::ProcedureTemplate* IncisionPanel::currentProcedure()
 {
   if (procedure_->currentIndex() < 0)
     return nullptr;
@@ -360,7 +360,7 @@ const incision::ProcedureTemplate* IncisionPanel::currentProcedure()
   }
 }
 
-void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure, const std::map<std::string, double>* values)
+void IncisionPanel::buildForm(const planning::ProcedureTemplate& procedure, const std::map<std::string, double>* values)
 {
   while (form_->rowCount() > 0)
     form_->removeRow(0);
@@ -370,9 +370,9 @@ void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure, cons
   {
     auto* spin = new QDoubleSpinBox(formBox_);
     spin->setObjectName(QString::fromStdString("incision.param." + p.name));
-    spin->setDecimals(p.unit == incision::ParameterUnit::Ratio ? 2 : 1);
-    spin->setSingleStep(p.unit == incision::ParameterUnit::Ratio    ? 0.05
-                        : p.unit == incision::ParameterUnit::Degree ? 5.0
+    spin->setDecimals(p.unit == planning::ParameterUnit::Ratio ? 2 : 1);
+    spin->setSingleStep(p.unit == planning::ParameterUnit::Ratio    ? 0.05
+                        : p.unit == planning::ParameterUnit::Degree ? 5.0
                                                                     : 1.0);
     spin->setRange(toUi(p.unit, p.minimum), toUi(p.unit, p.maximum));
     spin->setSuffix(unitSuffix(p.unit));
@@ -393,7 +393,7 @@ void IncisionPanel::buildForm(const incision::ProcedureTemplate& procedure, cons
   }
 }
 
-std::map<std::string, double> IncisionPanel::formValues(const incision::ProcedureTemplate& procedure) const
+std::map<std::string, double> IncisionPanel::formValues(const planning::ProcedureTemplate& procedure) const
 {
   std::map<std::string, double> values;
   for (const auto& p : procedure.parameters())
@@ -412,7 +412,7 @@ std::map<std::string, double> IncisionPanel::formValues(const incision::Procedur
       values[p.name] = p.defaultValue;
     else
       values[p.name] =
-        std::clamp(p.unit == incision::ParameterUnit::Degree ? shown * kDegree : shown, p.minimum, p.maximum);
+        std::clamp(p.unit == planning::ParameterUnit::Degree ? shown * kDegree : shown, p.minimum, p.maximum);
   }
   return procedure.resolveValues(values);
 }
@@ -421,7 +421,7 @@ std::map<std::string, double> IncisionPanel::formValues(const incision::Procedur
 
 void IncisionPanel::armPlace()
 {
-  const incision::ProcedureTemplate* procedure = currentProcedure();
+  const planning::ProcedureTemplate* procedure = currentProcedure();
   if (!procedure)
     return;
   if (!newestSkin())
@@ -440,7 +440,7 @@ void IncisionPanel::armPlace()
 
 void IncisionPanel::placeAt(const SurfacePick& pick)
 {
-  const incision::ProcedureTemplate* procedure = currentProcedure();
+  const planning::ProcedureTemplate* procedure = currentProcedure();
   const RangeMapNode* skinNode = newestSkin();
   if (!procedure)
     return;
@@ -454,16 +454,16 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
   const seg::RangeMap& skin = rangeMap(*skinNode);
   const seg::CylindricalPoint c =
     skin.frame().toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2]));
-  const incision::SkinPoint at{c.theta, c.z};
-  incision::IncisionPlan plan;
-  incision::PlanRecipe recipe;
+  const planning::SkinPoint at{c.theta, c.z};
+  planning::IncisionPlan plan;
+  planning::PlanRecipe recipe;
   try
   {
     const std::map<std::string, double> values = formValues(*procedure);
     plan = logic_.placeProcedure(procedure->id(), skin, at, values);
     recipe.ctSha256 = ctHash(skinId);
-    recipe.softwareVersion = incision::softwareVersion();
-    recipe.operations.push_back(incision::PlaceProcedure{procedure->id(), at, values});
+    recipe.softwareVersion = planning::softwareVersion();
+    recipe.operations.push_back(planning::PlaceProcedure{procedure->id(), at, values});
   }
   catch (const std::exception& e)
   {
@@ -476,8 +476,8 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
                    std::to_string(int(std::lround(at.z))) + " mm");
 }
 
-std::string IncisionPanel::addPlan(const std::string& title, const incision::IncisionPlan& plan,
-                                   const incision::PlanRecipe& recipe, const NodeId& skinId)
+std::string IncisionPanel::addPlan(const std::string& title, const planning::IncisionPlan& plan,
+                                   const planning::PlanRecipe& recipe, const NodeId& skinId)
 {
   // "<title> <n>", n the first number no node uses.
   std::string name;
@@ -554,14 +554,14 @@ void IncisionPanel::finishDraw()
     return;
   }
   const seg::RangeMap& skin = rangeMap(*skinNode);
-  incision::PlanRecipe recipe;
-  incision::IncisionPlan plan;
+  planning::PlanRecipe recipe;
+  planning::IncisionPlan plan;
   try
   {
-    const incision::PlanOperation op = incision::DrawCut{points};
-    plan = incision::applyOperation(plan, op, 1, skin, logic_.procedures());
+    const planning::PlanOperation op = planning::DrawCut{points};
+    plan = planning::applyOperation(plan, op, 1, skin, logic_.procedures());
     recipe.ctSha256 = ctHash(skinId);
-    recipe.softwareVersion = incision::softwareVersion();
+    recipe.softwareVersion = planning::softwareVersion();
     recipe.operations.push_back(op);
   }
   catch (const std::exception& e)
@@ -597,11 +597,11 @@ void IncisionPanel::moveTo(const NodeId& planId, const SurfacePick& pick)
   auto* node = logic_.scene().nodeAs<PlanNode>(planId);
   if (!node)
     return;
-  recordOperation(planId, "Move " + node->name(), [&](const incision::IncisionPlan& plan, const seg::RangeMap& skin) {
+  recordOperation(planId, "Move " + node->name(), [&](const planning::IncisionPlan& plan, const seg::RangeMap& skin) {
     const seg::CylindricalPoint c =
       skin.frame().toCylindrical(Eigen::Vector3d(pick.position[0], pick.position[1], pick.position[2]));
     // Placed afresh at the new centre with the values it has.
-    return incision::PlanOperation(incision::PlaceProcedure{plan.procedure(), {c.theta, c.z}, plan.parameters()});
+    return planning::PlanOperation(planning::PlaceProcedure{plan.procedure(), {c.theta, c.z}, plan.parameters()});
   });
 }
 
@@ -610,7 +610,7 @@ void IncisionPanel::parameterChanged(const std::string& name)
   PlanNode* node = selectedPlan();
   if (!node)
     return; // the form is for the next plan placed
-  const incision::ProcedureTemplate* procedure = logic_.procedures().find(node->procedure());
+  const planning::ProcedureTemplate* procedure = logic_.procedures().find(node->procedure());
   if (!procedure)
     return;
   const std::map<std::string, double> values = formValues(*procedure);
@@ -619,8 +619,8 @@ void IncisionPanel::parameterChanged(const std::string& name)
   if (value == values.end() || (old != node->parameters().end() && old->second == value->second))
     return;
   const bool done = recordOperation(node->id(), "Set " + readable(name).toLower().toStdString() + " of " + node->name(),
-                                    [&](const incision::IncisionPlan&, const seg::RangeMap&) {
-                                      return incision::PlanOperation(incision::SetParameter{name, value->second});
+                                    [&](const planning::IncisionPlan&, const seg::RangeMap&) {
+                                      return planning::PlanOperation(planning::SetParameter{name, value->second});
                                     });
   if (!done)
     showSelection(); // the form shows the plan as it stayed
@@ -649,8 +649,8 @@ void IncisionPanel::movePointTo(const NodeId& planId, int point, const SurfacePi
     return;
   const bool moved =
     recordOperation(planId, "Move point p" + std::to_string(point) + " of " + node->name(),
-                    [&](const incision::IncisionPlan&, const seg::RangeMap& skin) {
-                      return incision::PlanOperation(incision::MoveCutPoint{point, normalizedOf(skin, pick)});
+                    [&](const planning::IncisionPlan&, const seg::RangeMap& skin) {
+                      return planning::PlanOperation(planning::MoveCutPoint{point, normalizedOf(skin, pick)});
                     });
   if (!moved)
     updateHandles(); // refused: the handle goes back to the point
@@ -671,7 +671,7 @@ void IncisionPanel::updateHandles()
   for (const Eigen::Vector2d& p : node->cutPath())
   {
     const seg::CylindricalPoint c = frame.fromNormalized({1.0, p.x(), p.y()});
-    const Eigen::Vector3d x = frame.toWorld(skin.sample(c.theta, c.z) + incision::kIncisionLineLift, c.theta, c.z);
+    const Eigen::Vector3d x = frame.toWorld(skin.sample(c.theta, c.z) + planning::kIncisionLineLift, c.theta, c.z);
     if (!x.allFinite())
     {
       points.clear(); // a point off the skin map: no handles rather than some
@@ -705,10 +705,10 @@ void IncisionPanel::offsetBorderPoint()
   if (!node)
     return;
   const int vertex = borderPoint_->value();
-  const incision::ChartPoint offset(offsetU_->value(), offsetV_->value());
+  const planning::ChartPoint offset(offsetU_->value(), offsetV_->value());
   recordOperation(node->id(), "Offset border point " + std::to_string(vertex) + " of " + node->name(),
-                  [&](const incision::IncisionPlan&, const seg::RangeMap&) {
-                    return incision::PlanOperation(incision::OffsetBorderPoint{vertex, offset});
+                  [&](const planning::IncisionPlan&, const seg::RangeMap&) {
+                    return planning::PlanOperation(planning::OffsetBorderPoint{vertex, offset});
                   });
 }
 
@@ -759,12 +759,12 @@ void IncisionPanel::finishUndermining()
     regionStatus_->setText(corners.empty() ? QString() : tr("A region needs at least 3 corners: start again."));
     return;
   }
-  incision::UnderminedRegion region;
+  planning::UnderminedRegion region;
   for (const auto& c : corners)
     region.emplace_back(c[0], c[1]);
   if (recordOperation(node->id(), "Undermine a region of " + node->name(),
-                      [&](const incision::IncisionPlan&, const seg::RangeMap&) {
-                        return incision::PlanOperation(incision::UndermineRegion{region});
+                      [&](const planning::IncisionPlan&, const seg::RangeMap&) {
+                        return planning::PlanOperation(planning::UndermineRegion{region});
                       }))
     regionStatus_->setText(tr("%1 undermined region(s): simulate the plan again to see their effect.")
                              .arg(IncisionLogic::readPlan(*node).underminedRegions().size()));
@@ -776,27 +776,27 @@ void IncisionPanel::clearUndermining()
   if (!node)
     return;
   recordOperation(node->id(), "Clear the undermining of " + node->name(),
-                  [&](const incision::IncisionPlan&, const seg::RangeMap&) {
-                    return incision::PlanOperation(incision::ClearUndermining{});
+                  [&](const planning::IncisionPlan&, const seg::RangeMap&) {
+                    return planning::PlanOperation(planning::ClearUndermining{});
                   });
   regionStatus_->clear();
 }
 
 bool IncisionPanel::recordOperation(
   const NodeId& planId, const std::string& label,
-  const std::function<incision::PlanOperation(const incision::IncisionPlan&, const seg::RangeMap&)>& operation)
+  const std::function<planning::PlanOperation(const planning::IncisionPlan&, const seg::RangeMap&)>& operation)
 {
   return editPlan(
-    planId, label, [&](incision::IncisionPlan& plan, incision::PlanRecipe& recipe, const seg::RangeMap& skin) {
-      const incision::PlanOperation op = operation(plan, skin);
-      plan = incision::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
+    planId, label, [&](planning::IncisionPlan& plan, planning::PlanRecipe& recipe, const seg::RangeMap& skin) {
+      const planning::PlanOperation op = operation(plan, skin);
+      plan = planning::applyOperation(plan, op, int(recipe.operations.size()) + 1, skin, logic_.procedures());
       recipe.operations.push_back(op);
     });
 }
 
 bool IncisionPanel::editPlan(
   const NodeId& planId, const std::string& label,
-  const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit)
+  const std::function<void(planning::IncisionPlan&, planning::PlanRecipe&, const seg::RangeMap&)>& edit)
 {
   auto* node = logic_.scene().nodeAs<PlanNode>(planId);
   if (!node)
@@ -811,17 +811,17 @@ bool IncisionPanel::editPlan(
   try
   {
     const seg::RangeMap& skin = rangeMap(*skinNode);
-    incision::IncisionPlan plan = IncisionLogic::readPlan(*node);
-    std::optional<incision::PlanRecipe> recipe = IncisionLogic::readRecipe(*node);
+    planning::IncisionPlan plan = IncisionLogic::readPlan(*node);
+    std::optional<planning::PlanRecipe> recipe = IncisionLogic::readRecipe(*node);
     if (!recipe)
     {
       // A plan saved before plans kept their recipe: it starts with the
       // placement it holds (moves made by hand then are not known).
       recipe.emplace();
       recipe->ctSha256 = ctHash(skinNode->id());
-      recipe->operations.push_back(incision::PlaceProcedure{plan.procedure(), plan.centre(), plan.parameters()});
+      recipe->operations.push_back(planning::PlaceProcedure{plan.procedure(), plan.centre(), plan.parameters()});
     }
-    recipe->softwareVersion = incision::softwareVersion();
+    recipe->softwareVersion = planning::softwareVersion();
     edit(plan, *recipe, skin);
     {
       writing_ = true;
@@ -926,7 +926,7 @@ std::string IncisionPanel::ctHash(const NodeId& skinId)
   {
     if (!volume->image())
       return {};
-    return hashes_[volume->id()] = incision::ctContentHash(volume->image());
+    return hashes_[volume->id()] = planning::ctContentHash(volume->image());
   }
   catch (const std::exception&)
   {
@@ -956,7 +956,7 @@ void IncisionPanel::drawLines(const NodeId& planId, bool create)
   vtkSmartPointer<vtkPolyData> data;
   try
   {
-    data = incision::incisionLinesPolyData(IncisionLogic::readPlan(*plan), rangeMap(*skinNode));
+    data = planning::incisionLinesPolyData(IncisionLogic::readPlan(*plan), rangeMap(*skinNode));
   }
   catch (const std::exception& e)
   {
@@ -1079,7 +1079,7 @@ void IncisionPanel::planSelected()
 void IncisionPanel::showSelection()
 {
   const PlanNode* plan = selectedPlan();
-  const incision::ProcedureTemplate* procedure = nullptr;
+  const planning::ProcedureTemplate* procedure = nullptr;
   try
   {
     procedure = plan ? logic_.procedures().find(plan->procedure()) : currentProcedure();
@@ -1151,19 +1151,19 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
   };
   try
   {
-    const incision::IncisionPlan plan = IncisionLogic::readPlan(*node);
-    const incision::PlanMeasurements m = incision::measurePlan(plan, rangeMap(*skinNode));
+    const planning::IncisionPlan plan = IncisionLogic::readPlan(*node);
+    const planning::PlanMeasurements m = planning::measurePlan(plan, rangeMap(*skinNode));
     for (const auto& l : m.limbs)
       row(tr("Limb p%1–p%2").arg(l.from).arg(l.to), l.skin, 2, "mm");
     for (const auto& a : m.limbAngles)
       row(tr("Angle at p%1").arg(a.point), a.skin / kDegree, 1, QString::fromUtf8("°"));
     row(tr("Excised area"), m.excisedArea, 1, QString::fromUtf8("mm²"));
-    const incision::SkinTensionLines* guide = showTension_->isChecked() ? tensionLines(*skinNode) : nullptr;
+    const planning::SkinTensionLines* guide = showTension_->isChecked() ? tensionLines(*skinNode) : nullptr;
     if (guide)
     {
       try
       {
-        const incision::AxisToTensionLines axis = incision::axisToTensionLines(plan, *guide);
+        const planning::AxisToTensionLines axis = planning::axisToTensionLines(plan, *guide);
         row(tr("Axis %1 to skin tension lines").arg(QString::fromStdString(axis.axis)), axis.degrees, 0,
             QString::fromUtf8("°"));
       }
@@ -1177,12 +1177,12 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
     {
       try
       {
-        row(tr("Theoretical gain in length (Fig. 2.2)"), 100.0 * incision::zPlastyTheoreticalGain(angle->second), 0,
+        row(tr("Theoretical gain in length (Fig. 2.2)"), 100.0 * planning::zPlastyTheoreticalGain(angle->second), 0,
             "%");
       }
       catch (const std::invalid_argument&)
       {}
-      row(tr("Geometric gain in length"), 100.0 * incision::zPlastyGeometricGain(angle->second), 0, "%");
+      row(tr("Geometric gain in length"), 100.0 * planning::zPlastyGeometricGain(angle->second), 0, "%");
     }
   }
   catch (const std::exception& e)
@@ -1193,7 +1193,7 @@ void IncisionPanel::fillMeasurements(const PlanNode* node)
   }
 }
 
-const incision::SkinTensionLines* IncisionPanel::tensionLines(const RangeMapNode& skinNode, std::string* why)
+const planning::SkinTensionLines* IncisionPanel::tensionLines(const RangeMapNode& skinNode, std::string* why)
 {
   const seg::RangeMap& skin = rangeMap(skinNode);
   TensionLinesOnMap& entry = tension_[skinNode.id()];
@@ -1205,7 +1205,7 @@ const incision::SkinTensionLines* IncisionPanel::tensionLines(const RangeMapNode
     {
       const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
       entry.lines =
-        std::make_unique<incision::SkinTensionLines>(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
+        std::make_unique<planning::SkinTensionLines>(skin, planning::FaceLayout::fromLandmarks(found.landmarks, skin));
     }
     catch (const std::exception& e)
     {
@@ -1229,7 +1229,7 @@ void IncisionPanel::showTensionLines(bool show)
   }
   const RangeMapNode* skinNode = newestSkin();
   std::string why = "there is no skin range map yet: make one in the Range maps module first.";
-  const incision::SkinTensionLines* guide = skinNode ? tensionLines(*skinNode, &why) : nullptr;
+  const planning::SkinTensionLines* guide = skinNode ? tensionLines(*skinNode, &why) : nullptr;
   if (!guide)
   {
     host_.showWarning("Skin tension lines", "The skin tension lines cannot be shown: " + why);
@@ -1245,7 +1245,7 @@ void IncisionPanel::showTensionLines(bool show)
     node->setColor(kTensionLineColour);
     node->setLineWidth(kTensionLineWidth);
   }
-  node->setPolyData(incision::skinTensionLinesPolyData(*guide));
+  node->setPolyData(planning::skinTensionLinesPolyData(*guide));
   host_.showStatus("Skin tension lines shown (a schematic guide placed by the facial landmarks)");
   fillMeasurements(selectedPlan());
 }
@@ -1263,7 +1263,7 @@ void IncisionPanel::refreshButtons()
     // The points the plan has: p0 .. p(n-1) on the cut, 0 .. loop size - 1 on the border.
     const int points = int(node->cutPath().size());
     point_->setRange(0, std::max(0, points - 1));
-    borderPoint_->setRange(0, std::max(0, incision::holeLoopSize(points) - 1));
+    borderPoint_->setRange(0, std::max(0, planning::holeLoopSize(points) - 1));
   }
   const UndoStack& stack = logic_.scene().undoStack();
   undo_->setEnabled(stack.canUndo());

@@ -42,12 +42,12 @@ struct SurfacePick;
 namespace seg {
 class RangeMap;
 }
-namespace incision {
+namespace planning {
 class IncisionPlan;
 struct PlanRecipe;
 class ProcedureTemplate;
 class SkinTensionLines;
-} // namespace incision
+} // namespace planning
 
 /// @class IncisionPanel
 /// @brief Procedure and parameters, "Place on the skin", the scene's plans,
@@ -74,10 +74,10 @@ private:
   ///@{
   void fillProcedures();
   /// The parameter form of a procedure, with these values (API units) or its defaults.
-  void buildForm(const incision::ProcedureTemplate& procedure, const std::map<std::string, double>* values);
+  void buildForm(const planning::ProcedureTemplate& procedure, const std::map<std::string, double>* values);
   /// The form's values in API units, defaults exactly where untouched.
-  std::map<std::string, double> formValues(const incision::ProcedureTemplate& procedure) const;
-  const incision::ProcedureTemplate* currentProcedure();
+  std::map<std::string, double> formValues(const planning::ProcedureTemplate& procedure) const;
+  const planning::ProcedureTemplate* currentProcedure();
   ///@}
 
   /// @name Placing and editing
@@ -86,10 +86,10 @@ private:
   void placeAt(const SurfacePick& pick);
   /// Collects the points of a cut drawn by hand, one click each, in scalpel order.
   void armDraw();
-  /// Makes the drawn points a plan "Cut n" (incision::DrawCut).
+  /// Makes the drawn points a plan "Cut n" (planning::DrawCut).
   void finishDraw();
   /// Adds a plan "<title> n" (n the first number free) with its recipe and lines, and selects it; returns its name.
-  std::string addPlan(const std::string& title, const incision::IncisionPlan& plan, const incision::PlanRecipe& recipe,
+  std::string addPlan(const std::string& title, const planning::IncisionPlan& plan, const planning::PlanRecipe& recipe,
                       const NodeId& skinId);
   void armMove();
   void moveTo(const NodeId& planId, const SurfacePick& pick);
@@ -111,10 +111,10 @@ private:
   /// plan @a planId, and records it in its recipe as one undoable edit.
   bool recordOperation(
     const NodeId& planId, const std::string& label,
-    const std::function<incision::PlanOperation(const incision::IncisionPlan&, const seg::RangeMap&)>& operation);
+    const std::function<planning::PlanOperation(const planning::IncisionPlan&, const seg::RangeMap&)>& operation);
   /// Runs @a edit on plan @a planId and its recipe as one undoable edit.
   bool editPlan(const NodeId& planId, const std::string& label,
-                const std::function<void(incision::IncisionPlan&, incision::PlanRecipe&, const seg::RangeMap&)>& edit);
+                const std::function<void(planning::IncisionPlan&, planning::PlanRecipe&, const seg::RangeMap&)>& edit);
   void undo();
   void redo();
   void deletePlan();
@@ -149,7 +149,7 @@ private:
   void hideEvent(QHideEvent* event) override;
   /// The skin tension lines on a skin map, placed by the landmarks found on
   /// it; nullptr (and @a why) when they cannot be placed.
-  const incision::SkinTensionLines* tensionLines(const RangeMapNode& skin, std::string* why = nullptr);
+  const planning::SkinTensionLines* tensionLines(const RangeMapNode& skin, std::string* why = nullptr);
   /// Shows or hides the skin tension lines on the newest skin map.
   void showTensionLines(bool show);
   /// Whether a plan has prediction nodes made for another state of it.
@@ -169,7 +169,7 @@ private:
   struct TensionLinesOnMap
   {
     std::shared_ptr<seg::RangeMap> map; ///< the map they were placed on (they point into it)
-    std::unique_ptr<incision::SkinTensionLines> lines;
+    std::unique_ptr<planning::SkinTensionLines> lines;
     std::string why; ///< why there are none
   };
   std::map<NodeId, TensionLinesOnMap> tension_;

@@ -269,13 +269,13 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
 }
 
 /// The procedure's parameters from the file's units (degrees) to the API's (radians).
-std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
+std::map<std::string, double> apiValues(const planning::ProcedureTemplate& t,
                                         const std::map<std::string, double>& given)
 {
   std::map<std::string, double> values;
   for (const auto& [name, value] : given)
   {
-    const auto* p = [&]() -> const incision::ProcedureParameter* {
+    const auto* p = [&]() -> const planning::ProcedureParameter* {
       for (const auto& q : t.parameters())
         if (q.name == name)
           return &q;
@@ -288,7 +288,7 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
         known += (known.empty() ? "" : ", ") + q.name;
       throw std::invalid_argument("procedure " + t.id() + " has no parameter '" + name + "' (it has " + known + ")");
     }
-    values[name] = p->unit == incision::ParameterUnit::Degree ? value * kDegree : value;
+    values[name] = p->unit == planning::ParameterUnit::Degree ? value * kDegree : value;
   }
   return values;
 }
@@ -296,8 +296,8 @@ std::map<std::string, double> apiValues(const incision::ProcedureTemplate& t,
 /// Radius (mm on the skin) of the band around the wound where the peak skin stress is taken.
 constexpr double kWoundStressRadius = 10.0;
 
-void writeMeasurements(const fs::path& file, const incision::PlanMeasurements& m, const incision::PlanPrediction& p,
-                       double excisedVolumeToBone, const incision::WoundStress& stress,
+void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m, const planning::PlanPrediction& p,
+                       double excisedVolumeToBone, const planning::WoundStress& stress,
                        const seg::CylindricalPoint& peakAt)
 {
   std::ofstream out(file);
@@ -363,13 +363,13 @@ private:
   {
     if (args_.replay)
     {
-      replay_ = incision::readRecipe(*args_.replay);
+      replay_ = planning::readRecipe(*args_.replay);
       for (const auto& operation : replay_->operations)
-        if (const auto* place = std::get_if<incision::PlaceProcedure>(&operation))
-          incision::findProcedure(logic_.procedures(), place->procedure);
+        if (const auto* place = std::get_if<planning::PlaceProcedure>(&operation))
+          planning::findProcedure(logic_.procedures(), place->procedure);
       return;
     }
-    const incision::ProcedureTemplate& procedure = incision::findProcedure(logic_.procedures(), args_.procedure);
+    const planning::ProcedureTemplate& procedure = planning::findProcedure(logic_.procedures(), args_.procedure);
     // Every value recorded, defaults too: a default changed in the
     // procedure file later does not change the replayed plan.
     values_ = procedure.resolveValues(apiValues(procedure, args_.params)); // range errors now
@@ -381,7 +381,7 @@ private:
   {
     args_.read.progress = cli::consoleProgress(err_);
     volume_ = cli::loadCt(logic_, args_.ct, args_.read, err_);
-    ctHash_ = incision::ctContentHash(volume_->image());
+    ctHash_ = planning::ctContentHash(volume_->image());
     if (!replay_)
       return;
     const std::string file = args_.replay->string();
@@ -396,10 +396,10 @@ private:
       err_ << "caps plan: warning: " << file << " was made on " << made
            << "; its operations are applied to this CT (--other-ct), the prediction is a new one.\n";
     }
-    if (replay_->softwareVersion != incision::softwareVersion())
+    if (replay_->softwareVersion != planning::softwareVersion())
       err_ << "caps plan: warning: " << file << " was made by CAPS "
            << (replay_->softwareVersion.empty() ? std::string("of an unknown version") : replay_->softwareVersion)
-           << ", this is CAPS " << incision::softwareVersion()
+           << ", this is CAPS " << planning::softwareVersion()
            << ": the plan is rebuilt from the same operations, but the prediction may differ from the one made "
               "then.\n";
   }
@@ -434,27 +434,27 @@ private:
         for (const auto& operation : replay_->operations)
           recorded_->apply(operation, skin, logic_.procedures());
       }
-      catch (const incision::RecipeError& e)
+      catch (const planning::RecipeError& e)
       {
-        throw incision::RecipeError(e.operation(), args_.replay->string() + ": " + e.what());
+        throw planning::RecipeError(e.operation(), args_.replay->string() + ": " + e.what());
       }
     }
     else
       recorded_->apply(
-        incision::PlaceProcedure{args_.procedure, {args_.at->first * kDegree, args_.at->second}, values_}, skin,
+        planning::PlaceProcedure{args_.procedure, {args_.at->first * kDegree, args_.at->second}, values_}, skin,
         logic_.procedures());
     for (const PlanEdit& e : args_.edits)
       if (e.move)
         recorded_->apply(
-          incision::MoveCutPoint{e.index, incision::normalizedFromSkinPoint(skin.frame(), {e.a * kDegree, e.b})}, skin,
+          planning::MoveCutPoint{e.index, planning::normalizedFromSkinPoint(skin.frame(), {e.a * kDegree, e.b})}, skin,
           logic_.procedures());
       else
-        recorded_->apply(incision::OffsetBorderPoint{e.index, {e.a, e.b}}, skin, logic_.procedures());
+        recorded_->apply(planning::OffsetBorderPoint{e.index, {e.a, e.b}}, skin, logic_.procedures());
     for (const auto& points : args_.undermineRegions)
     {
-      incision::UndermineRegion region;
+      planning::UndermineRegion region;
       for (const auto& [theta, z] : points)
-        region.region.push_back(incision::normalizedFromSkinPoint(skin.frame(), {theta * kDegree, z}));
+        region.region.push_back(planning::normalizedFromSkinPoint(skin.frame(), {theta * kDegree, z}));
       recorded_->apply(region, skin, logic_.procedures());
     }
   }
@@ -469,7 +469,7 @@ private:
     saved_ = recorded_->recipe();
     saved_.elementSize = elementSize;
     saved_.cutLayers = cutLayers;
-    incision::writeRecipe(saved_, args_.out / "plan.json");
+    planning::writeRecipe(saved_, args_.out / "plan.json");
     options_.elementSize = elementSize;
     options_.cutLayers = cutLayers;
     options_.threads = 2;
@@ -478,11 +478,11 @@ private:
   /// The measurements on the skin, the prediction and its wound stress.
   void predict()
   {
-    const incision::IncisionPlan& plan = recorded_->plan();
-    procedure_ = &incision::findProcedure(logic_.procedures(), plan.procedure());
-    measured_ = incision::measurePlan(plan, maps_.skin);
-    prediction_ = incision::simulatePlan(maps_.skin, maps_.bone, plan, options_);
-    excisedVolume_ = incision::excisedVolume(plan, maps_.skin, maps_.bone, options_.noBoneDepth);
+    const planning::IncisionPlan& plan = recorded_->plan();
+    procedure_ = &planning::findProcedure(logic_.procedures(), plan.procedure());
+    measured_ = planning::measurePlan(plan, maps_.skin);
+    prediction_ = planning::simulatePlan(maps_.skin, maps_.bone, plan, options_);
+    excisedVolume_ = planning::excisedVolume(plan, maps_.skin, maps_.bone, options_.noBoneDepth);
     // The meshed region cut short (a shape the mesher could not grow round,
     // or the end of the scan) changes the prediction: say so.
     if (!prediction_.surface.message.empty())
@@ -492,14 +492,14 @@ private:
                                                   "and run again"
                                                 : "")
            << "\n";
-    woundStress_ = incision::woundSkinStress(prediction_, kWoundStressRadius);
+    woundStress_ = planning::woundSkinStress(prediction_, kWoundStressRadius);
     peakAt_ = maps_.skin.frame().toCylindrical(woundStress_.original);
   }
 
   void printThePrediction()
   {
-    const incision::IncisionPlan& plan = recorded_->plan();
-    const incision::PlanPrediction& p = prediction_;
+    const planning::IncisionPlan& plan = recorded_->plan();
+    const planning::PlanPrediction& p = prediction_;
     out_ << std::fixed << std::setprecision(1);
     if (replay_)
       out_ << "Replayed " << replay_->operations.size() << " operations of " << args_.replay->string() << "\n";
@@ -526,7 +526,7 @@ private:
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
     out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum
          << " N over all sutures, largest suture " << p.closure.largest << " N\n";
-    const incision::WoundStress& w = woundStress_;
+    const planning::WoundStress& w = woundStress_;
     out_ << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
          << 1e3 * w.peakVonMises << " kPa at theta " << peakAt_.theta / kDegree << " deg, z " << peakAt_.z << " mm ("
          << w.distance << " mm from the wound edge), largest principal " << 1e3 * w.peakMaxPrincipal
@@ -543,11 +543,11 @@ private:
   /// numbered among the plans there) and model.vtu.
   void writeTheFiles()
   {
-    const incision::IncisionPlan& plan = recorded_->plan();
+    const planning::IncisionPlan& plan = recorded_->plan();
     writeMeasurements(args_.out / "measurements.csv", measured_, prediction_, excisedVolume_, woundStress_, peakAt_);
     const seg::ColourMap shade = seg::skinShadeFromCt(volume_->image(), maps_.skin);
-    const incision::PlanDisplay display = incision::buildPlanDisplay(prediction_, maps_.skin, &shade);
-    incision::writePlanDisplay(display, args_.out / "skin-before.vtp", args_.out / "skin-after.vtp");
+    const planning::PlanDisplay display = planning::buildPlanDisplay(prediction_, maps_.skin, &shade);
+    planning::writePlanDisplay(display, args_.out / "skin-before.vtp", args_.out / "skin-after.vtp");
     const std::string name =
       procedure_->title() + " " + std::to_string(logic_.scene().nodesOfType(NodeType::Plan).size() + 1);
     logic_.addPrediction(name, plan, saved_, prediction_, display, skinMapId_);
@@ -561,15 +561,15 @@ private:
 
   /// The surgeon's question: how far must I undermine? The same plan and
   /// mesh, the bone released under a band around the sutured edges
-  /// (incision::studyUndermining()), as undermining.csv and a plot.
+  /// (planning::studyUndermining()), as undermining.csv and a plot.
   void studyTheUndermining()
   {
-    const incision::IncisionPlan& plan = recorded_->plan();
+    const planning::IncisionPlan& plan = recorded_->plan();
     out_ << "Undermining study (closure force and peak skin stress within " << std::lround(kWoundStressRadius)
          << " mm of the wound against width):\n";
-    const incision::UnderminingStudy study =
-      incision::studyUndermining(maps_.skin, maps_.bone, plan, options_, args_.undermineWidths, kWoundStressRadius);
-    if (study.regionRadius > incision::SimulationOptions{}.regionRadius)
+    const planning::UnderminingStudy study =
+      planning::studyUndermining(maps_.skin, maps_.bone, plan, options_, args_.undermineWidths, kWoundStressRadius);
+    if (study.regionRadius > planning::SimulationOptions{}.regionRadius)
       out_ << "  (meshed region " << study.regionRadius << " mm around the wound, for the widest band)\n";
     const fs::path csv = args_.out / "undermining.csv";
     std::ofstream table(csv);
@@ -583,7 +583,7 @@ private:
                               {},
                               {},
                               0xc0392b};
-    for (const incision::UnderminingStudyRow& row : study.rows)
+    for (const planning::UnderminingStudyRow& row : study.rows)
     {
       table << row.width << "," << row.releasedBoneNodes << "," << row.closureForce << "," << row.largestSutureForce
             << "," << row.sutureGap << "," << row.peakVonMisesKPa << "," << row.meanVonMisesKPa << "\n";
@@ -614,20 +614,20 @@ private:
   PlanArgs args_;
   std::ostream& out_;
   std::ostream& err_;
-  std::optional<incision::PlanRecipe> replay_;
+  std::optional<planning::PlanRecipe> replay_;
   std::map<std::string, double> values_;
   VolumeNode* volume_ = nullptr;
   std::string ctHash_;
   RangeMapOutput maps_;
   NodeId skinMapId_;
-  std::optional<incision::RecordedPlan> recorded_;
-  incision::PlanRecipe saved_;
-  incision::SimulationOptions options_;
-  const incision::ProcedureTemplate* procedure_ = nullptr;
-  incision::PlanMeasurements measured_;
-  incision::PlanPrediction prediction_;
+  std::optional<planning::RecordedPlan> recorded_;
+  planning::PlanRecipe saved_;
+  planning::SimulationOptions options_;
+  const planning::ProcedureTemplate* procedure_ = nullptr;
+  planning::PlanMeasurements measured_;
+  planning::PlanPrediction prediction_;
   double excisedVolume_ = 0.0;
-  incision::WoundStress woundStress_;
+  planning::WoundStress woundStress_;
   seg::CylindricalPoint peakAt_;
 };
 

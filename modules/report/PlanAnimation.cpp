@@ -82,7 +82,7 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
                                 ", so one cannot be morphed into the other: predict the plan again (caps plan)");
   const seg::RangeMap skin = skinMapOf(scene, planNode);
   const seg::CylindricalFrame& frame = skin.frame();
-  const incision::IncisionPlan plan = IncisionLogic::readPlan(planNode);
+  const planning::IncisionPlan plan = IncisionLogic::readPlan(planNode);
   vtkPolyData* head = options.turntable ? headSkin(scene) : nullptr;
   if (options.turntable && !head)
     throw std::invalid_argument("the scene has no skin surface (\"Skin\") for the turntable: segment the CT "

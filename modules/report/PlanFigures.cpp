@@ -73,11 +73,11 @@ vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name)
   return nullptr;
 }
 
-LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart, bool labelled)
+LineLayer incisionLine(const planning::IncisionPlan& plan, const planning::SkinChart& chart, bool labelled)
 {
   LineLayer line;
   line.markLabelledPoints = labelled;
-  const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
+  const std::vector<planning::ChartPoint> path = plan.chartPath(chart);
   // Every cut point of a short cut; of a long one (an ellipse's 17) the
   // ends and a few between, so the labels do not cover one another.
   const std::size_t every = path.size() <= 6 ? 1 : (path.size() + 3) / 4;
@@ -227,7 +227,7 @@ std::optional<Figure> PlanFigures::planFigure(const PlanFacts& plan, PlanView vi
 {
   const seg::RangeMap skin = skinMap(plan);
   const seg::CylindricalFrame& frame = skin.frame();
-  const incision::SkinChart chart = plan.plan.chart(skin);
+  const planning::SkinChart chart = plan.plan.chart(skin);
   Figure figure;
   figure.printWidthMm = printWidthMm;
   figure.width = pixels(printWidthMm, dpi_);

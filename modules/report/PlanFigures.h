@@ -45,7 +45,7 @@ vtkPolyData* surfaceNamed(const Scene& scene, const std::string& name);
 /// The cut path of @a plan lifted onto the skin every 0.5 mm (§3.3.1: a
 /// solid line), its cut points labelled p0, p1, ... when @a labelled (on a
 /// long cut the ends and a few between, so labels do not overlap).
-render::LineLayer incisionLine(const incision::IncisionPlan& plan, const incision::SkinChart& chart,
+render::LineLayer incisionLine(const planning::IncisionPlan& plan, const planning::SkinChart& chart,
                                bool labelled = true);
 
 /// A caption for a view; @a left: the plan is on the patient's left.

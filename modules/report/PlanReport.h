@@ -66,12 +66,12 @@ struct PlanFacts
   std::string reference;      ///< where the procedure is described
   /// Parameter label, value and unit, in the procedure file's units.
   std::vector<std::array<std::string, 3>> parameters;
-  incision::IncisionPlan plan;
-  std::optional<incision::PlanRecipe> recipe;
-  incision::SimulationOptions options;
-  incision::PlanMeasurements measured;
-  incision::PlanPrediction prediction;
-  incision::WoundStress woundStress;
+  planning::IncisionPlan plan;
+  std::optional<planning::PlanRecipe> recipe;
+  planning::SimulationOptions options;
+  planning::PlanMeasurements measured;
+  planning::PlanPrediction prediction;
+  planning::WoundStress woundStress;
   double woundStressTheta = 0.0, woundStressZ = 0.0; ///< where the peak is (radians, mm)
   double excisedVolumeToBone = 0.0;                  ///< by the range maps (mm³), the second method
   /// Soft-tissue thickness under the cut path (mm), sampled every 0.5 mm

@@ -188,7 +188,7 @@ ClosureJob ResultsLogic::closureJob(const PlanNode& node)
   // As the report's planFacts: the plan rebuilt from its recipe, meshed
   // and solved with the options it was predicted with.
   IncisionLogic incision(scene());
-  const std::optional<incision::PlanRecipe> recipe = IncisionLogic::readRecipe(node);
+  const std::optional<planning::PlanRecipe> recipe = IncisionLogic::readRecipe(node);
   job.plan = recipe ? incision.applyRecipe(*recipe, job.skin) : IncisionLogic::readPlan(node);
   job.options = IncisionLogic::simulationOptions(node);
   job.options.threads = 2;
@@ -199,10 +199,10 @@ std::optional<ClosureNumbers> ResultsLogic::computeClosure(const ClosureJob& job
 {
   if (progress && !progress(0.05, "Predicting " + job.planName + " again for its closure force"))
     return std::nullopt;
-  const incision::PlanPrediction prediction = incision::simulatePlan(job.skin, job.bone, job.plan, job.options);
+  const planning::PlanPrediction prediction = planning::simulatePlan(job.skin, job.bone, job.plan, job.options);
   if (progress && !progress(0.95, "Wound stress of " + job.planName))
     return std::nullopt;
-  const incision::WoundStress wound = incision::woundSkinStress(prediction, kWoundStressRadius);
+  const planning::WoundStress wound = planning::woundSkinStress(prediction, kWoundStressRadius);
   ClosureNumbers numbers;
   numbers.closureForce = prediction.closure.magnitudeSum;
   numbers.largestSutureForce = prediction.closure.largest;
@@ -224,16 +224,16 @@ IncisionProfile ResultsLogic::incisionProfile(const PlanNode& node, vtkPolyData*
   if (!stress || !moved)
     return profile;
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);
-  const incision::IncisionPlan plan = IncisionLogic::readPlan(node);
-  const incision::SkinChart chart = plan.chart(skin);
-  const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
+  const planning::IncisionPlan plan = IncisionLogic::readPlan(node);
+  const planning::SkinChart chart = plan.chart(skin);
+  const std::vector<planning::ChartPoint> path = plan.chartPath(chart);
 
   auto locator = vtkSmartPointer<vtkStaticPointLocator>::New();
   locator->SetDataSet(before);
   locator->BuildLocator();
   double length = 0.0;
   Eigen::Vector3d previous = Eigen::Vector3d::Zero();
-  const auto sample = [&](const incision::ChartPoint& c) {
+  const auto sample = [&](const planning::ChartPoint& c) {
     const Eigen::Vector3d p = chart.lift(c);
     if (!p.allFinite())
       return;

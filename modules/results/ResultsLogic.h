@@ -76,8 +76,8 @@ struct ClosureJob
 {
   std::string planName;
   seg::RangeMap skin, bone;
-  incision::IncisionPlan plan;
-  incision::SimulationOptions options;
+  planning::IncisionPlan plan;
+  planning::SimulationOptions options;
 };
 
 /// A point along the incision and the skin's values there.

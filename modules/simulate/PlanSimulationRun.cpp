@@ -73,7 +73,7 @@ std::string facialTissueSource()
          "the forces and stresses scale with E.";
 }
 
-PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const incision::SimulationOptions& options)
+PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const planning::SimulationOptions& options)
 {
   const auto* node = scene.nodeAs<PlanNode>(planId);
   if (!node)
@@ -106,7 +106,7 @@ PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const inci
   in.options = options;
   for (const auto& [layer, m] : options.materials)
   {
-    const std::string problem = incision::materialProblem(m.youngsModulus, m.poissonRatio);
+    const std::string problem = planning::materialProblem(m.youngsModulus, m.poissonRatio);
     if (!problem.empty())
       throw std::invalid_argument("the material of " + layerName(layer) + ": " + problem);
   }
@@ -116,9 +116,9 @@ PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const inci
 ModelSize estimateModel(const PlanRunInput& input)
 {
   const auto start = std::chrono::steady_clock::now();
-  incision::SimulationOptions options = input.options;
+  planning::SimulationOptions options = input.options;
   options.progress = nullptr;
-  const incision::PlanPrediction meshed = incision::meshPlan(input.skin, input.bone, input.plan, options);
+  const planning::PlanPrediction meshed = planning::meshPlan(input.skin, input.bone, input.plan, options);
   ModelSize size;
   size.nodes = meshed.continuum.mesh.nodeCount();
   size.elements = Eigen::Index(meshed.continuum.mesh.elements.size());
@@ -133,24 +133,24 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   // Fractions of the whole run: the simulation takes most of it.
   phase(progress, 0.0, "Skin shade from the CT");
   auto start = std::chrono::steady_clock::now();
-  const incision::SkinShade shade = incision::skinShadeOfCt(input.ct, input.skin);
+  const planning::SkinShade shade = planning::skinShadeOfCt(input.ct, input.skin);
   r.shadeNote = shade.note;
   r.shadeSeconds = secondsSince(start);
 
-  incision::SimulationOptions options = input.options;
+  planning::SimulationOptions options = input.options;
   options.progress = [&progress](double fraction, const std::string& step) {
     return !progress || progress(0.05 + 0.8 * fraction, step);
   };
-  r.prediction = incision::simulatePlan(input.skin, input.bone, input.plan, options);
+  r.prediction = planning::simulatePlan(input.skin, input.bone, input.plan, options);
 
   phase(progress, 0.87, "Display surfaces (\u00a74.7)");
   start = std::chrono::steady_clock::now();
-  r.display = incision::buildPlanDisplay(r.prediction, input.skin, shade.map());
+  r.display = planning::buildPlanDisplay(r.prediction, input.skin, shade.map());
   r.displaySeconds = secondsSince(start);
 
   phase(progress, 0.95, "Skin stress near the wound");
   start = std::chrono::steady_clock::now();
-  r.woundStress = incision::woundSkinStress(r.prediction, kWoundRadius);
+  r.woundStress = planning::woundSkinStress(r.prediction, kWoundRadius);
   const seg::CylindricalPoint at = input.skin.frame().toCylindrical(r.woundStress.original);
   r.woundStressTheta = at.theta;
   r.woundStressZ = at.z;
@@ -164,7 +164,7 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
 
 PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunResult& result, bool showModel)
 {
-  incision::PlanRecipe recipe = input.recipe;
+  planning::PlanRecipe recipe = input.recipe;
   recipe.elementSize = input.options.elementSize;
   recipe.cutLayers = input.options.cutLayers;
 
@@ -218,7 +218,7 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
   return nodes;
 }
 
-vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& prediction, int steps, double lift)
+vtkSmartPointer<vtkPolyData> modelDrawing(const planning::PlanPrediction& prediction, int steps, double lift)
 {
   if (steps < 1)
     throw std::invalid_argument("modelDrawing: at least one step per element edge");
@@ -304,7 +304,7 @@ vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& predic
 
 std::string summaryText(const PlanRunResult& r)
 {
-  const incision::PlanPrediction& p = r.prediction;
+  const planning::PlanPrediction& p = r.prediction;
   std::ostringstream out;
   out << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
       << p.dofCount << " DOF (" << p.reducedDofCount << " free)\n";

@@ -32,7 +32,7 @@ namespace simulate {
 /// @name Materials
 ///@{
 /// The tissue of layer @a layer from the skin down, as
-/// incision::defaultFacialTissueMaterials() assigns it: "Skin (dermis)",
+/// planning::defaultFacialTissueMaterials() assigns it: "Skin (dermis)",
 /// "Subcutaneous fat", "Muscle / SMAS", deeper layers "Layer N (as muscle)".
 std::string layerName(int layer);
 /// Title of the default preset, shown in the panel.
@@ -47,13 +47,13 @@ struct PlanRunInput
 {
   NodeId planId;    ///< the plan node it replaces
   std::string name; ///< its name, kept by the new nodes
-  incision::IncisionPlan plan;
-  incision::PlanRecipe recipe; ///< the node's recipe (operations only, when it has none: empty)
+  planning::IncisionPlan plan;
+  planning::PlanRecipe recipe; ///< the node's recipe (operations only, when it has none: empty)
   seg::RangeMap skin, bone;
   NodeId skinMapId;
   /// The CT the skin's shade is read from (seg::skinShadeFromCt); null: grey.
   vtkSmartPointer<vtkImageData> ct;
-  incision::SimulationOptions options;
+  planning::SimulationOptions options;
 };
 
 /// @brief Gathers a run of plan @a planId of @a scene with @a options.
@@ -62,25 +62,25 @@ struct PlanRunInput
 /// @throws std::invalid_argument naming what is missing (no such plan, no
 /// skin or bone map: build them in the RangeMap module) or a plan that does
 /// not read (IncisionLogic::readPlan(), readRecipe()).
-PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const incision::SimulationOptions& options);
+PlanRunInput preparePlanRun(const Scene& scene, const NodeId& planId, const planning::SimulationOptions& options);
 
-/// The size of the model a run will solve, from its meshes alone (incision::meshPlan()).
+/// The size of the model a run will solve, from its meshes alone (planning::meshPlan()).
 struct ModelSize
 {
   Eigen::Index nodes = 0, elements = 0, dofs = 0;
   double seconds = 0.0; ///< how long the meshing took
 };
-/// @throws as incision::meshPlan() does.
+/// @throws as planning::meshPlan() does.
 ModelSize estimateModel(const PlanRunInput& input);
 
 /// What a run computed (worker thread).
 struct PlanRunResult
 {
-  incision::PlanPrediction prediction;
-  incision::PlanDisplay display;
+  planning::PlanPrediction prediction;
+  planning::PlanDisplay display;
   /// The largest skin stress within kWoundRadius of the wound, and where
   /// (θ radians, z mm on the skin map's frame, before the operation).
-  incision::WoundStress woundStress;
+  planning::WoundStress woundStress;
   double woundStressTheta = 0.0, woundStressZ = 0.0;
   /// Why the skin is grey, when it is (no CT, or its shade failed); empty otherwise.
   std::string shadeNote;
@@ -126,7 +126,7 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
 /// red, sutures green (kEdgeColour, kFixedColour, kSutureColour). Lines
 /// and points are lifted @a lift mm outwards (from the bone to the skin
 /// along each node column) so the skin surface does not hide them.
-vtkSmartPointer<vtkPolyData> modelDrawing(const incision::PlanPrediction& prediction, int steps = 4, double lift = 0.3);
+vtkSmartPointer<vtkPolyData> modelDrawing(const planning::PlanPrediction& prediction, int steps = 4, double lift = 0.3);
 inline constexpr unsigned char kEdgeColour[3] = {30, 50, 120};
 inline constexpr unsigned char kFixedColour[3] = {220, 30, 30};
 inline constexpr unsigned char kSutureColour[3] = {0, 170, 60};

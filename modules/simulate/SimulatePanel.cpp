@@ -183,7 +183,7 @@ void SimulatePanel::addRunAndResults(QWidget* content, QVBoxLayout* layout)
 /// values replace them).
 void SimulatePanel::setDefaults()
 {
-  const incision::SimulationOptions defaults;
+  const planning::SimulationOptions defaults;
   estimateTimer_ = new QTimer(this);
   estimateTimer_->setSingleShot(true);
   estimateTimer_->setInterval(300);
@@ -294,7 +294,7 @@ void SimulatePanel::loadPlanOptions()
   const auto* node = logic_.scene().nodeAs<PlanNode>(currentPlan());
   if (!node)
     return;
-  const incision::SimulationOptions o = IncisionLogic::simulationOptions(*node);
+  const planning::SimulationOptions o = IncisionLogic::simulationOptions(*node);
   loading_ = true;
   layers_->setValue(o.layerCount);
   cutDepth_->setMaximum(o.layerCount);
@@ -316,7 +316,7 @@ void SimulatePanel::loadPlanOptions()
       materials_->item(layer, kPoissonColumn)->setText(numberText(o.materials.at(layer).poissonRatio, 3));
     }
     bool preset = true;
-    for (const auto& [layer, m] : incision::defaultFacialTissueMaterials(o.layerCount))
+    for (const auto& [layer, m] : planning::defaultFacialTissueMaterials(o.layerCount))
       preset = preset && o.materials.count(layer) && o.materials.at(layer).youngsModulus == m.youngsModulus &&
                o.materials.at(layer).poissonRatio == m.poissonRatio;
     preset_->setCurrentIndex(preset ? 0 : 1);
@@ -327,7 +327,7 @@ void SimulatePanel::loadPlanOptions()
 void SimulatePanel::resizeMaterials(int layers)
 {
   const QSignalBlocker block(materials_);
-  const fem::MaterialTable preset = incision::defaultFacialTissueMaterials(layers);
+  const fem::MaterialTable preset = planning::defaultFacialTissueMaterials(layers);
   const int old = materials_->rowCount();
   materials_->setRowCount(layers);
   for (int layer = old; layer < layers; ++layer)
@@ -373,7 +373,7 @@ void SimulatePanel::materialEdited(QTableWidgetItem* item)
   if (!okE || !okNu)
     problem = "type a number";
   else
-    problem = incision::materialProblem(e / 1e3, nu);
+    problem = planning::materialProblem(e / 1e3, nu);
   const QSignalBlocker block(materials_);
   item->setBackground(problem.empty() ? QBrush() : QBrush(QColor(255, 200, 200)));
   if (!problem.empty())
@@ -382,9 +382,9 @@ void SimulatePanel::materialEdited(QTableWidgetItem* item)
                       ". Correct it, or choose the preset again; nothing runs until it is valid.");
 }
 
-incision::SimulationOptions SimulatePanel::options(std::string* problem) const
+planning::SimulationOptions SimulatePanel::options(std::string* problem) const
 {
-  incision::SimulationOptions o;
+  planning::SimulationOptions o;
   o.layerCount = layers_->value();
   o.cutLayers = cutDepth_->value();
   o.regionRadius = regionRadius_->value();
@@ -396,7 +396,7 @@ incision::SimulationOptions SimulatePanel::options(std::string* problem) const
     bool okE = false, okNu = false;
     const double e = materials_->item(layer, kModulusColumn)->text().trimmed().toDouble(&okE) / 1e3;
     const double nu = materials_->item(layer, kPoissonColumn)->text().trimmed().toDouble(&okNu);
-    const std::string wrong = okE && okNu ? incision::materialProblem(e, nu) : std::string("not a number");
+    const std::string wrong = okE && okNu ? planning::materialProblem(e, nu) : std::string("not a number");
     if (!wrong.empty())
     {
       if (problem && problem->empty())
@@ -427,7 +427,7 @@ void SimulatePanel::estimate()
   if (plan_->count() == 0)
     return;
   std::string problem;
-  incision::SimulationOptions o = options(&problem);
+  planning::SimulationOptions o = options(&problem);
   auto input = std::make_shared<simulate::PlanRunInput>();
   try
   {
@@ -481,7 +481,7 @@ void SimulatePanel::run()
     return;
   }
   std::string problem;
-  const incision::SimulationOptions o = options(&problem);
+  const planning::SimulationOptions o = options(&problem);
   if (!problem.empty())
   {
     host_.showError("Simulate", "Not run: " + problem + ". Correct the value in the material table.");

@@ -58,7 +58,7 @@ private:
   void materialEdited(QTableWidgetItem* item);
   /// The options the widgets give; materials only when all are valid
   /// (@a problem says what is wrong otherwise).
-  incision::SimulationOptions options(std::string* problem) const;
+  planning::SimulationOptions options(std::string* problem) const;
   /// Recomputes the estimate after a short pause (parameters change in bursts).
   void scheduleEstimate();
   void estimate();

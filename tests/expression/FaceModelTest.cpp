@@ -118,7 +118,7 @@ TEST(FaceModel, TheWholeFaceIsMeshedFromTheSkinToTheBone)
 
   // Every skin node lies on the skin map, and every column runs along the
   // ray towards the axis down to the depth the mesher was given.
-  const seg::RangeMap boneForDepth = incision::boneForTissueDepth(skin, sample.maps.bone, 10.0, 8);
+  const seg::RangeMap boneForDepth = planning::boneForTissueDepth(skin, sample.maps.bone, 10.0, 8);
   double worstSkin = 0.0, worstDepth = 0.0, worstRay = 0.0;
   for (std::size_t v = 0; v < c.vertexColumns.size(); ++v)
   {

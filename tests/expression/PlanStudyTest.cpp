@@ -53,7 +53,7 @@ Studied& studied()
     Scene scene;
     IncisionLogic logic(scene);
     out->input.planName = "Z-plasty 1";
-    out->input.plan = logic.placeProcedure("z-plasty", face.maps.skin, incision::SkinPoint{-40.0 * kDegree, -47.0}, {});
+    out->input.plan = logic.placeProcedure("z-plasty", face.maps.skin, planning::SkinPoint{-40.0 * kDegree, -47.0}, {});
     out->input.skin = face.maps.skin;
     out->input.bone = face.maps.bone;
     out->input.model = out->model;
@@ -77,11 +77,11 @@ Studied& studied()
 /// The plan's display surface built independently, with @a u set as its solution.
 Eigen::Matrix3Xd displayUnder(const PlanStudy& study, const Eigen::VectorXd& u)
 {
-  incision::PlanDisplayOptions options;
+  planning::PlanDisplayOptions options;
   options.resolution = 3;
   options.maxRangeDetail = 3.0;
-  incision::PlanDisplay display =
-    incision::buildPlanDisplay(study.prediction(), test::sampleFace().maps.skin, nullptr, options);
+  planning::PlanDisplay display =
+    planning::buildPlanDisplay(study.prediction(), test::sampleFace().maps.skin, nullptr, options);
   display.surface.setSolution(u, study.prediction().materials);
   return display.surface.positions(fem::DisplayMapping{1.0, true});
 }
@@ -101,7 +101,7 @@ Eigen::VectorXd smileOf(const ExpressionModel& model)
 /// (in the chart), where the closure put it.
 Eigen::Vector3d skinPointBelowTheCut(const PlanStudy& study, double below)
 {
-  const incision::PlanPrediction& p = study.prediction();
+  const planning::PlanPrediction& p = study.prediction();
   const fem::ChartPoint aim = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -below);
   std::size_t nearest = 0;
   for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)
@@ -255,7 +255,7 @@ TEST(PlanStudy, TheFaceCellsUnderThePlanCoverTheRegionInsideItsRim)
   double perimeter = 0.0;
   for (std::size_t i = 0, j = rim.size() - 1; i < rim.size(); j = i++)
     perimeter += (rim[i] - rim[j]).norm();
-  const incision::PlanPrediction& p = study.prediction();
+  const planning::PlanPrediction& p = study.prediction();
   const seg::CylindricalFrame& frame = test::sampleFace().maps.skin.frame();
   const seg::CylindricalPoint origin = frame.toCylindrical(
     p.continuum.mesh.nodes.col(p.continuum.vertexColumns[std::size_t(p.surface.mesh.outerBorder.front())].front()));

@@ -24,7 +24,7 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 
 struct ClosedPlan
 {
-  incision::PlanPrediction prediction;
+  planning::PlanPrediction prediction;
   std::unique_ptr<fem::LinearStaticAnalysis> analysis;
   std::vector<FittedMuscle> muscles;
 };
@@ -37,11 +37,11 @@ const ClosedPlan& closedPlan()
     const auto& face = test::sampleFace();
     Scene scene;
     IncisionLogic logic(scene);
-    const incision::IncisionPlan z =
-      logic.placeProcedure("z-plasty", face.maps.skin, incision::SkinPoint{-40.0 * kDegree, -47.0}, {});
-    incision::SimulationOptions options;
+    const planning::IncisionPlan z =
+      logic.placeProcedure("z-plasty", face.maps.skin, planning::SkinPoint{-40.0 * kDegree, -47.0}, {});
+    planning::SimulationOptions options;
     options.threads = 2;
-    out->prediction = incision::simulatePlan(face.maps.skin, face.maps.bone, z, options);
+    out->prediction = planning::simulatePlan(face.maps.skin, face.maps.bone, z, options);
     out->analysis = postOperativeAnalysis(out->prediction);
     out->muscles =
       fitMuscleSet(readMuscleSet(defaultMuscleSetPath()), face.landmarks.landmarks, face.maps.skin, face.maps.bone);
@@ -51,7 +51,7 @@ const ClosedPlan& closedPlan()
 }
 
 /// The skin node 12 mm below the cut's first point (in the chart): where the fingertip goes.
-int fingertipNode(const incision::PlanPrediction& p)
+int fingertipNode(const planning::PlanPrediction& p)
 {
   const fem::ChartPoint below = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
   std::size_t nearest = 0;
@@ -116,7 +116,7 @@ TEST(PlanUnderExpression, MusclesOnTheClosedPlanAddToItsClosure)
 TEST(PlanUnderExpression, TheContourMeasureIgnoresALiftAndSeesABump)
 {
   const ClosedPlan& plan = closedPlan();
-  const incision::PlanPrediction& p = plan.prediction;
+  const planning::PlanPrediction& p = plan.prediction;
   const seg::CylindricalFrame& frame = test::sampleFace().maps.skin.frame();
   const Eigen::VectorXd& rest = p.displacements;
   const ContourBumps before = contourBumps(p, frame, rest);
@@ -164,7 +164,7 @@ TEST(PlanUnderExpression, TheContourMeasureIgnoresALiftAndSeesABump)
 TEST(PlanUnderExpression, APushOfHalfTheTravelIsHalfWay)
 {
   const ClosedPlan& plan = closedPlan();
-  const incision::PlanPrediction& p = plan.prediction;
+  const planning::PlanPrediction& p = plan.prediction;
   const seg::CylindricalFrame& frame = test::sampleFace().maps.skin.frame();
   // The fingertip below the cut, pushing the cheek up 6 mm along the head
   // axis (§5.4: "pushed her cheek up about a half inch").
@@ -218,7 +218,7 @@ TEST(PlanUnderExpression, ThePushPathGoesThroughItsCornersAtEvenSpeed)
 TEST(PlanUnderExpression, ThreeUnitPushesGiveAnyTravelAsAFreshSolveDoes)
 {
   const ClosedPlan& plan = closedPlan();
-  const incision::PlanPrediction& p = plan.prediction;
+  const planning::PlanPrediction& p = plan.prediction;
   const int tip = fingertipNode(p);
   const Eigen::Vector3d centre = p.continuum.mesh.nodes.col(tip) + p.displacements.segment<3>(3 * Eigen::Index(tip));
   const PushResponses responses(p, centre, 4.0);
@@ -255,7 +255,7 @@ TEST(PlanUnderExpression, ThreeUnitPushesGiveAnyTravelAsAFreshSolveDoes)
 TEST(PlanUnderExpression, TheWholeFaceSmileDrivesThePlanAtItsRim)
 {
   const ClosedPlan& plan = closedPlan();
-  const incision::PlanPrediction& p = plan.prediction;
+  const planning::PlanPrediction& p = plan.prediction;
   const auto& sample = test::sampleFace();
   FaceModelOptions options;
   options.elementSize = 8.0;

@@ -9,7 +9,7 @@
 #include "planning/PlanSimulation.h"
 #include "scene/PlanNode.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 /// The plan read from a node after a trip through the scene's JSON, as a
@@ -93,4 +93,4 @@ TEST(PlanNode, AHandEditedNodeThatDoesNotFitIsRefused)
   EXPECT_THROW(IncisionLogic::readPlan(sutures), std::invalid_argument);
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

@@ -29,7 +29,7 @@
 
 namespace fs = std::filesystem;
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 using test::degree;
@@ -667,4 +667,4 @@ TEST(CtContentHash, TheSameScanReadTwiceUnderOtherNamesHashesTheSame)
   EXPECT_THROW(ctContentHash(vtkSmartPointer<vtkImageData>::New()), std::invalid_argument);
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

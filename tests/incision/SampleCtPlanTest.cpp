@@ -25,7 +25,7 @@
 
 namespace fs = std::filesystem;
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
@@ -168,4 +168,4 @@ TEST_F(SampleCtPlan, PlansAcrossTheSeamAndNearTheTopOfTheScanClose)
 }
 
 } // namespace
-} // namespace caps::incision
+} // namespace caps::planning

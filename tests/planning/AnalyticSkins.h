@@ -51,9 +51,9 @@ inline const CylinderPhantom& cylinderPhantom()
 }
 
 /// The phantom tests' simulation: 2 mm elements, a 20 mm region, 3 layers, one thread.
-inline incision::SimulationOptions phantomSimulationOptions()
+inline planning::SimulationOptions phantomSimulationOptions()
 {
-  incision::SimulationOptions o;
+  planning::SimulationOptions o;
   o.elementSize = 2.0;
   o.regionRadius = 20.0;
   o.layerCount = 3;
@@ -66,16 +66,16 @@ inline std::filesystem::path proceduresFolder()
   return std::filesystem::path(CAPS_TEST_DATA_DIR) / "procedures";
 }
 
-inline const incision::ProcedureLibrary& shippedProcedures()
+inline const planning::ProcedureLibrary& shippedProcedures()
 {
-  static const incision::ProcedureLibrary library = incision::ProcedureLibrary::load(proceduresFolder());
+  static const planning::ProcedureLibrary library = planning::ProcedureLibrary::load(proceduresFolder());
   return library;
 }
 
 /// The shipped procedure @a id (data/procedures/); throws when there is none.
-inline const incision::ProcedureTemplate& shippedProcedure(const std::string& id)
+inline const planning::ProcedureTemplate& shippedProcedure(const std::string& id)
 {
-  const incision::ProcedureTemplate* t = shippedProcedures().find(id);
+  const planning::ProcedureTemplate* t = shippedProcedures().find(id);
   if (!t)
     throw std::runtime_error("no procedure " + id);
   return *t;

@@ -10,7 +10,7 @@
 #include "planning/IncisionPlan.h"
 
 using namespace caps;
-using namespace caps::incision;
+using namespace caps::planning;
 
 namespace {
 

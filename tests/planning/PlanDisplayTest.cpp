@@ -27,7 +27,7 @@
 #include "planning/PlanDisplay.h"
 #include "segmentation/SkinShade.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 using Phantom = test::CylinderPhantom;
@@ -397,4 +397,4 @@ TEST(PlanDisplay, NewSolutionAndNewScaleAreFast)
 }
 
 } // namespace
-} // namespace caps::incision
+} // namespace caps::planning

@@ -14,7 +14,7 @@
 #include "AnalyticSkins.h"
 #include "planning/PlanSimulation.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 using test::degree;
@@ -583,4 +583,4 @@ TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
 }
 
 } // namespace
-} // namespace caps::incision
+} // namespace caps::planning

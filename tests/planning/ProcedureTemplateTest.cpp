@@ -11,7 +11,7 @@
 #include "planning/SkinMeasurements.h"
 
 using namespace caps;
-using namespace caps::incision;
+using namespace caps::planning;
 namespace fs = std::filesystem;
 
 namespace {

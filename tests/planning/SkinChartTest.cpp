@@ -6,7 +6,7 @@
 #include "planning/SkinChart.h"
 
 using namespace caps;
-using namespace caps::incision;
+using namespace caps::planning;
 
 TEST(SkinChart, ScaleIsTheSkinRadiusAtTheCentre)
 {

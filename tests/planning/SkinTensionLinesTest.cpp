@@ -19,8 +19,8 @@
 namespace caps {
 namespace {
 
-using incision::FaceLayout;
-using incision::SkinTensionLines;
+using planning::FaceLayout;
+using planning::SkinTensionLines;
 using test::cylinderSkin;
 
 constexpr double kFront = -test::pi / 2.0;
@@ -181,21 +181,21 @@ TEST_F(SkinTensionLinesTest, PlanAxisAgainstTheLines)
 {
   // A horizontal cut on the forehead lies along the lines; a vertical one across them.
   const seg::CylindricalFrame& frame = skin.frame();
-  auto normalized = [&frame](double x, double z) { return incision::normalizedFromSkinPoint(frame, {theta(x), z}); };
-  incision::IncisionPlan along({normalized(-10.0, 90.0), normalized(0.0, 90.0), normalized(10.0, 90.0)},
+  auto normalized = [&frame](double x, double z) { return planning::normalizedFromSkinPoint(frame, {theta(x), z}); };
+  planning::IncisionPlan along({normalized(-10.0, 90.0), normalized(0.0, 90.0), normalized(10.0, 90.0)},
                                {theta(0.0), 90.0});
-  incision::IncisionPlan across({normalized(0.0, 80.0), normalized(0.0, 90.0), normalized(0.0, 100.0)},
+  planning::IncisionPlan across({normalized(0.0, 80.0), normalized(0.0, 90.0), normalized(0.0, 100.0)},
                                 {theta(0.0), 90.0});
-  const auto a = incision::axisToTensionLines(along, lines);
+  const auto a = planning::axisToTensionLines(along, lines);
   EXPECT_EQ(a.axis, "p0–p2");
   EXPECT_LT(a.degrees, 3.0);
-  EXPECT_GT(incision::axisToTensionLines(across, lines).degrees, 87.0);
+  EXPECT_GT(planning::axisToTensionLines(across, lines).degrees, 87.0);
   // A Z-plasty is judged by its central limb p1–p2.
-  incision::IncisionPlan z(
+  planning::IncisionPlan z(
     {normalized(-10.0, 100.0), normalized(-5.0, 90.0), normalized(5.0, 90.0), normalized(10.0, 80.0)},
     {theta(0.0), 90.0});
   z.setGenerator("z");
-  const auto c = incision::axisToTensionLines(z, lines);
+  const auto c = planning::axisToTensionLines(z, lines);
   EXPECT_EQ(c.axis, "p1–p2");
   EXPECT_LT(c.degrees, 3.0);
 }

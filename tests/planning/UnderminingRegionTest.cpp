@@ -27,7 +27,7 @@
 #include "planning/PlanSimulation.h"
 #include "planning/Undermining.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 using test::pi;
@@ -455,4 +455,4 @@ TEST(UnderminingRegion, TheDisplayIsOneOverTheRegionAndZeroAwayFromIt)
   EXPECT_GT(tinted, 50);
 }
 
-} // namespace caps::incision
+} // namespace caps::planning

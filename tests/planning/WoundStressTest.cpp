@@ -19,7 +19,7 @@
 #include "planning/PlanSimulation.h"
 #include "planning/WoundStress.h"
 
-namespace caps::incision {
+namespace caps::planning {
 namespace {
 
 /// A 24 mm 3:1 ellipse along the axis direction u, centred at θ = 0, z = 0:
@@ -258,4 +258,4 @@ TEST(WoundStress, RejectsABadRadiusAndAnEmptyPrediction)
 }
 
 } // namespace
-} // namespace caps::incision
+} // namespace caps::planning

@@ -462,7 +462,7 @@ TEST(ExpressionPanel, APlanStudiedUnderTheSmileAndPushedByAFingertip)
   // A fingertip 12 mm below the cut's first point: the display vertex there,
   // clicked where it shows, is where the fingertip rests (its place after
   // the operation, whatever the sliders show).
-  const incision::PlanPrediction& p = study->prediction();
+  const planning::PlanPrediction& p = study->prediction();
   const fem::ChartPoint aim = p.surface.mesh.vertices[0] + fem::ChartPoint(0.0, -12.0);
   std::size_t nearest = 0;
   for (std::size_t v = 0; v < p.surface.mesh.vertices.size(); ++v)

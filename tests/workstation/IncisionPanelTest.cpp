@@ -82,7 +82,7 @@ double worstLiftError(vtkPolyData* lines, const seg::RangeMap& skin)
     double p[3];
     lines->GetPoint(i, p);
     const seg::CylindricalPoint c = skin.frame().toCylindrical(Eigen::Vector3d(p[0], p[1], p[2]));
-    worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - incision::kIncisionLineLift));
+    worst = std::max(worst, std::abs(c.r - skin.sample(c.theta, c.z) - planning::kIncisionLineLift));
   }
   return worst;
 }
@@ -112,17 +112,17 @@ void hidePredictedSkins(Scene& scene)
 
 /// Checks the plan's lines against the plan and the skin: every point lift
 /// mm outside the skin, one vertex per cut point at its lifted skin point.
-void expectLinesOnSkin(vtkPolyData* lines, const incision::IncisionPlan& plan, const seg::RangeMap& skin)
+void expectLinesOnSkin(vtkPolyData* lines, const planning::IncisionPlan& plan, const seg::RangeMap& skin)
 {
   ASSERT_NE(lines, nullptr);
   ASSERT_GT(lines->GetNumberOfLines(), 0);
   EXPECT_LT(worstLiftError(lines, skin), 1.0) << "a line point is not lifted 0.5 mm off the skin map";
   const std::vector<Eigen::Vector3d> vertices = vertexPositions(lines);
-  const incision::SkinChart chart = plan.chart(skin);
-  const std::vector<incision::ChartPoint> path = plan.chartPath(chart);
+  const planning::SkinChart chart = plan.chart(skin);
+  const std::vector<planning::ChartPoint> path = plan.chartPath(chart);
   ASSERT_EQ(vertices.size(), path.size());
   for (std::size_t i = 0; i < path.size(); ++i)
-    EXPECT_NEAR((vertices[i] - chart.lift(path[i])).norm(), incision::kIncisionLineLift, 0.05) << "cut point " << i;
+    EXPECT_NEAR((vertices[i] - chart.lift(path[i])).norm(), planning::kIncisionLineLift, 0.05) << "cut point " << i;
 }
 
 void click(QPushButton* button)
@@ -188,7 +188,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   ASSERT_NE(planNode, nullptr) << "the new plan is not named Z-plasty 2";
   const NodeId planId = planNode->id();
   EXPECT_EQ(planNode->rangeMapId(), skinNode->id());
-  const incision::IncisionPlan placed = IncisionLogic::readPlan(*planNode);
+  const planning::IncisionPlan placed = IncisionLogic::readPlan(*planNode);
   EXPECT_EQ(placed.procedure(), "z-plasty");
   {
     const double rc = skin.sample(placed.centre().theta, placed.centre().z);
@@ -204,7 +204,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
     EXPECT_EQ(recipe->ctSha256, demoPlan->ctSha256());
     EXPECT_FALSE(recipe->ctSha256.empty());
     ASSERT_EQ(recipe->operations.size(), 1u);
-    const incision::IncisionPlan replayed = logic.applyRecipe(*recipe, skin);
+    const planning::IncisionPlan replayed = logic.applyRecipe(*recipe, skin);
     PlanNode a, b;
     IncisionLogic::writePlan(placed, a);
     IncisionLogic::writePlan(replayed, b);
@@ -225,7 +225,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   auto* table = workstation.widget<QTableWidget>("incision.measurements");
   ASSERT_NE(table, nullptr);
   {
-    const incision::PlanMeasurements m = incision::measurePlan(placed, skin);
+    const planning::PlanMeasurements m = planning::measurePlan(placed, skin);
     ASSERT_EQ(m.limbs.size(), 3u);
     for (const auto& l : m.limbs)
       EXPECT_NEAR(tableValue(table, QString("Limb p%1–p%2").arg(l.from).arg(l.to)), l.skin, 0.05);
@@ -240,7 +240,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
   limbAngle->setValue(45.0);
   ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() != before; }, 5)) << workstation.errors();
   const nlohmann::json after = planNode->toJson();
-  const incision::IncisionPlan changed = IncisionLogic::readPlan(*planNode);
+  const planning::IncisionPlan changed = IncisionLogic::readPlan(*planNode);
   EXPECT_NEAR(changed.parameters().at("limb_angle"), 45.0 * kDegree, 1e-12);
   EXPECT_NEAR(changed.centre().theta, placed.centre().theta, 1e-12);
   EXPECT_NE(changed.cutPath(), placed.cutPath());
@@ -254,7 +254,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
     PlanNode direct;
     IncisionLogic::writePlan(changed, direct);
     EXPECT_EQ(replayed.toJson(), direct.toJson());
-    const incision::PlanMeasurements m = incision::measurePlan(changed, skin);
+    const planning::PlanMeasurements m = planning::measurePlan(changed, skin);
     for (const auto& l : m.limbs)
       EXPECT_NEAR(tableValue(table, QString("Limb p%1–p%2").arg(l.from).arg(l.to)), l.skin, 0.05);
     for (const auto& a : m.limbAngles)
@@ -290,7 +290,7 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
     click(workstation.widget<QPushButton>("incision.move"));
     workstation.clickThreeDView(workstation.threeDViewPointOf({to.x(), to.y(), to.z()}));
     ASSERT_TRUE(workstation.waitUntil([&] { return planNode->toJson() != after; }, 5)) << workstation.errors();
-    const incision::IncisionPlan moved = IncisionLogic::readPlan(*planNode);
+    const planning::IncisionPlan moved = IncisionLogic::readPlan(*planNode);
     const Eigen::Vector3d centre =
       skin.frame().toWorld(skin.sample(moved.centre().theta, moved.centre().z), moved.centre().theta, moved.centre().z);
     EXPECT_LT((centre - to).norm(), 1.5);
@@ -348,13 +348,13 @@ TEST(IncisionPanel, PlaceMeasureEditUndoDelete)
     ASSERT_NE(ellipse, nullptr);
     selectPlan(list, ellipse->name());
     workstation.settle(200);
-    const incision::IncisionPlan plan = IncisionLogic::readPlan(*ellipse);
+    const planning::IncisionPlan plan = IncisionLogic::readPlan(*ellipse);
     ASSERT_TRUE(plan.isExcision());
     SurfaceNode* ellipseLines = test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 incision");
     ASSERT_NE(ellipseLines, nullptr);
     EXPECT_EQ(ellipseLines->polyData()->GetNumberOfLines(), 2) << "the cut and the hole border";
     expectLinesOnSkin(ellipseLines->polyData(), plan, skin);
-    const double area = incision::excisedArea(plan, skin);
+    const double area = planning::excisedArea(plan, skin);
     EXPECT_GT(area, 10.0);
     EXPECT_NEAR(tableValue(table, "Excised area"), area, 0.05);
   }
@@ -391,7 +391,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
     const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
     return std::pair{c.theta, c.z};
   };
-  const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
+  const planning::IncisionPlan original = IncisionLogic::readPlan(*node);
   const auto [t1, z1] = chartOf(original.cutPath()[1]);
   workstation.window().setThreeDViewCamera(cameraFacing(frame, skinPoint(t1, z1), t1, 180.0));
   workstation.selectModule("incision");
@@ -413,7 +413,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   workstation.settle(200);
   ASSERT_TRUE(workstation.errors().empty()) << workstation.errors();
   node = scene.nodeAs<PlanNode>(planId);
-  const incision::IncisionPlan moved = IncisionLogic::readPlan(*node);
+  const planning::IncisionPlan moved = IncisionLogic::readPlan(*node);
   {
     const auto [t, z] = chartOf(moved.cutPath()[1]);
     EXPECT_LT((skinPoint(t, z) - moveTo).norm(), 1.5);
@@ -433,11 +433,11 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   auto* v = workstation.widget<QDoubleSpinBox>("incision.offsetV");
   ASSERT_TRUE(border && u && v);
   border->setValue(1);
-  const incision::IncisionPlan current = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
-  const std::vector<incision::ChartPoint> path = current.chartPath(current.chart(skin));
-  const incision::ChartPoint across =
+  const planning::IncisionPlan current = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const std::vector<planning::ChartPoint> path = current.chartPath(current.chart(skin));
+  const planning::ChartPoint across =
     ((path[0] - path[1]).normalized() + (path[2] - path[1]).normalized()).normalized();
-  incision::ChartPoint applied = incision::ChartPoint::Zero();
+  planning::ChartPoint applied = planning::ChartPoint::Zero();
   for (double side : {1.0, -1.0})
   {
     const std::size_t errorsBefore = workstation.window().reportedErrors().size();
@@ -447,12 +447,12 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
     workstation.settle(100);
     if (workstation.window().reportedErrors().size() == errorsBefore)
     {
-      applied = incision::ChartPoint(u->value(), v->value());
+      applied = planning::ChartPoint(u->value(), v->value());
       break;
     }
   }
   ASSERT_GT(applied.norm(), 0.5) << workstation.errors();
-  const incision::IncisionPlan excised = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const planning::IncisionPlan excised = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
   EXPECT_TRUE(excised.isExcision());
   EXPECT_NEAR((excised.borderOffsets()[1] - applied).norm(), 0.0, 1e-12);
   EXPECT_GT(tableValue(workstation.widget<QTableWidget>("incision.measurements"), "Excised area"), 1.0);
@@ -469,7 +469,7 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   workstation.settle(200);
   ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBeforeRegion) << workstation.errors();
   node = scene.nodeAs<PlanNode>(planId);
-  const incision::IncisionPlan undermined = IncisionLogic::readPlan(*node);
+  const planning::IncisionPlan undermined = IncisionLogic::readPlan(*node);
   ASSERT_EQ(undermined.underminedRegions().size(), 1u);
   ASSERT_EQ(undermined.underminedRegions()[0].size(), 3u);
   for (std::size_t k = 0; k < 3; ++k)
@@ -493,8 +493,8 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
     ASSERT_NE(colours, nullptr);
     int tinted = 0;
     for (vtkIdType i = 0; i < colours->GetNumberOfTuples(); ++i)
-      tinted += colours->GetTypedComponent(i, 0) == incision::kUnderminedTint[0] &&
-                colours->GetTypedComponent(i, 2) == incision::kUnderminedTint[2];
+      tinted += colours->GetTypedComponent(i, 0) == planning::kUnderminedTint[0] &&
+                colours->GetTypedComponent(i, 2) == planning::kUnderminedTint[2];
     EXPECT_GT(tinted, 10);
   }
   workstation.screenshot("incision-edited-by-hand");
@@ -510,14 +510,14 @@ TEST(IncisionPanel, PointsOffsetsAndUnderminingByHand)
   ASSERT_EQ(workstation.window().reportedErrors().size(), errorsBeforeRegion) << workstation.errors();
   PlanNode* drawnNode = test::nodeNamed<PlanNode>(scene, "Cut 1");
   ASSERT_NE(drawnNode, nullptr);
-  const incision::IncisionPlan drawn = IncisionLogic::readPlan(*drawnNode);
+  const planning::IncisionPlan drawn = IncisionLogic::readPlan(*drawnNode);
   ASSERT_EQ(drawn.pointCount(), 3);
   for (int k = 0; k < 3; ++k)
   {
     const auto [t, z] = chartOf(drawn.cutPath()[std::size_t(k)]);
     EXPECT_LT((skinPoint(t, z) - cutPoints[std::size_t(k)]).norm(), 1.5) << "cut point " << k;
   }
-  EXPECT_EQ(drawn.writtenSutures(), incision::straightClosureSutures(3));
+  EXPECT_EQ(drawn.writtenSutures(), planning::straightClosureSutures(3));
   EXPECT_NE(test::nodeNamed<SurfaceNode>(scene, "Cut 1 incision"), nullptr);
   selectPlan(list, "Z-plasty 1");
   workstation.settle(100);
@@ -548,7 +548,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
     const seg::CylindricalPoint c = frame.fromNormalized({1.0, n.x(), n.y()});
     return std::pair{c.theta, c.z};
   };
-  const incision::IncisionPlan original = IncisionLogic::readPlan(*node);
+  const planning::IncisionPlan original = IncisionLogic::readPlan(*node);
   const auto [t0, z0] = chartOf(original.cutPath()[0]);
   workstation.window().setThreeDViewCamera(cameraFacing(frame, skinPoint(t0, z0 - 10.0), t0, 180.0));
   ui::ThreeDView* view = workstation.window().threeDView();
@@ -557,7 +557,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   selectPlan(workstation.widget<QListWidget>("incision.plans"), "Z-plasty 1");
   workstation.settle(200);
   ASSERT_EQ(view->handleCount(), original.cutPath().size());
-  const Eigen::Vector3d lifted0 = frame.toWorld(skin.sample(t0, z0) + incision::kIncisionLineLift, t0, z0);
+  const Eigen::Vector3d lifted0 = frame.toWorld(skin.sample(t0, z0) + planning::kIncisionLineLift, t0, z0);
   const QPoint grip = view->handleOnScreen(0);
   EXPECT_LE((grip - workstation.threeDViewPointOf({lifted0.x(), lifted0.y(), lifted0.z()})).manhattanLength(), 2);
 
@@ -575,7 +575,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   const double* cameraAfter = view->renderer()->GetActiveCamera()->GetPosition();
   for (int k = 0; k < 3; ++k)
     EXPECT_EQ(cameraAfter[k], cameraBefore[k]) << "the view turned during the drag";
-  const incision::IncisionPlan moved = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const planning::IncisionPlan moved = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
   const auto [tm, zm] = chartOf(moved.cutPath()[0]);
   EXPECT_LT((skinPoint(tm, zm) - target).norm(), 1.5) << "p0 is not where it was let go";
   for (std::size_t k = 1; k < original.cutPath().size(); ++k)
@@ -595,7 +595,7 @@ TEST(IncisionPanel, CutPointsDraggedAlongTheSkin)
   workstation.dragThreeDView(view->handleOnScreen(1), QPoint(3, 3));
   workstation.settle(100);
   EXPECT_TRUE(workstation.errors().empty()) << workstation.errors();
-  const incision::IncisionPlan after = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
+  const planning::IncisionPlan after = IncisionLogic::readPlan(*scene.nodeAs<PlanNode>(planId));
   for (std::size_t k = 0; k < after.cutPath().size(); ++k)
     EXPECT_LT((after.cutPath()[k] - moved.cutPath()[k]).norm(), 1e-12) << "point " << k;
 
@@ -642,9 +642,9 @@ TEST(IncisionPanel, SkinTensionLinesGuide)
   const double shown = tableValue(table, axisRow);
   ASSERT_FALSE(std::isnan(shown)) << "no angle to the skin tension lines in the measurements";
   const seg::LandmarkPlacement found = seg::placeLandmarks(skin);
-  const incision::SkinTensionLines logic(skin, incision::FaceLayout::fromLandmarks(found.landmarks, skin));
+  const planning::SkinTensionLines logic(skin, planning::FaceLayout::fromLandmarks(found.landmarks, skin));
   const double expected =
-    incision::axisToTensionLines(IncisionLogic::readPlan(*test::nodeNamed<PlanNode>(scene, "Z-plasty 1")), logic)
+    planning::axisToTensionLines(IncisionLogic::readPlan(*test::nodeNamed<PlanNode>(scene, "Z-plasty 1")), logic)
       .degrees;
   EXPECT_NEAR(shown, expected, 0.5);
   EXPECT_GE(shown, 0.0);

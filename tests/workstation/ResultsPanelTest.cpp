@@ -284,17 +284,17 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
     ASSERT_NE(node, nullptr);
     const seg::RangeMap skin = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
     const seg::RangeMap bone = RangeMapLogic::toRangeMap(*mapOfRole(scene, "bone"));
-    const std::optional<incision::PlanRecipe> recipe = IncisionLogic::readRecipe(*node);
+    const std::optional<planning::PlanRecipe> recipe = IncisionLogic::readRecipe(*node);
     ASSERT_TRUE(recipe.has_value());
     IncisionLogic incisionLogic(scene);
-    const incision::IncisionPlan replayed = incisionLogic.applyRecipe(*recipe, skin);
-    incision::SimulationOptions options;
+    const planning::IncisionPlan replayed = incisionLogic.applyRecipe(*recipe, skin);
+    planning::SimulationOptions options;
     options.threads = 2;
     if (recipe->elementSize > 0.0)
       options.elementSize = recipe->elementSize;
     options.cutLayers = recipe->cutLayers;
-    const incision::PlanPrediction prediction = incision::simulatePlan(skin, bone, replayed, options);
-    const incision::WoundStress wound = incision::woundSkinStress(prediction, 10.0);
+    const planning::PlanPrediction prediction = planning::simulatePlan(skin, bone, replayed, options);
+    const planning::WoundStress wound = planning::woundSkinStress(prediction, 10.0);
     const std::string force = "Closure force: " + fixed(prediction.closure.magnitudeSum, 2) + " N";
     const std::string stress = "Peak wound stress: " + fixed(1e3 * wound.peakVonMises, 1) + " kPa";
     ASSERT_TRUE(workstation.waitUntil([&] { return summary->text().contains("Closure force:"); }, 600))
@@ -408,8 +408,8 @@ TEST(ResultsPanel, ProfileAlongTheIncision)
   ASSERT_GT(profile.arcLength.size(), 10u);
   // Chart length of the cut path (mm).
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
-  const incision::IncisionPlan plan = IncisionLogic::readPlan(*node);
-  const std::vector<incision::ChartPoint> path = plan.chartPath(plan.chart(skin));
+  const planning::IncisionPlan plan = IncisionLogic::readPlan(*node);
+  const std::vector<planning::ChartPoint> path = plan.chartPath(plan.chart(skin));
   double chartLength = 0.0;
   for (std::size_t i = 0; i + 1 < path.size(); ++i)
     chartLength += (path[i + 1] - path[i]).norm();
@@ -487,7 +487,7 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   if (PlanNode* excision = test::nodeNamed<PlanNode>(scene, otherName);
       excision && excision->procedure() == "elliptical-excision")
   {
-    const incision::IncisionPlan read = IncisionLogic::readPlan(*excision);
+    const planning::IncisionPlan read = IncisionLogic::readPlan(*excision);
     const seg::RangeMap skinMap = RangeMapLogic::toRangeMap(*mapOfRole(scene, "skin"));
     const double theta = read.centre().theta, z = read.centre().z;
     const Eigen::Vector3d centre = skinMap.frame().toWorld(skinMap.sample(theta, z), theta, z);

@@ -125,16 +125,16 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   EXPECT_DOUBLE_EQ(planNode->simulation().value("elementSize", 0.0), 3.0);
 
   // The same plan simulated directly, from what the scene holds.
-  const incision::IncisionPlan plan = IncisionLogic::readPlan(*planNode); // still reads
+  const planning::IncisionPlan plan = IncisionLogic::readPlan(*planNode); // still reads
   const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(planNode->rangeMapId());
   ASSERT_NE(skinNode, nullptr);
   const RangeMapNode* boneNode = mapOfRole(scene, "bone");
   ASSERT_NE(boneNode, nullptr);
-  incision::SimulationOptions options;
+  planning::SimulationOptions options;
   options.elementSize = 3.0;
   options.threads = 2;
-  const incision::PlanPrediction direct =
-    incision::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
+  const planning::PlanPrediction direct =
+    planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
 
   EXPECT_EQ(dofs, long(direct.dofCount)) << "the estimate before the run is the solved model's size";
 
@@ -225,10 +225,10 @@ TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
   const auto plans = nodesNamed(scene, NodeType::Plan, kPlan);
   ASSERT_EQ(plans.size(), 1u);
   const auto* planNode = static_cast<PlanNode*>(plans.front());
-  const incision::IncisionPlan plan = IncisionLogic::readPlan(*planNode);
+  const planning::IncisionPlan plan = IncisionLogic::readPlan(*planNode);
   const seg::RangeMap skin = RangeMapLogic::toRangeMap(*scene.nodeAs<RangeMapNode>(planNode->rangeMapId()));
   const seg::RangeMap bone = RangeMapLogic::toRangeMap(*mapOfRole(scene, "bone"));
-  incision::SimulationOptions options;
+  planning::SimulationOptions options;
   options.elementSize = 3.0;
 
   std::vector<std::string> phases;
@@ -238,7 +238,7 @@ TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
     fractions.push_back(fraction);
     return true;
   };
-  const incision::PlanPrediction reported = incision::simulatePlan(skin, bone, plan, options);
+  const planning::PlanPrediction reported = planning::simulatePlan(skin, bone, plan, options);
   ASSERT_EQ(phases.size(), 5u);
   EXPECT_NE(phases[0].find("Surface mesh"), std::string::npos);
   EXPECT_NE(phases[1].find("Continuum mesh"), std::string::npos);
@@ -248,11 +248,11 @@ TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
   EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
 
   // The callback changes nothing of the result, and meshPlan() meshes the same model.
-  incision::SimulationOptions plain = options;
+  planning::SimulationOptions plain = options;
   plain.progress = nullptr;
-  const incision::PlanPrediction silent = incision::simulatePlan(skin, bone, plan, plain);
+  const planning::PlanPrediction silent = planning::simulatePlan(skin, bone, plan, plain);
   EXPECT_EQ((reported.displacements - silent.displacements).cwiseAbs().maxCoeff(), 0.0);
-  const incision::PlanPrediction meshed = incision::meshPlan(skin, bone, plan, plain);
+  const planning::PlanPrediction meshed = planning::meshPlan(skin, bone, plan, plain);
   EXPECT_EQ(meshed.continuum.mesh.dofCount(), silent.dofCount);
   EXPECT_EQ(meshed.continuum.mesh.elements.size(), silent.continuum.mesh.elements.size());
   EXPECT_EQ(meshed.displacements.size(), 0);
@@ -260,7 +260,7 @@ TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
   // Stopped before the assembly: the distinct exception, nothing solved.
   int calls = 0;
   options.progress = [&](double, const std::string&) { return ++calls < 3; };
-  EXPECT_THROW(incision::simulatePlan(skin, bone, plan, options), seg::Cancelled);
+  EXPECT_THROW(planning::simulatePlan(skin, bone, plan, options), seg::Cancelled);
   EXPECT_EQ(calls, 3);
 }
 
