@@ -143,6 +143,14 @@ Camera turntableCamera(const seg::CylindricalFrame& frame, double rMax, double z
   return fitCamera(points, frame.radialDirection(theta), frame.direction(), aspect, 20.0, 1.04);
 }
 
+/// Frame @a k of a morph of @a frames frames from @a from to @a to that may
+/// come back (k past the peak walks back down, the peak not repeated).
+vtkSmartPointer<vtkPolyData> morphFrame(vtkPolyData* from, vtkPolyData* to, int frames, int k)
+{
+  const int along = k < frames ? k : 2 * (frames - 1) - k;
+  return blendSurfaces(from, to, double(along) / (frames - 1));
+}
+
 /// Renders frame k = 0 … @a total − 1 of @a surfaceAt into
 /// @a sequence.folder with @a sequence.camera, coloured by the surfaces' skin
 /// shade when they have one, else in a skin tone; @a step is called before
@@ -173,12 +181,7 @@ void renderMorphFrames(vtkPolyData* from, vtkPolyData* to, const Figure& base, F
                        bool andBack, const std::function<void(const char*)>& step)
 {
   const int total = andBack ? 2 * frames - 2 : frames;
-  renderSurfaces(
-    [&](int k) {
-      const int along = k < frames ? k : 2 * (frames - 1) - k;
-      return blendSurfaces(from, to, double(along) / (frames - 1));
-    },
-    total, base, sequence, step);
+  renderSurfaces([&](int k) { return morphFrame(from, to, frames, k); }, total, base, sequence, step);
 }
 
 void renderTurntableFrames(const Figure& figure, vtkPolyData* framed, const seg::CylindricalFrame& frame, int frames,
@@ -406,12 +409,8 @@ AnimationResult writeMorphAnimation(vtkPolyData* from, vtkPolyData* to, const st
                                 std::to_string(to->GetNumberOfPoints()) + " points, so one cannot become the other");
   // There and back: the peak not repeated.
   const int total = andBack ? 2 * frames - 2 : frames;
-  return writeSequence(
-    [&](int k) {
-      const int along = k < frames ? k : 2 * (frames - 1) - k;
-      return blendSurfaces(from, to, double(along) / (frames - 1));
-    },
-    total, {from, to}, name, toCamera, viewUp, outDir, options, progress);
+  return writeSequence([&](int k) { return morphFrame(from, to, frames, k); }, total, {from, to}, name, toCamera,
+                       viewUp, outDir, options, progress);
 }
 
 AnimationResult writeSurfaceAnimation(const std::vector<vtkSmartPointer<vtkPolyData>>& frames, const std::string& name,

@@ -19,11 +19,6 @@
 namespace caps {
 namespace {
 
-void report(const TaskProgress& progress, double fraction, const std::string& step)
-{
-  seg::reportProgress(progress, fraction, step);
-}
-
 // The part [from, to] of the progress bar.
 seg::ProgressCallback part(const TaskProgress& progress, double from, double to)
 {
@@ -42,7 +37,7 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels, co
   if (parameters.nTheta < 4 || parameters.nZ < 2)
     throw std::invalid_argument("The range map needs at least 4 x 2 samples (got " + std::to_string(parameters.nTheta) +
                                 " x " + std::to_string(parameters.nZ) + ").");
-  report(progress, 0.0, "Head axis");
+  seg::reportProgress(progress, 0.0, "Head axis");
   const auto body = SegmentLogic::maskOf(labels, kSoftTissueLabel);
   const auto bone = SegmentLogic::maskOf(labels, kBoneLabel);
   seg::HeadAxisOptions axisOptions;
@@ -53,7 +48,7 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels, co
                ? seg::axisThroughBody(body, parameters.axis->point, parameters.axis->direction, axisOptions)
                : seg::fitHeadAxis(body, axisOptions);
 
-  report(progress, 0.05, "Skin and bone range maps");
+  seg::reportProgress(progress, 0.05, "Skin and bone range maps");
   seg::RangeMapBuildOptions build;
   build.skinThreshold = parameters.skinThresholdHu;
   build.boneThreshold = parameters.boneThresholdHu;
@@ -63,7 +58,7 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels, co
   out.boneFromMaskEdge = maps.boneFromMaskEdge;
   if (parameters.smooth)
   {
-    report(progress, 0.65, "Smoothing");
+    seg::reportProgress(progress, 0.65, "Smoothing");
     out.skin = seg::boxSmooth(maps.skin);
     out.bone = seg::boxSmooth(maps.bone);
   }
@@ -73,15 +68,15 @@ RangeMapOutput RangeMapLogic::compute(vtkImageData* ct, vtkImageData* labels, co
     out.bone = std::move(maps.bone);
   }
 
-  report(progress, 0.67, "Radial thickness");
+  seg::reportProgress(progress, 0.67, "Radial thickness");
   out.thickness = seg::radialThickness(out.skin, out.bone);
-  report(progress, 0.70, "Thickness along the skin normal");
+  seg::reportProgress(progress, 0.70, "Thickness along the skin normal");
   seg::NormalThicknessOptions normal;
   normal.progress = part(progress, 0.70, 0.98);
   out.thicknessNormal = seg::normalThickness(out.skin, out.bone, normal);
   out.radialStatistics = seg::thicknessStatistics(out.thickness);
   out.normalStatistics = seg::thicknessStatistics(out.thicknessNormal);
-  report(progress, 1.0, "Done");
+  seg::reportProgress(progress, 1.0, "Done");
   return out;
 }
 

@@ -18,12 +18,6 @@
 namespace caps {
 namespace {
 
-// Reports progress and throws seg::Cancelled when the user asked to stop.
-void report(const TaskProgress& progress, double fraction, const std::string& step)
-{
-  seg::reportProgress(progress, fraction, step);
-}
-
 // An unsigned char image with the geometry (origin, spacing, direction) of @a like.
 vtkSmartPointer<vtkImageData> emptyLike(vtkImageData* like)
 {
@@ -71,11 +65,11 @@ SegmentationOutput SegmentLogic::compute(vtkImageData* ct, const Parameters& par
   out.labels = makeLabels(masks.body, masks.bone);
   out.notes = std::move(masks.notes);
   out.thresholds = {parameters.skinThresholdHu, parameters.boneThresholdHu};
-  report(progress, 0.85, "Skin surface");
+  seg::reportProgress(progress, 0.85, "Skin surface");
   out.skinDisplay = displaySurface(masks.body);
-  report(progress, 0.93, "Bone surface");
+  seg::reportProgress(progress, 0.93, "Bone surface");
   out.boneDisplay = displaySurface(masks.bone);
-  report(progress, 1.0, "Done");
+  seg::reportProgress(progress, 1.0, "Done");
   return out;
 }
 

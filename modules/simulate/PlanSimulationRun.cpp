@@ -33,12 +33,6 @@ double secondsSince(std::chrono::steady_clock::time_point start)
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-/// Reports a phase; stops the run when the user cancelled.
-void phase(const TaskProgress& progress, double fraction, const std::string& step)
-{
-  seg::reportProgress(progress, fraction, step);
-}
-
 } // namespace
 
 std::string layerName(int layer)
@@ -131,7 +125,7 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
 {
   PlanRunResult r;
   // Fractions of the whole run: the simulation takes most of it.
-  phase(progress, 0.0, "Skin shade from the CT");
+  seg::reportProgress(progress, 0.0, "Skin shade from the CT");
   auto start = std::chrono::steady_clock::now();
   const planning::SkinShade shade = planning::skinShadeOfCt(input.ct, input.skin);
   r.shadeNote = shade.note;
@@ -143,12 +137,12 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   };
   r.prediction = planning::simulatePlan(input.skin, input.bone, input.plan, options);
 
-  phase(progress, 0.87, "Display surfaces (\u00a74.7)");
+  seg::reportProgress(progress, 0.87, "Display surfaces (\u00a74.7)");
   start = std::chrono::steady_clock::now();
   r.display = planning::buildPlanDisplay(r.prediction, input.skin, shade.map());
   r.displaySeconds = secondsSince(start);
 
-  phase(progress, 0.95, "Skin stress near the wound");
+  seg::reportProgress(progress, 0.95, "Skin stress near the wound");
   start = std::chrono::steady_clock::now();
   r.woundStress = planning::woundSkinStress(r.prediction, kWoundRadius);
   const seg::CylindricalPoint at = input.skin.frame().toCylindrical(r.woundStress.original);
@@ -156,9 +150,9 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   r.woundStressZ = at.z;
   r.stressSeconds = secondsSince(start);
 
-  phase(progress, 0.98, "Model drawing");
+  seg::reportProgress(progress, 0.98, "Model drawing");
   r.modelLines = modelDrawing(r.prediction);
-  phase(progress, 1.0, "Adding the prediction to the scene");
+  seg::reportProgress(progress, 1.0, "Adding the prediction to the scene");
   return r;
 }
 

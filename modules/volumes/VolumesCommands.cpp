@@ -111,23 +111,13 @@ std::optional<std::string> parse(const std::vector<std::string>& args, bool with
   return std::nullopt;
 }
 
-// Loads the CT named by the arguments into the scene, printing warnings.
-VolumeNode* loadFor(VolumesLogic& logic, const CommonArgs& args, std::ostream& err)
-{
-  std::vector<std::string> warnings;
-  VolumeNode* volume = logic.load(args.path, args.read, warnings);
-  for (const auto& w : warnings)
-    err << "warning: " << w << "\n";
-  return volume;
-}
-
 int runInfo(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
 {
   const auto parseInfo = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, false, args); };
   return cli::runCommand<CommonArgs>("info", kInfoUsage, argv, out, err, parseInfo, [&](CommonArgs& args) {
     // info describes one series: with several and none named, list them.
     args.read.requireSingleSeries = true;
-    VolumeNode* volume = loadFor(static_cast<VolumesLogic&>(logic), args, err);
+    VolumeNode* volume = cli::loadCt(logic, args.path, args.read, err);
     out << VolumesLogic::describe(*volume);
     return 0;
   });
@@ -137,7 +127,7 @@ int runSlices(ModuleLogic& logic, const std::vector<std::string>& argv, std::ost
 {
   const auto parseSlices = [](const std::vector<std::string>& a, CommonArgs& args) { return parse(a, true, args); };
   return cli::runCommand<CommonArgs>("slices", kSlicesUsage, argv, out, err, parseSlices, [&](CommonArgs& args) {
-    VolumeNode* volume = loadFor(static_cast<VolumesLogic&>(logic), args, err);
+    VolumeNode* volume = cli::loadCt(logic, args.path, args.read, err);
     for (const auto& file : VolumesLogic::writeMiddleSlices(*volume, args.out, args.window, args.level))
       out << "wrote " << file.string() << "\n";
     return 0;
