@@ -54,6 +54,21 @@ struct FiniteStrainElementCheck
   double energy = 0.0;     ///< strain energy (mJ = N mm)
 };
 
+/// The checks every large-deformation result carries (DESIGN.md), over all
+/// integration points of a model.
+struct DeformationCheck
+{
+  double minDetF = 1.0;
+  int minDetFElement = -1;
+  double maxStretch = 1.0;
+  double minStretch = 1.0;
+  double strainEnergy = 0.0; ///< N mm (0 from checkDeformation(), which has no material)
+  /// Elements with det F <= 0 at one of their points or more: 0 in a
+  /// large-deformation solve, which never accepts one; counted by
+  /// checkDeformation() for any displacement field.
+  int invertedElements = 0;
+};
+
 /// B_L at one point: row (ij) of the Green-Lagrange strain's variation per
 /// node DOF (a, k), E_ii: F_ki dh_a,i; 2 E_ij: F_ki dh_a,j + F_kj dh_a,i,
 /// for slots 0..@a slots - 1 (the rest zero). Shared by the displacement and

@@ -5,6 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <limits>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -132,6 +133,55 @@ FiniteStrainNodalField recoverFiniteStrainNodalField(const Mesh& mesh, const Hyp
     field.principalStretches.col(i) << c[2], c[1], c[0];
   }
   return field;
+}
+
+DeformationCheck checkDeformation(const Mesh& mesh, const Eigen::VectorXd& u, int pointsPerDirection)
+{
+  if (u.size() != mesh.dofCount())
+    throw std::invalid_argument("checkDeformation: the displacement vector has " + std::to_string(u.size()) +
+                                " entries for a model of " + std::to_string(mesh.dofCount()) + " DOFs");
+  DeformationCheck check;
+  if (mesh.elements.empty())
+    return check;
+  check.minDetF = check.minStretch = std::numeric_limits<double>::infinity();
+  check.maxStretch = 0.0;
+  for (std::size_t e = 0; e < mesh.elements.size(); ++e)
+  {
+    const Element& el = mesh.elements[e];
+    ElementDisplacements ue = ElementDisplacements::Zero();
+    for (int k = 0; k < kHex20NodeCount; ++k)
+      if (el.nodes[std::size_t(k)] >= 0)
+        ue.row(k) = u.segment<3>(3 * Eigen::Index(el.nodes[std::size_t(k)])).transpose();
+    const ElementShape shape = ElementShape::fromConnectivity(el.kind, el.nodes);
+    const IntegrationRule& rule = integrationRule(el.kind, integrationPointsOf(el, pointsPerDirection));
+    const ReferencePoints reference = referencePoints(shape, mesh.elementCoordinates(e), rule, int(e));
+    bool inverted = false;
+    for (const ShapeDerivatives& dh : reference.gradients)
+    {
+      const Eigen::Matrix3d f = Eigen::Matrix3d::Identity() + ue.transpose() * dh; // F = I + du/dX
+      const double j = f.determinant();
+      if (j < check.minDetF)
+      {
+        check.minDetF = j;
+        check.minDetFElement = int(e);
+      }
+      if (j <= 0.0)
+      {
+        inverted = true;
+        continue;
+      }
+      const Eigen::Vector3d stretch =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(f.transpose() * f, Eigen::EigenvaluesOnly)
+          .eigenvalues()
+          .cwiseSqrt();
+      check.maxStretch = std::max(check.maxStretch, stretch.maxCoeff());
+      check.minStretch = std::min(check.minStretch, stretch.minCoeff());
+    }
+    check.invertedElements += inverted ? 1 : 0;
+  }
+  if (check.maxStretch == 0.0) // every point inverted
+    check.maxStretch = check.minStretch = std::numeric_limits<double>::quiet_NaN();
+  return check;
 }
 
 } // namespace caps::fem

@@ -86,4 +86,17 @@ struct FiniteStrainNodalField
 FiniteStrainNodalField recoverFiniteStrainNodalField(const Mesh& mesh, const HyperelasticTable& materials,
                                                      const Eigen::VectorXd& u, int pointsPerDirection = 2);
 
+/**
+ * @brief det F and the principal stretches of x -> x + @a u at every point of
+ *        each element's own rule (@a pointsPerDirection for those that
+ *        leave it to the analysis, 3 as AssemblyOptions), for any displacement field: a linear
+ *        solve's too, to tell whether its deformed mesh is still a body.
+ *
+ * Needs no material and does not throw on an inverted element: it counts
+ * them (DeformationCheck::invertedElements). Stretches are left out at
+ * points where det F <= 0. Throws std::invalid_argument for a wrong @a u
+ * size, ElementError for a bad reference Jacobian.
+ */
+DeformationCheck checkDeformation(const Mesh& mesh, const Eigen::VectorXd& u, int pointsPerDirection = 3);
+
 } // namespace caps::fem

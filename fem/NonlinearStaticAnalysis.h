@@ -93,16 +93,6 @@ enum class NonlinearStatus
   Cancelled     ///< stopped by the monitor
 };
 
-/// The checks every large-deformation result carries (DESIGN.md).
-struct DeformationCheck
-{
-  double minDetF = 1.0;
-  int minDetFElement = -1;
-  double maxStretch = 1.0;
-  double minStretch = 1.0;
-  double strainEnergy = 0.0; ///< N mm
-};
-
 struct NonlinearResult
 {
   NonlinearStatus status = NonlinearStatus::NotConverged;

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "fem/FiniteStrainStress.h"
 #include "fem/StaticAnalysis.h"
 #include "planning/Undermining.h"
 
@@ -303,13 +304,12 @@ public:
     checkTheThesisCounts();
     if (meshOnly)
       return std::move(out_);
-    phase(0.2, "Assembly and factorisation (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
-    fem::AssemblyOptions assembly;
-    assembly.threads = options_.threads;
-    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, layerMaterials(), out_.continuum.constraints(), assembly);
-    factor(analysis);
-    phase(0.8, "Solve");
-    solve(analysis);
+    layerMaterials();
+    if (options_.model == TissueModel::LargeDeformation)
+      solveInLargeDeformation();
+    else
+      solveLinear();
+    checkTheDeformation();
     phase(0.9, "Closure forces");
     closureForces();
     skinForTheDisplay();
@@ -466,7 +466,95 @@ private:
     return out_.materials;
   }
 
-  /// 5. The model with its constraints, assembled and factored.
+  /// 5. The linear model (the preview): assembled, factored, solved once.
+  void solveLinear()
+  {
+    phase(0.2, "Assembly and factorisation (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
+    fem::AssemblyOptions assembly;
+    assembly.threads = options_.threads;
+    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, out_.materials, out_.continuum.constraints(), assembly);
+    factor(analysis);
+    phase(0.8, "Solve");
+    solve(analysis);
+    out_.check.model = TissueModel::LinearElastic;
+    out_.check.increments = out_.check.iterations = 1;
+  }
+
+  /// 5'. The large-deformation model (the final prediction): neo-Hookean
+  /// layers with the small-strain moduli, the sutures' gaps (linear
+  /// constraints, exact in large deformation too) closed over increments;
+  /// the internal forces at the sutured and fixed nodes are the reactions.
+  void solveInLargeDeformation()
+  {
+    phase(0.2, "Large-deformation closure (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
+    for (const auto& [layer, m] : out_.materials)
+      out_.hyperelasticMaterials[layer] = fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::NeoHookean, m);
+    fem::AssemblyOptions assembly;
+    assembly.threads = options_.threads;
+    const auto start = std::chrono::steady_clock::now();
+    fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, out_.hyperelasticMaterials, out_.continuum.constraints(),
+                                          assembly);
+    const fem::NewtonMonitor monitor = [this](const fem::NewtonIteration& it) {
+      return !options_.progress ||
+             options_.progress(0.2 + 0.65 * it.loadFraction,
+                               "Large-deformation closure: " + std::to_string(int(std::lround(100 * it.loadFraction))) +
+                                 " % of the closure, increment " + std::to_string(it.increment));
+    };
+    const fem::NonlinearResult result = analysis.solve(fem::LoadCase{}, options_.increments, {}, monitor);
+    if (result.status == fem::NonlinearStatus::Cancelled)
+      throw seg::Cancelled();
+    out_.displacements = result.displacements;
+    out_.times.assemble = result.assembleSeconds;
+    out_.times.factor = result.factorSeconds;
+    out_.times.solve = std::max(0.0, secondsSince(start) - result.assembleSeconds - result.factorSeconds);
+    out_.dofCount = out_.continuum.mesh.dofCount();
+    out_.reducedDofCount = fem::resolveConstraints(out_.continuum.mesh, out_.continuum.constraints()).reducedCount();
+    out_.nodalForces = analysis.internalForces(out_.displacements);
+    recordTheSolve(result);
+  }
+
+  void recordTheSolve(const fem::NonlinearResult& result)
+  {
+    PredictionCheck& check = out_.check;
+    check.model = TissueModel::LargeDeformation;
+    check.converged = result.status == fem::NonlinearStatus::Converged;
+    check.closureFraction = result.loadFraction;
+    check.increments = int(std::count_if(result.increments.begin(), result.increments.end(),
+                                         [](const fem::IncrementRecord& r) { return r.accepted; }));
+    check.iterations = int(result.iterations.size());
+    if (!check.converged)
+      check.problem = "the large-deformation closure stopped at " +
+                      std::to_string(int(std::floor(100 * result.loadFraction))) +
+                      " % of the closure: " + result.message +
+                      ". What is shown is not a prediction. Try undermining the flaps and a margin around them, a "
+                      "finer element size, or a smaller plan";
+  }
+
+  /// 6'. Whether the deformation is a body (thesis §5.5: validating the
+  /// results), for either model: det F and the stretches at every point.
+  void checkTheDeformation()
+  {
+    PredictionCheck& check = out_.check;
+    // At the points the solver integrates at, so both models are checked alike.
+    check.deformation =
+      fem::checkDeformation(out_.continuum.mesh, out_.displacements, fem::AssemblyOptions{}.gaussPointsPerDirection);
+    if (!check.problem.empty() || check.deformation.minDetF > kAdmissibleDetF)
+      return;
+    const int e = check.deformation.minDetFElement;
+    const int layer =
+      e >= 0 && std::size_t(e) < out_.continuum.elementLayer.size() ? out_.continuum.elementLayer[e] : -1;
+    std::ostringstream text;
+    text << check.deformation.invertedElements << " of " << out_.continuum.mesh.elements.size()
+         << " elements are turned inside out or crushed (smallest det F " << check.deformation.minDetF
+         << (layer >= 0 ? ", in tissue layer " + std::to_string(layer + 1) + " from the skin" : std::string()) << ")";
+    text << (check.model == TissueModel::LinearElastic
+               ? ": the linear preview moves the tissue too far to be a body; the large-deformation prediction is "
+                 "the one to trust. Undermining the flaps also helps"
+               : ": try undermining the flaps and a margin around them, or a finer element size");
+    check.problem = text.str();
+  }
+
+  /// The linear model with its constraints, assembled and factored.
   void factor(fem::LinearStaticAnalysis& analysis)
   {
     const auto prepareStart = std::chrono::steady_clock::now();
@@ -476,7 +564,7 @@ private:
       throw std::runtime_error("the model of the plan cannot be solved: " + analysis.message());
   }
 
-  /// 6. The displacements and the nodal forces K U.
+  /// The displacements and the nodal forces K U.
   void solve(fem::LinearStaticAnalysis& analysis)
   {
     out_.displacements = analysis.solve(fem::LoadCase{});
@@ -630,6 +718,28 @@ private:
 };
 
 } // namespace
+
+const char* tissueModelId(TissueModel model)
+{
+  return model == TissueModel::LargeDeformation ? "large-deformation" : "linear";
+}
+
+std::string tissueModelDescription(TissueModel model)
+{
+  return model == TissueModel::LargeDeformation
+           ? "large deformation: compressible neo-Hookean layers (same small-strain moduli), sutures closed over "
+             "load increments"
+           : "linear elastic, small strain (the preview)";
+}
+
+std::optional<TissueModel> tissueModelFromId(const std::string& id)
+{
+  if (id == "linear")
+    return TissueModel::LinearElastic;
+  if (id == "large-deformation")
+    return TissueModel::LargeDeformation;
+  return std::nullopt;
+}
 
 std::string materialProblem(double youngsModulusMPa, double poissonRatio)
 {

@@ -14,7 +14,9 @@
 #include <Eigen/Core>
 
 #include "fem/ContinuumMesher.h"
+#include "fem/HyperelasticMaterial.h"
 #include "fem/LinearElasticMaterial.h"
+#include "fem/NonlinearStaticAnalysis.h"
 #include "fem/Mesh.h"
 #include "fem/SurfaceMesher.h"
 #include "planning/IncisionPlan.h"
@@ -65,9 +67,67 @@ struct TissueDepthOptions
   fem::MaterialTable layerMaterials() const;
 };
 
+/// Which model of the tissue makes a prediction (thesis §1.4 and §6.1.2: the
+/// linear model's limits).
+enum class TissueModel
+{
+  /// Small-strain linear elasticity, one solve: the instant preview. Its
+  /// deformed mesh need not be a body when the closure moves tissue by more
+  /// than a few per cent of the element size; the check says so.
+  LinearElastic,
+  /// Compressible neo-Hookean layers with the same small-strain moduli
+  /// (fem::HyperelasticMaterial::fromLinear()), Total Lagrangian, the
+  /// sutures' gaps closed over load increments
+  /// (fem::NonlinearStaticAnalysis): the final prediction.
+  LargeDeformation
+};
+
+/// "linear" or "large-deformation": the name in plan.json and on the command line.
+const char* tissueModelId(TissueModel model);
+/// What the model is, in words, for every output that shows a prediction.
+std::string tissueModelDescription(TissueModel model);
+/// The model of an id of tissueModelId(); empty for any other text.
+std::optional<TissueModel> tissueModelFromId(const std::string& id);
+
+/// The smallest det F below which a deformation is not shown as a body of
+/// tissue: an element folded (det F <= 0) or crushed to a hundredth of its
+/// volume. Living soft tissue is nearly incompressible (det F ~ 1).
+constexpr double kAdmissibleDetF = 0.01;
+
+/// How far to trust a prediction (thesis §5.5): which model made it, whether
+/// its solve reached the full closure, and whether the deformation it gives
+/// is a body (every integration point's det F above kAdmissibleDetF).
+struct PredictionCheck
+{
+  TissueModel model = TissueModel::LinearElastic;
+  /// The large-deformation solve reached the full closure (always true for
+  /// the linear model, which has one solve).
+  bool converged = true;
+  /// The fraction of the closure the displacements are at (1 when converged).
+  double closureFraction = 1.0;
+  int increments = 0; ///< accepted load increments (1 for the linear model)
+  int iterations = 0; ///< Newton iterations in all, cut-back attempts included
+  /// det F and the principal stretches over every integration point of the
+  /// displacements (for the linear model: of its displacement field taken as
+  /// a deformation x + u).
+  fem::DeformationCheck deformation;
+  /// Empty when admissible; otherwise what failed, where, and what to try.
+  std::string problem;
+
+  bool admissible() const { return converged && deformation.minDetF > kAdmissibleDetF; }
+};
+
 /// Options of simulatePlan(). Lengths in mm.
 struct SimulationOptions : TissueDepthOptions
 {
+  /// The model of the tissue; materials (TissueDepthOptions) are the
+  /// small-strain moduli of either.
+  TissueModel model = TissueModel::LinearElastic;
+  /// Load increments of the large-deformation solve: the first is a quarter
+  /// of the closure, grown when Newton converges fast, cut back (down to
+  /// 1e-4 of the closure) when it does not or an element would turn inside
+  /// out.
+  fem::IncrementControl increments = {0.25, 1e-4, 0.5, false, 200};
   /// Element size at the wound: cut-path segments are split so every hole
   /// border edge is at most this long (sutured edges into equal numbers of
   /// pieces on both sides), and it is the first quad layer's thickness.
@@ -204,14 +264,18 @@ struct PlanPrediction
   Eigen::Index reducedDofCount = 0; ///< unknowns after constraints
   SimulationTimes times;
   std::optional<ZPlastyPrediction> zPlasty; ///< for plans of a Z generator
-  fem::MaterialTable materials;             ///< what was used
+  fem::MaterialTable materials;             ///< what was used (small-strain moduli)
+  /// The large-deformation materials (empty for the linear model).
+  fem::HyperelasticTable hyperelasticMaterials;
+  PredictionCheck check;
 
   /// Displaced world position of FE node i.
   Eigen::Vector3d displacedNode(int i) const;
 };
 
 /// @brief Simulates a plan: meshes the skin around its hole down to the bone
-/// and closes its sutures with a linear static solve (thesis §4.5–4.6).
+/// and closes its sutures (thesis §4.5–4.6) with the model of
+/// options.model: a linear static solve or a large-deformation one.
 ///
 /// The chart is the plan's (centre()). The cut path is refined to
 /// options.elementSize consistently with the sutures; offsets (excisions)
@@ -222,6 +286,10 @@ struct PlanPrediction
 /// nodes are fixed except under the undermined band and the plan's
 /// undermined regions, the rim as options.rim
 /// says. After the solve, the reaction of every suture is the closure force.
+/// Every prediction carries its check (PlanPrediction::check): a
+/// large-deformation solve that stops short of the full closure returns its
+/// last converged state with check.converged false and check.problem
+/// saying what to try; it is not a prediction and must not be shown as one.
 ///
 /// @throws std::invalid_argument for a bad plan (checkPlan()), a plan off the
 /// skin, holes in the skin map under the meshed region, a bone map on another

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "fem/FiniteStrainStress.h"
 #include "fem/NodalStress.h"
 
 namespace caps::planning {
@@ -45,9 +46,27 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
   // §4.7: σ at the Gauss points, extrapolated to the nodes, averaged within
   // each region; a skin node takes the skin's value (the top layer's region),
   // not the fat's below it, where the skin is one element thick.
-  const fem::NodalStressField field =
-    fem::recoverNodalStresses(prediction.continuum.mesh, prediction.materials, prediction.displacements);
+  // The large-deformation prediction's stress is the Cauchy stress of its
+  // hyperelastic layers (per deformed area); the linear one's, Hooke's law.
   const fem::ContinuumMesh& continuum = prediction.continuum;
+  fem::RegionNodeLayout layout;
+  fem::NodalStressMatrix regionStress, nodeStress;
+  if (prediction.check.model == TissueModel::LargeDeformation)
+  {
+    fem::FiniteStrainNodalField field =
+      fem::recoverFiniteStrainNodalField(continuum.mesh, prediction.hyperelasticMaterials, prediction.displacements);
+    layout = std::move(field.layout);
+    regionStress = std::move(field.regionCauchy);
+    nodeStress = std::move(field.cauchy);
+  }
+  else
+  {
+    fem::NodalStressField field =
+      fem::recoverNodalStresses(continuum.mesh, prediction.materials, prediction.displacements);
+    layout = std::move(field.layout);
+    regionStress = std::move(field.regionStress);
+    nodeStress = std::move(field.stress);
+  }
   int skinRegion = -1;
   for (std::size_t e = 0; e < continuum.elementLayer.size() && e < continuum.mesh.elements.size(); ++e)
     if (continuum.elementLayer[e] == 0)
@@ -56,8 +75,8 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
       break;
     }
   auto skinStress = [&](int node) -> fem::Vector6d {
-    const int column = field.layout.column(skinRegion, node);
-    return column >= 0 ? fem::Vector6d(field.regionStress.col(column)) : fem::Vector6d(field.stress.col(node));
+    const int column = layout.column(skinRegion, node);
+    return column >= 0 ? fem::Vector6d(regionStress.col(column)) : fem::Vector6d(nodeStress.col(node));
   };
 
   // Each vertex's share of the chart area of its polygons, for the mean.
