@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -406,6 +407,62 @@ PlanOperation operationFromJson(const json& j, int number)
                               " (a newer CAPS may have written the file)");
 }
 
+namespace {
+
+json predictionCheckToJson(const PredictionCheck& c)
+{
+  // JSON has no NaN: a stretch left out (every point inverted) is null.
+  const auto number = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+  return {{"model", tissueModelId(c.model)},
+          {"converged", c.converged},
+          {"closureFraction", c.closureFraction},
+          {"increments", c.increments},
+          {"iterations", c.iterations},
+          {"minDetF", number(c.deformation.minDetF)},
+          {"minDetFElement", c.deformation.minDetFElement},
+          {"maxStretch", number(c.deformation.maxStretch)},
+          {"minStretch", number(c.deformation.minStretch)},
+          {"invertedElements", c.deformation.invertedElements},
+          {"admissible", c.admissible()},
+          {"problem", c.problem}};
+}
+
+PredictionCheck predictionCheckFromJson(const json& j)
+{
+  const auto bad = [](const std::string& what) { throw RecipeError(0, "\"prediction\": " + what); };
+  if (!j.is_object())
+    bad("must be an object (the check of the prediction caps plan made), not " + j.dump().substr(0, 80));
+  PredictionCheck c;
+  const auto model = j.find("model");
+  const auto known =
+    model != j.end() && model->is_string() ? tissueModelFromId(model->get<std::string>()) : std::nullopt;
+  if (!known)
+    bad("\"model\" must be \"linear\" or \"large-deformation\"");
+  c.model = *known;
+  const auto number = [&](const char* key, double fallback) {
+    const auto it = j.find(key);
+    if (it == j.end() || it->is_null())
+      return fallback;
+    if (!it->is_number())
+      bad(std::string("\"") + key + "\" must be a number, not " + it->dump());
+    return it->get<double>();
+  };
+  c.converged = j.value("converged", true);
+  c.closureFraction = number("closureFraction", 1.0);
+  c.increments = int(number("increments", 0));
+  c.iterations = int(number("iterations", 0));
+  c.deformation.minDetF = number("minDetF", std::numeric_limits<double>::quiet_NaN());
+  c.deformation.minDetFElement = int(number("minDetFElement", -1));
+  c.deformation.maxStretch = number("maxStretch", std::numeric_limits<double>::quiet_NaN());
+  c.deformation.minStretch = number("minStretch", std::numeric_limits<double>::quiet_NaN());
+  c.deformation.invertedElements = int(number("invertedElements", 0));
+  if (const auto problem = j.find("problem"); problem != j.end() && problem->is_string())
+    c.problem = problem->get<std::string>();
+  return c;
+}
+
+} // namespace
+
 json recipeToJson(const PlanRecipe& recipe)
 {
   json operations = json::array();
@@ -420,6 +477,10 @@ json recipeToJson(const PlanRecipe& recipe)
     j["simulation"] = {{"elementSize", recipe.elementSize}};
   if (recipe.cutLayers > 0)
     j["simulation"]["cutLayers"] = recipe.cutLayers;
+  if (recipe.elementSize > 0.0 && recipe.model != TissueModel::LinearElastic)
+    j["simulation"]["model"] = tissueModelId(recipe.model);
+  if (recipe.prediction)
+    j["prediction"] = predictionCheckToJson(*recipe.prediction);
   return j;
 }
 
@@ -467,7 +528,16 @@ PlanRecipe recipeFromJson(const json& j)
             cut->dump());
       recipe.cutLayers = int(cut->get<long long>());
     }
+    if (const auto model = simulation->find("model"); model != simulation->end())
+    {
+      const auto known = model->is_string() ? tissueModelFromId(model->get<std::string>()) : std::nullopt;
+      if (!known)
+        bad("\"model\" in \"simulation\" must be \"linear\" or \"large-deformation\", not " + model->dump());
+      recipe.model = *known;
+    }
   }
+  if (const auto prediction = j.find("prediction"); prediction != j.end() && !prediction->is_null())
+    recipe.prediction = predictionCheckFromJson(*prediction);
   return recipe;
 }
 

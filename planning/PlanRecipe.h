@@ -11,6 +11,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
@@ -19,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "planning/IncisionPlan.h"
+#include "planning/PlanSimulation.h"
 #include "planning/ProcedureTemplate.h"
 
 class vtkImageData;
@@ -136,6 +138,13 @@ struct PlanRecipe
   /// The incision depth the prediction was made with: tissue layers cut
   /// from the skin (SimulationOptions::cutLayers); 0 = full thickness.
   int cutLayers = 0;
+  /// The model of the tissue the prediction was made with (a file without
+  /// one was made by the linear model, the only one then).
+  TissueModel model = TissueModel::LinearElastic;
+  /// How the prediction made from these operations checked out, written
+  /// after the solve so anyone can read it from the file; a replay makes
+  /// and checks its own.
+  std::optional<PredictionCheck> prediction;
 };
 
 /// @brief Applies operation number `number` (1-based, for messages) to @a plan.
@@ -196,10 +205,15 @@ inline constexpr int recipeFormatVersion = 1;
 ///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 },
 ///     { "operation": "undermine", "region": [[-0.52, 0.01], [-0.46, 0.01], [-0.46, 0.06], [-0.52, 0.06]] },
 ///     { "operation": "clear-undermining" } ],
-///   "simulation": { "elementSize": 2.5, "cutLayers": 1 } }
+///   "simulation": { "elementSize": 2.5, "cutLayers": 1, "model": "large-deformation" },
+///   "prediction": { "model": "large-deformation", "converged": true, "closureFraction": 1.0,
+///                   "increments": 6, "iterations": 31, "minDetF": 0.42, "maxStretch": 1.61,
+///                   "invertedElements": 0, "admissible": true, "problem": "" } }
 /// @endcode
 /// "simulation" is left out when elementSize is 0; "cutLayers" when the cut
-/// is full thickness (0). "undermine" and
+/// is full thickness (0); "model" when it is "linear" (tissueModelId()).
+/// "prediction" is the check of the prediction made (PredictionCheck),
+/// left out until there is one. "undermine" and
 /// "clear-undermining" came later within format 1: files without them read
 /// as before; a CAPS older than them refuses a file that has them, naming
 /// the operation it does not know.

@@ -219,6 +219,8 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
   number("underminingWidth", options.underminingWidth, 0.0);
   integer("layerCount", options.layerCount, 1, 16);
   integer("cutLayers", options.cutLayers, 0, options.layerCount);
+  if (const auto model = s.find("model"); model != s.end() && model->is_string())
+    options.model = planning::tissueModelFromId(model->get<std::string>()).value_or(options.model);
   if (const auto materials = s.find("materials"); materials != s.end() && materials->is_array())
   {
     fem::MaterialTable table;
@@ -248,7 +250,8 @@ nlohmann::json IncisionLogic::simulationRecord(const planning::SimulationOptions
                       {"cutLayers", options.cutLayers},
                       {"regionRadius", options.regionRadius},
                       {"layerCount", options.layerCount},
-                      {"underminingWidth", options.underminingWidth}};
+                      {"underminingWidth", options.underminingWidth},
+                      {"model", planning::tissueModelId(options.model)}};
   const fem::MaterialTable materials =
     options.materials.empty() ? planning::defaultFacialTissueMaterials(options.layerCount) : options.materials;
   nlohmann::json list = nlohmann::json::array();

@@ -89,11 +89,21 @@ const char* kPlanUsage =
   "                       writes undermining.csv: closure force and peak skin stress near\n"
   "                       the wound against undermining width, plotted in undermining.png\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
+  "  --model linear|large-deformation\n"
+  "                       the model of the tissue (default linear, or the replayed plan's):\n"
+  "                       linear elastic, small strain (the instant preview), or\n"
+  "                       compressible neo-Hookean layers in large deformation with the\n"
+  "                       sutures closed over load increments\n"
   "\n"
-  "The tissue is linear elastic with assumed moduli (skin 0.15, fat 0.01, muscle\n"
-  "0.05 MPa, Poisson 0.45), the bone fixed: a first prediction, not a measurement.\n"
+  "The tissue has assumed moduli (skin 0.15, fat 0.01, muscle 0.05 MPa, Poisson 0.45),\n"
+  "the bone fixed: a first prediction, not a measurement. Every prediction is checked:\n"
+  "the smallest det F over all integration points (is the deformed mesh still a body?),\n"
+  "the largest stretch, the increments and whether the solve reached the full closure;\n"
+  "measurements.csv and plan.json (\"prediction\") record them.\n"
   "Exit status: 0 when written, 1 when the CT or the plan cannot be used (the message\n"
-  "says why), 2 on wrong usage.\n";
+  "says why), 2 on wrong usage, 3 when the files are written but the large-deformation\n"
+  "solve did not reach the full closure or its result is not a body (the files hold the\n"
+  "last converged state, marked as such: not a prediction).\n";
 
 /// A --move or --offset, in the order given.
 struct PlanEdit
@@ -113,9 +123,10 @@ struct PlanArgs : cli::CtCommandArgs
   std::vector<std::vector<std::pair<double, double>>> undermineRegions; ///< degrees, mm
   std::optional<fs::path> replay;
   bool otherCt = false;
-  std::optional<double> elementSize;   ///< mm; default 2, or the replayed plan's
-  std::optional<int> cutLayers;        ///< --cut-depth; default all layers, or the replayed plan's
-  std::vector<double> undermineWidths; ///< mm, the --undermine study; empty: none
+  std::optional<double> elementSize;          ///< mm; default 2, or the replayed plan's
+  std::optional<int> cutLayers;               ///< --cut-depth; default all layers, or the replayed plan's
+  std::vector<double> undermineWidths;        ///< mm, the --undermine study; empty: none
+  std::optional<planning::TissueModel> model; ///< --model; default linear, or the replayed plan's
 };
 
 /// "W,W,..." of undermining widths in mm, each in [0, 100].
@@ -241,6 +252,13 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
                  "or 3 (down to the bone)";
         parsed.cutLayers = int(layers);
       }
+      else if (a == "--model")
+      {
+        parsed.model = hasValue ? planning::tissueModelFromId(args[i + 1]) : std::nullopt;
+        if (!parsed.model)
+          return "--model needs linear (the small-strain preview) or large-deformation (the final prediction)";
+        ++i;
+      }
       else if (a == "--undermine")
       {
         if (!hasValue || !parseWidths(args[++i], parsed.undermineWidths))
@@ -314,6 +332,16 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "excised volume to the bone (range maps),hole,," << excisedVolumeToBone << ",mm3\n";
   out << "wound width before closure,sutures,," << p.maxSutureGapBefore << ",mm\n";
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
+  // How far to trust the numbers below (thesis §5.5): the model and its checks.
+  const planning::PredictionCheck& c = p.check;
+  out << "prediction model," << planning::tissueModelId(c.model) << ",,,\n";
+  out << "prediction admissible,checks,," << (c.admissible() ? 1 : 0) << ",\n";
+  out << "solve converged at full closure,increments,," << (c.converged ? 1 : 0) << ",\n";
+  out << "closure reached,increments,," << 100.0 * c.closureFraction << ",%\n";
+  out << "load increments,solve,," << c.increments << ",\n";
+  out << "smallest det F,element " << c.deformation.minDetFElement << ",," << c.deformation.minDetF << ",\n";
+  out << "largest principal stretch,all integration points,," << c.deformation.maxStretch << ",\n";
+  out << "inverted elements,det F <= 0,," << c.deformation.invertedElements << ",\n";
   out << "closure force (sum over sutures),sutures,," << p.closure.magnitudeSum << ",N\n";
   out << "largest suture force,sutures,," << p.closure.largest << ",N\n";
   // §4.7: the skin's nodal stress within stress.radius mm of the hole border.
@@ -354,6 +382,14 @@ public:
     writeTheFiles();
     if (!args_.undermineWidths.empty())
       studyTheUndermining();
+  }
+
+  /// A large-deformation solve that stopped short of the closure or gave a
+  /// deformation that is not a body (the linear preview's own failure is a
+  /// warning: it is the preview, and the large-deformation model is the cure).
+  bool failedItsChecks() const
+  {
+    return prediction_.check.model == planning::TissueModel::LargeDeformation && !prediction_.check.admissible();
   }
 
 private:
@@ -466,12 +502,16 @@ private:
     const double elementSize =
       args_.elementSize.value_or(replay_ && replay_->elementSize > 0.0 ? replay_->elementSize : 2.0);
     const int cutLayers = args_.cutLayers.value_or(replay_ ? replay_->cutLayers : 0);
+    const planning::TissueModel model =
+      args_.model.value_or(replay_ ? replay_->model : planning::TissueModel::LinearElastic);
     saved_ = recorded_->recipe();
     saved_.elementSize = elementSize;
     saved_.cutLayers = cutLayers;
+    saved_.model = model;
     planning::writeRecipe(saved_, args_.out / "plan.json");
     options_.elementSize = elementSize;
     options_.cutLayers = cutLayers;
+    options_.model = model;
     options_.threads = 2;
   }
 
@@ -481,7 +521,11 @@ private:
     const planning::IncisionPlan& plan = recorded_->plan();
     procedure_ = &planning::findProcedure(logic_.procedures(), plan.procedure());
     measured_ = planning::measurePlan(plan, maps_.skin);
+    options_.progress = cli::consoleProgress(err_);
     prediction_ = planning::simulatePlan(maps_.skin, maps_.bone, plan, options_);
+    options_.progress = {};
+    saved_.prediction = prediction_.check; // plan.json says how the prediction checked out
+    planning::writeRecipe(saved_, args_.out / "plan.json");
     excisedVolume_ = planning::excisedVolume(plan, maps_.skin, maps_.bone, options_.noBoneDepth);
     // The meshed region cut short (a shape the mesher could not grow round,
     // or the end of the scan) changes the prediction: say so.
@@ -515,6 +559,7 @@ private:
     if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
       out_ << "  cut through " << options_.cutLayers << " of " << options_.layerCount
            << " tissue layers: the tissue below stays whole\n";
+    out_ << "Tissue model: " << planning::tissueModelDescription(p.check.model) << "\n";
     out_ << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
          << p.dofCount << " DOF (" << p.reducedDofCount << " free); mesh " << std::setprecision(3) << p.times.mesh
          << " s, assemble " << p.times.assemble << " s, factor " << p.times.factor << " s, solve " << p.times.solve
@@ -522,6 +567,7 @@ private:
     if (!plan.underminedRegions().empty())
       out_ << "Undermined: " << plan.underminedRegions().size() << " region(s), " << p.continuum.underminedNodes.size()
            << " bone nodes released\n";
+    printTheChecks();
     out_ << std::setprecision(2) << "Wound " << p.maxSutureGapBefore << " mm wide before, sutures within "
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
     out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum
@@ -535,6 +581,21 @@ private:
       out_ << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * p.zPlasty->predicted.fraction
            << " %, theoretical " << 100.0 * p.zPlasty->theoretical << " % (Fig. 2.2)\n";
     out_.unsetf(std::ios::floatfield);
+  }
+
+  /// How far to trust what follows: the solve and det F (thesis §5.5).
+  void printTheChecks()
+  {
+    const planning::PredictionCheck& c = prediction_.check;
+    out_ << std::setprecision(3) << "Checks: smallest det F " << c.deformation.minDetF << ", largest stretch "
+         << c.deformation.maxStretch << ", " << c.deformation.invertedElements << " inverted elements";
+    if (c.model == planning::TissueModel::LargeDeformation)
+      out_ << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), "
+           << (c.converged ? "converged at full closure" : "NOT converged");
+    out_ << "\n";
+    if (!c.problem.empty())
+      out_ << (c.model == planning::TissueModel::LinearElastic ? "WARNING (linear preview): " : "NOT A PREDICTION: ")
+           << c.problem << "\n";
   }
 
   /// measurements.csv, the display surfaces (§4.7: subdivided skin faces
@@ -636,8 +697,9 @@ int runPlan(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, std:
   return cli::runCommand<PlanArgs>("plan", kPlanUsage, argv, out, err, parse, [&](PlanArgs& args) {
     try
     {
-      PlanRun(static_cast<IncisionLogic&>(moduleLogic), std::move(args), out, err).run();
-      return 0;
+      PlanRun run(static_cast<IncisionLogic&>(moduleLogic), std::move(args), out, err);
+      run.run();
+      return run.failedItsChecks() ? 3 : 0;
     }
     catch (const fem::ElementError& e)
     {
