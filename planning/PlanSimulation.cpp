@@ -522,12 +522,8 @@ private:
     check.increments = int(std::count_if(result.increments.begin(), result.increments.end(),
                                          [](const fem::IncrementRecord& r) { return r.accepted; }));
     check.iterations = int(result.iterations.size());
-    if (!check.converged)
-      check.problem = "the large-deformation closure stopped at " +
-                      std::to_string(int(std::floor(100 * result.loadFraction))) +
-                      " % of the closure: " + result.message +
-                      ". What is shown is not a prediction. Try undermining the flaps and a margin around them, a "
-                      "finer element size, or a smaller plan";
+    if (!check.converged) // the solver's message says where it stopped, why, and what to try
+      check.problem = result.message + ". What is shown is not a prediction.";
   }
 
   /// 6'. Whether the deformation is a body (thesis §5.5: validating the
@@ -739,6 +735,26 @@ std::optional<TissueModel> tissueModelFromId(const std::string& id)
   if (id == "large-deformation")
     return TissueModel::LargeDeformation;
   return std::nullopt;
+}
+
+std::string checkSummary(const PredictionCheck& c)
+{
+  std::ostringstream text;
+  text.precision(3);
+  text << "smallest det F " << c.deformation.minDetF << ", largest stretch " << c.deformation.maxStretch << ", "
+       << c.deformation.invertedElements << " inverted elements";
+  if (c.model == TissueModel::LargeDeformation)
+    text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), "
+         << (c.converged ? "converged at full closure" : "NOT converged");
+  return text.str();
+}
+
+std::string checkWarning(const PredictionCheck& c)
+{
+  if (c.problem.empty() && c.admissible())
+    return {};
+  const std::string problem = c.problem.empty() ? checkSummary(c) : c.problem;
+  return (c.model == TissueModel::LinearElastic ? "WARNING (linear preview): " : "NOT A PREDICTION: ") + problem;
 }
 
 std::string materialProblem(double youngsModulusMPa, double poissonRatio)

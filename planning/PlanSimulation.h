@@ -117,6 +117,15 @@ struct PredictionCheck
   bool admissible() const { return converged && deformation.minDetF > kAdmissibleDetF; }
 };
 
+/// The check in one line for a person: "smallest det F 0.639, largest
+/// stretch 2.83, 0 inverted elements, 5 increments (41 Newton iterations),
+/// converged at full closure".
+std::string checkSummary(const PredictionCheck& check);
+/// The label every view of a prediction starts with when the check failed:
+/// "NOT A PREDICTION: ..." (large deformation) or "WARNING (linear preview):
+/// ..." with the problem; empty when the check passed.
+std::string checkWarning(const PredictionCheck& check);
+
 /// Options of simulatePlan(). Lengths in mm.
 struct SimulationOptions : TissueDepthOptions
 {

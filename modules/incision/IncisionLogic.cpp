@@ -246,12 +246,10 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
 
 nlohmann::json IncisionLogic::simulationRecord(const planning::SimulationOptions& options)
 {
-  nlohmann::json j = {{"elementSize", options.elementSize},
-                      {"cutLayers", options.cutLayers},
-                      {"regionRadius", options.regionRadius},
-                      {"layerCount", options.layerCount},
-                      {"underminingWidth", options.underminingWidth},
-                      {"model", planning::tissueModelId(options.model)}};
+  nlohmann::json j = {
+    {"elementSize", options.elementSize},           {"cutLayers", options.cutLayers},
+    {"regionRadius", options.regionRadius},         {"layerCount", options.layerCount},
+    {"underminingWidth", options.underminingWidth}, {"model", planning::tissueModelId(options.model)}};
   const fem::MaterialTable materials =
     options.materials.empty() ? planning::defaultFacialTissueMaterials(options.layerCount) : options.materials;
   nlohmann::json list = nlohmann::json::array();

@@ -586,16 +586,9 @@ private:
   /// How far to trust what follows: the solve and det F (thesis §5.5).
   void printTheChecks()
   {
-    const planning::PredictionCheck& c = prediction_.check;
-    out_ << std::setprecision(3) << "Checks: smallest det F " << c.deformation.minDetF << ", largest stretch "
-         << c.deformation.maxStretch << ", " << c.deformation.invertedElements << " inverted elements";
-    if (c.model == planning::TissueModel::LargeDeformation)
-      out_ << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), "
-           << (c.converged ? "converged at full closure" : "NOT converged");
-    out_ << "\n";
-    if (!c.problem.empty())
-      out_ << (c.model == planning::TissueModel::LinearElastic ? "WARNING (linear preview): " : "NOT A PREDICTION: ")
-           << c.problem << "\n";
+    out_ << "Checks: " << planning::checkSummary(prediction_.check) << "\n";
+    if (const std::string warning = planning::checkWarning(prediction_.check); !warning.empty())
+      out_ << warning << "\n";
   }
 
   /// measurements.csv, the display surfaces (§4.7: subdivided skin faces

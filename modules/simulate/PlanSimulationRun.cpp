@@ -300,6 +300,11 @@ std::string summaryText(const PlanRunResult& r)
 {
   const planning::PlanPrediction& p = r.prediction;
   std::ostringstream out;
+  // A failed check comes first: what follows is then not an ordinary result.
+  if (const std::string warning = planning::checkWarning(p.check); !warning.empty())
+    out << warning << "\n";
+  out << "Tissue model: " << planning::tissueModelDescription(p.check.model) << "\n";
+  out << "Checks: " << planning::checkSummary(p.check) << "\n";
   out << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
       << p.dofCount << " DOF (" << p.reducedDofCount << " free)\n";
   out << std::fixed << std::setprecision(2) << "Times: skin shade " << r.shadeSeconds << " s, mesh " << p.times.mesh

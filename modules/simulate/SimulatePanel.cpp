@@ -1,5 +1,6 @@
 #include "modules/simulate/SimulatePanel.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <iomanip>
@@ -140,6 +141,14 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
   cutDepth_->setToolTip(tr("Layers the incision goes through from the skin (\u00a73.2.2); the tissue below stays "
                            "whole. 0: through every layer."));
   form->addRow(tr("Cut depth"), cutDepth_);
+  model_ = new QComboBox(meshBox);
+  model_->setObjectName("simulate.model");
+  model_->addItem(tr("Linear (preview)"), QString(planning::tissueModelId(planning::TissueModel::LinearElastic)));
+  model_->addItem(tr("Large deformation"), QString(planning::tissueModelId(planning::TissueModel::LargeDeformation)));
+  model_->setToolTip(tr("Linear: small strain, one solve, instant, but its mesh can fold where the closure moves "
+                        "tissue far (the checks say so). Large deformation: neo-Hookean layers closed over load "
+                        "increments, the prediction to trust; slower."));
+  form->addRow(tr("Tissue model"), model_);
   undermining_ = new QDoubleSpinBox(meshBox);
   undermining_->setObjectName("simulate.undermining");
   undermining_->setRange(0.0, 50.0);
@@ -302,6 +311,7 @@ void SimulatePanel::loadPlanOptions()
   regionRadius_->setValue(o.regionRadius);
   elementSize_->setValue(o.elementSize);
   undermining_->setValue(o.underminingWidth);
+  model_->setCurrentIndex(std::max(0, model_->findData(QString(planning::tissueModelId(o.model)))));
   loading_ = false;
   if (o.materials.empty())
     fillMaterialsFromPreset();
@@ -390,6 +400,7 @@ planning::SimulationOptions SimulatePanel::options(std::string* problem) const
   o.regionRadius = regionRadius_->value();
   o.elementSize = elementSize_->value();
   o.underminingWidth = undermining_->value();
+  o.model = planning::tissueModelFromId(model_->currentData().toString().toStdString()).value_or(o.model);
   o.threads = std::max(1, std::min(2, QThread::idealThreadCount()));
   for (int layer = 0; layer < materials_->rowCount(); ++layer)
   {

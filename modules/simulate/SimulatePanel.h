@@ -82,6 +82,7 @@ private:
   QDoubleSpinBox* elementSize_ = nullptr;
   QSpinBox* cutDepth_ = nullptr;
   QDoubleSpinBox* undermining_ = nullptr;
+  QComboBox* model_ = nullptr; ///< the tissue model: linear preview or large deformation
   QLabel* estimate_ = nullptr;
   QPushButton* run_ = nullptr;
   QLabel* summary_ = nullptr;
