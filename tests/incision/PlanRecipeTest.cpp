@@ -667,4 +667,51 @@ TEST(CtContentHash, TheSameScanReadTwiceUnderOtherNamesHashesTheSame)
   EXPECT_THROW(ctContentHash(vtkSmartPointer<vtkImageData>::New()), std::invalid_argument);
 }
 
+// The model a prediction was made with, and how it checked out, are in
+// plan.json: the model so a replay solves the same way, the check so anyone
+// can read how far to trust the prediction without running CAPS.
+TEST(PlanRecipe, KeepsTheTissueModelAndThePredictionCheck)
+{
+  PlanRecipe recipe;
+  recipe.ctSha256 = std::string(64, 'e');
+  recipe.operations.push_back(placeZ());
+  recipe.elementSize = 2.0;
+  const nlohmann::json linear = recipeToJson(recipe);
+  EXPECT_FALSE(linear["simulation"].contains("model")) << "the linear model is what older files mean";
+  EXPECT_FALSE(linear.contains("prediction"));
+  EXPECT_EQ(recipeFromJson(linear).model, TissueModel::LinearElastic);
+
+  recipe.model = TissueModel::LargeDeformation;
+  SimulationOptions options;
+  options.elementSize = 2.5;
+  options.regionRadius = 15.0;
+  options.model = recipe.model;
+  const PlanPrediction p =
+    simulatePlan(phantom().skin, phantom().bone, applyRecipe(recipe, phantom().skin, library()), options);
+  recipe.prediction = p.check;
+  const nlohmann::json written = recipeToJson(recipe);
+  EXPECT_EQ(written["simulation"]["model"], "large-deformation");
+  EXPECT_EQ(written["prediction"]["model"], "large-deformation");
+  EXPECT_EQ(written["prediction"]["admissible"], p.check.admissible());
+  EXPECT_EQ(written["prediction"]["minDetF"].get<double>(), p.check.deformation.minDetF);
+  const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
+  EXPECT_EQ(read.model, TissueModel::LargeDeformation);
+  ASSERT_TRUE(read.prediction);
+  EXPECT_EQ(read.prediction->increments, p.check.increments);
+  EXPECT_EQ(read.prediction->converged, p.check.converged);
+  EXPECT_EQ(recipeToJson(read), written);
+
+  nlohmann::json bad = written;
+  bad["simulation"]["model"] = "nonlinear";
+  try
+  {
+    recipeFromJson(bad);
+    ADD_FAILURE() << "an unknown tissue model was accepted";
+  }
+  catch (const RecipeError& e)
+  {
+    EXPECT_TRUE(contains(e.what(), "\"linear\" or \"large-deformation\"")) << e.what();
+  }
+}
+
 } // namespace caps::planning
