@@ -342,6 +342,10 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "smallest det F,element " << c.deformation.minDetFElement << ",," << c.deformation.minDetF << ",\n";
   out << "largest principal stretch,all integration points,," << c.deformation.maxStretch << ",\n";
   out << "inverted elements,det F <= 0,," << c.deformation.invertedElements << ",\n";
+  double largestMove = 0.0;
+  for (std::size_t v = 0; v < p.skin.original.size(); ++v)
+    largestMove = std::max(largestMove, (p.skin.displaced[v] - p.skin.original[v]).norm());
+  out << "largest skin displacement,skin,," << largestMove << ",mm\n";
   out << "closure force (sum over sutures),sutures,," << p.closure.magnitudeSum << ",N\n";
   out << "largest suture force,sutures,," << p.closure.largest << ",N\n";
   // §4.7: the skin's nodal stress within stress.radius mm of the hole border.
