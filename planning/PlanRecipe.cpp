@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <limits>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include <QByteArray>
@@ -447,7 +447,12 @@ PredictionCheck predictionCheckFromJson(const json& j)
       bad(std::string("\"") + key + "\" must be a number, not " + it->dump());
     return it->get<double>();
   };
-  c.converged = j.value("converged", true);
+  if (const auto converged = j.find("converged"); converged != j.end())
+  {
+    if (!converged->is_boolean())
+      bad("\"converged\" must be true or false, not " + converged->dump());
+    c.converged = converged->get<bool>();
+  }
   c.closureFraction = number("closureFraction", 1.0);
   c.increments = int(number("increments", 0));
   c.iterations = int(number("iterations", 0));
