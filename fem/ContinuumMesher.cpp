@@ -5,6 +5,8 @@
 #include "fem/HoleFloor.h"
 #include "fem/Quadrature.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -183,6 +185,21 @@ Constraints ContinuumMesh::constraints() const
     c.fixNode(n);
   for (const Suture& s : sutures)
     c.suture(s.node, s.target);
+  for (const SlidingNode& sliding : slidingNodes)
+  {
+    // (u - u_beneath) . n = 0, the dependent DOF the normal's largest component.
+    Eigen::Index dependent = 0;
+    sliding.normal.cwiseAbs().maxCoeff(&dependent);
+    LinearConstraint onThePlane;
+    onThePlane.terms.push_back({sliding.node, int(dependent), sliding.normal[dependent]});
+    for (int d = 0; d < 3; ++d)
+      if (d != int(dependent) && sliding.normal[d] != 0.0)
+        onThePlane.terms.push_back({sliding.node, d, sliding.normal[d]});
+    for (int d = 0; sliding.beneath >= 0 && d < 3; ++d)
+      if (sliding.normal[d] != 0.0)
+        onThePlane.terms.push_back({sliding.beneath, d, -sliding.normal[d]});
+    c.equation(std::move(onThePlane));
+  }
   return c;
 }
 
@@ -196,8 +213,9 @@ int ContinuumMesh::edgeIndex(int a, int b) const
 namespace {
 
 /// meshContinuum() in its steps (§4.5.2): run() is the table of contents. A
-/// cut of partial depth adds three steps: the hole's floor edges, the twins
-/// merged below the cut, and the nodes no element uses dropped.
+/// cut of partial depth adds four steps: the hole's floor edges, the twins
+/// merged below the cut, the undermined plane split at the cut's root, and
+/// the nodes no element uses dropped.
 class ContinuumMesher
 {
 public:
@@ -218,7 +236,10 @@ public:
     edgeCount_ = int(out_.edges.size());
     placeNodes();
     if (partial_)
+    {
       mergeTwinsBelowTheCut();
+      splitTheUnderminedPlane();
+    }
     makeElements();
     if (partial_)
       dropUnusedNodes();
@@ -430,6 +451,52 @@ private:
     }
   }
 
+  /// 2c. Under a cut of partial depth the surgeon raises the tissue the cut
+  ///     goes through in the plane at its root (thesis §3.2.2, §3.2.4 item
+  ///     2): every undermined vertex, and every edge between two, gets a
+  ///     second node on that plane, which the layer above uses; the layer
+  ///     below keeps the first and stays whole and held. Twins merged below
+  ///     the cut get one each, so the wound's two sides part there too.
+  void splitTheUnderminedPlane()
+  {
+    upperOfVertex_.assign(std::size_t(vertexCount_), -1);
+    upperOfEdge_.assign(std::size_t(edgeCount_), -1);
+    const auto& undermined = options_.underminedVertices;
+    if (undermined.empty())
+      return;
+    std::vector<int> copied;
+    auto copyOf = [&](int node) {
+      copied.push_back(node);
+      return int(nodeTotal_) + int(copied.size()) - 1;
+    };
+    for (int v = 0; v < vertexCount_; ++v)
+      if (undermined[std::size_t(v)])
+        upperOfVertex_[std::size_t(v)] = copyOf(out_.vertexColumns[std::size_t(v)][std::size_t(2 * cut_)]);
+    for (int e = 0; e < edgeCount_; ++e)
+    {
+      const auto& [a, b] = out_.edges[std::size_t(e)];
+      if (undermined[std::size_t(a)] && undermined[std::size_t(b)])
+        upperOfEdge_[std::size_t(e)] = copyOf(out_.edgeColumns[std::size_t(e)][std::size_t(cut_)]);
+    }
+    out_.mesh.nodes.conservativeResize(3, nodeTotal_ + Eigen::Index(copied.size()));
+    for (std::size_t i = 0; i < copied.size(); ++i)
+      out_.mesh.nodes.col(nodeTotal_ + Eigen::Index(i)) = out_.mesh.nodes.col(copied[i]);
+    nodeTotal_ += Eigen::Index(copied.size());
+  }
+
+  /// The node of vertex @a v's column on the undermined plane that the layer
+  /// above it uses, and the one of edge @a e.
+  int upperPlaneNodeOfVertex(int v) const
+  {
+    const int upper = upperOfVertex_.empty() ? -1 : upperOfVertex_[std::size_t(v)];
+    return upper >= 0 ? upper : out_.vertexColumns[std::size_t(v)][std::size_t(2 * cut_)];
+  }
+  int upperPlaneNodeOfEdge(int e) const
+  {
+    const int upper = upperOfEdge_.empty() ? -1 : upperOfEdge_[std::size_t(e)];
+    return upper >= 0 ? upper : out_.edgeColumns[std::size_t(e)][std::size_t(cut_)];
+  }
+
   /// The element of layer @a k over a polygon of @a n corners, its node
   /// slots read from the corners' and the edges' columns. Bathe: corners 0-3
   /// top, 4-7 bottom, 8-11 / 12-15 top / bottom mid-edges i-(i+1), 16-19
@@ -450,6 +517,11 @@ private:
       el.nodes[std::size_t(2 * n + i)] = edgeColumn[std::size_t(k)];
       el.nodes[std::size_t(3 * n + i)] = edgeColumn[std::size_t(k + 1)];
       el.nodes[std::size_t(4 * n + i)] = column[std::size_t(2 * k + 1)];
+      if (partial_ && k == cut_ - 1) // its bottom face is on the undermined plane
+      {
+        el.nodes[std::size_t(n + i)] = upperPlaneNodeOfVertex(corners[std::size_t(i)]);
+        el.nodes[std::size_t(3 * n + i)] = upperPlaneNodeOfEdge(edges[std::size_t(i)]);
+      }
     }
     return el;
   }
@@ -506,6 +578,10 @@ private:
         for (int& node : column)
           if (node >= 0)
             node = renumbered[std::size_t(node)];
+    for (auto* upper : {&upperOfVertex_, &upperOfEdge_}) // a copy no element uses is no copy
+      for (int& node : *upper)
+        if (node >= 0)
+          node = renumbered[std::size_t(node)];
   }
 
   /// The index of edge (a, b) when it is a border edge of the hole loop, else -1.
@@ -521,8 +597,10 @@ private:
 
   /// 4. Sutures (§4.4.5): edge a onto edge b through every layer (only the
   ///    layers the cut goes through: the nodes at its root and below are
-  ///    held by the tissue under it), vertex columns a0 -> b0, a1 -> b1 (not
-  ///    at a corner being closed) and the mid-edge columns.
+  ///    held by the tissue under it; raised over an undermined plane, the
+  ///    wall's foot lies on the plane and slides there), vertex columns
+  ///    a0 -> b0, a1 -> b1 (not at a corner being closed) and the mid-edge
+  ///    columns.
   void sew()
   {
     NodeGroups groups;
@@ -573,7 +651,9 @@ private:
 
   /// 5. Supports: the bone layer (§4.5) less the undermined region (§3.2.4
   ///    item 2: the skin freed from what lies beneath slides over it) and,
-  ///    if asked, the rim columns.
+  ///    if asked, the rim columns. Under a cut of partial depth the freed
+  ///    nodes are the raised tissue's own on the plane at the cut's root
+  ///    (splitTheUnderminedPlane()) and the bone holds its whole layer.
   void support()
   {
     const auto& undermined = options_.underminedVertices;
@@ -582,14 +662,18 @@ private:
     {
       const int node = out_.vertexColumns[std::size_t(v)].back();
       out_.boneNodes.push_back(node);
-      if (isUndermined(v))
+      if (partial_ && upperOfVertex_[std::size_t(v)] >= 0)
+        out_.underminedNodes.push_back(upperOfVertex_[std::size_t(v)]);
+      else if (!partial_ && isUndermined(v))
         out_.underminedNodes.push_back(node);
     }
     for (int e = 0; e < edgeCount_; ++e)
     {
       const int node = out_.edgeColumns[std::size_t(e)].back();
       out_.boneNodes.push_back(node);
-      if (isUndermined(out_.edges[std::size_t(e)][0]) && isUndermined(out_.edges[std::size_t(e)][1]))
+      if (partial_ && upperOfEdge_[std::size_t(e)] >= 0)
+        out_.underminedNodes.push_back(upperOfEdge_[std::size_t(e)]);
+      else if (!partial_ && isUndermined(out_.edges[std::size_t(e)][0]) && isUndermined(out_.edges[std::size_t(e)][1]))
         out_.underminedNodes.push_back(node);
     }
     // Merged twins share a bone node: keep each once.
@@ -611,6 +695,87 @@ private:
     for (int node = 0; node < nodeCount; ++node)
       if (fixed[std::size_t(node)] && !sutured_[std::size_t(node)])
         out_.fixedNodes.push_back(node);
+    if (options_.underminedBase == UnderminedBase::Sliding)
+      slideOnTheDeepPlane(fixed);
+  }
+
+  /// 5b. Undermined tissue glides on the deep plane it was freed from: the
+  ///     bone (a full-thickness cut) or the tissue below the cut's root (a
+  ///     cut of partial depth), with the plane's normal at each freed node
+  ///     from the vector areas of the plane's faces around it (the surface
+  ///     polygons' and the hole floor's). Sutured nodes move as one with
+  ///     their suture group's root, so a group slides once, on the mean of
+  ///     its members' planes: a wound closed onto its mirror image slides on
+  ///     the mirror-symmetric plane.
+  void slideOnTheDeepPlane(const std::vector<char>& fixed)
+  {
+    const int nodeCount = int(out_.mesh.nodes.cols());
+    const std::size_t vertexLevel = std::size_t(partial_ ? 2 * cut_ : 2 * layers_);
+    const std::size_t edgeLevel = std::size_t(partial_ ? cut_ : layers_);
+    std::vector<Eigen::Vector3d> vertexNormal(std::size_t(vertexCount_), Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d> edgeNormal(std::size_t(edgeCount_), Eigen::Vector3d::Zero());
+    auto addFace = [&](const auto& vertices, const auto& edges) {
+      const std::size_t n = vertices.size();
+      auto at = [&](std::size_t i) {
+        return Eigen::Vector3d(out_.mesh.nodes.col(out_.vertexColumns[std::size_t(vertices[i % n])][vertexLevel]));
+      };
+      Eigen::Vector3d area = Eigen::Vector3d::Zero();
+      for (std::size_t i = 0; i < n; ++i)
+        area += at(i).cross(at(i + 1));
+      for (std::size_t i = 0; i < n; ++i)
+      {
+        vertexNormal[std::size_t(vertices[i])] += area;
+        edgeNormal[std::size_t(edges[i])] += area;
+      }
+    };
+    for (std::size_t p = 0; p < surface_.polygons.size(); ++p)
+      addFace(surface_.polygons[p], polygonEdges_[p]);
+    if (partial_)
+      for (std::size_t t = 0; t < floor_.triangles.size(); ++t)
+        addFace(floor_.triangles[t], floorEdges_[t]);
+
+    // The freed nodes, each with its plane's normal and the node beneath it
+    // (-1: the bone, which does not move).
+    std::vector<Eigen::Vector3d> normal(std::size_t(nodeCount), Eigen::Vector3d::Zero());
+    std::vector<int> beneath(std::size_t(nodeCount), -1);
+    std::vector<char> freed(std::size_t(nodeCount), 0);
+    auto free = [&](int node, const Eigen::Vector3d& n, int below) {
+      freed[std::size_t(node)] = 1;
+      normal[std::size_t(node)] += n;
+      beneath[std::size_t(node)] = below;
+    };
+    const auto& undermined = options_.underminedVertices;
+    for (int v = 0; v < vertexCount_; ++v)
+      if (partial_ ? upperOfVertex_[std::size_t(v)] >= 0 : !undermined.empty() && undermined[std::size_t(v)] != 0)
+        free(partial_ ? upperOfVertex_[std::size_t(v)] : out_.vertexColumns[std::size_t(v)].back(),
+             vertexNormal[std::size_t(v)], partial_ ? out_.vertexColumns[std::size_t(v)][vertexLevel] : -1);
+    for (int e = 0; e < edgeCount_; ++e)
+    {
+      const auto& [a, b] = out_.edges[std::size_t(e)];
+      const bool both = !undermined.empty() && undermined[std::size_t(a)] && undermined[std::size_t(b)];
+      const int node = partial_ ? upperOfEdge_[std::size_t(e)] : both ? out_.edgeColumns[std::size_t(e)].back() : -1;
+      if (node >= 0 && !freed[std::size_t(node)]) // merged twins share their nodes
+        free(node, edgeNormal[std::size_t(e)], partial_ ? out_.edgeColumns[std::size_t(e)][edgeLevel] : -1);
+    }
+
+    std::vector<int> groupRoot(static_cast<std::size_t>(nodeCount));
+    std::iota(groupRoot.begin(), groupRoot.end(), 0);
+    for (const Suture& s : out_.sutures) // sutures point at their group's root (sew())
+      groupRoot[std::size_t(s.node)] = s.target;
+    std::vector<Eigen::Vector3d> groupNormal(std::size_t(nodeCount), Eigen::Vector3d::Zero());
+    std::vector<char> slides(std::size_t(nodeCount), 0);
+    for (int node = 0; node < nodeCount; ++node)
+    {
+      // A node the clamped rim holds (and is sutured to nothing) stays held.
+      if (!freed[std::size_t(node)] || (fixed[std::size_t(node)] && !sutured_[std::size_t(node)]))
+        continue;
+      const std::size_t root = std::size_t(groupRoot[std::size_t(node)]);
+      groupNormal[root] += normal[std::size_t(node)];
+      slides[root] = freed[root]; // a group held by a member that is not freed does not slide
+    }
+    for (int node = 0; node < nodeCount; ++node)
+      if (slides[std::size_t(node)] && groupNormal[std::size_t(node)].norm() > 0.0)
+        out_.slidingNodes.push_back({node, groupNormal[std::size_t(node)].normalized(), beneath[std::size_t(node)]});
   }
 
   /// The rim: the columns of every border edge that is not an edge of the
@@ -631,6 +796,9 @@ private:
         onRim[std::size_t(node)] = 1;
       for (int v : {a, b})
         for (int node : out_.vertexColumns[std::size_t(v)])
+          onRim[std::size_t(node)] = 1;
+      if (partial_) // and the raised tissue's nodes on the undermined plane
+        for (int node : {upperPlaneNodeOfEdge(e), upperPlaneNodeOfVertex(a), upperPlaneNodeOfVertex(b)})
           onRim[std::size_t(node)] = 1;
     }
     for (int node = 0; node < nodeCount; ++node)
@@ -653,6 +821,10 @@ private:
   HoleFloor floor_;
   std::vector<std::array<int, 3>> floorEdges_;
   std::vector<char> sutured_;
+  /// Per vertex and per edge, the node the layer above the undermined plane
+  /// uses there when it is not the column's own (splitTheUnderminedPlane()),
+  /// else -1; empty for a full-thickness cut.
+  std::vector<int> upperOfVertex_, upperOfEdge_;
 };
 
 } // namespace
@@ -698,6 +870,7 @@ ContinuumMesh meshExcisedTissue(const SurfaceMesh& surface, const TissueGeometry
   };
   ContinuumMesh out = meshContinuum(floorSurface, {}, toRoot, removed);
   out.fixedNodes.clear(); // nothing holds what is cut out
+  out.slidingNodes.clear();
   return out;
 }
 

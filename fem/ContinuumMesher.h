@@ -46,6 +46,14 @@ enum class RimCondition
   Clamped, ///< every node of the rim's columns is fixed (tissue beyond the mesh held in place)
 };
 
+/// What holds undermined tissue (thesis §3.2.2, §3.2.4 item 2) on the deep
+/// plane it was freed from.
+enum class UnderminedBase
+{
+  Sliding, ///< glides over the fascia or periosteum: u . n = 0 there, tangential motion free
+  Free,    ///< held by nothing: the deep face of the freed tissue may lift off or sink in
+};
+
 /// Options of meshContinuum().
 struct ContinuumMeshOptions
 {
@@ -68,13 +76,20 @@ struct ContinuumMeshOptions
   std::optional<double> noBoneDepth;
   RimCondition rim = RimCondition::Free;
   /// Undermining (thesis §3.2.2, §3.2.4 item 2): one flag per surface
-  /// vertex, non-zero where the skin is freed from what lies beneath. The
-  /// bone node of such a vertex's column is not fixed, nor the bone node of
-  /// an edge whose two vertices are both undermined (the bottom face of the
-  /// freed elements is then free as a whole). Empty: no undermining. A
+  /// vertex, non-zero where the tissue the cut goes through is freed from
+  /// what lies beneath, in the plane at the cut's root. For a
+  /// full-thickness cut that plane is the bone: the bone node of such a
+  /// vertex's column is not fixed, nor the bone node of an edge whose two
+  /// vertices are both undermined (the bottom face of the freed elements is
+  /// then free as a whole). For a cut of partial depth the plane is inside
+  /// the tissue (the fascia under the fat, say): the freed vertices and
+  /// edges get a second node there for the layer above, and the tissue
+  /// below stays whole and held by the bone. Empty: no undermining. A
   /// clamped rim stays clamped: it holds the tissue beyond the mesh, not the
   /// bone.
   std::vector<char> underminedVertices;
+  /// How the undermined bone-layer nodes are held (ContinuumMesh::slidingNodes).
+  UnderminedBase underminedBase = UnderminedBase::Sliding;
   /// Incision depth (thesis §3.2.2: cutting to a depth): the number of
   /// layers, from the skin, the cut goes through; 0 (or N_l) is full
   /// thickness, the thesis's model. Below a cut of partial depth the tissue
@@ -84,6 +99,17 @@ struct ContinuumMeshOptions
   /// layers the cut goes through (not the nodes at its root, which the
   /// tissue below holds).
   int cutLayers = 0;
+};
+
+/// A node of undermined tissue that slides on the deep plane beneath it:
+/// (u - u_beneath) . normal = 0, u_beneath = 0 on the bone.
+struct SlidingNode
+{
+  int node = -1;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero(); ///< unit normal of the deep surface at the node
+  /// The node of the tissue beneath on the same plane (a cut of partial
+  /// depth), or -1: the bone, which does not move.
+  int beneath = -1;
 };
 
 /**
@@ -111,9 +137,22 @@ struct ContinuumMesh
   std::vector<int> fixedNodes;
   /// Every node of the bone layer (ascending), sutured or not.
   std::vector<int> boneNodes;
-  /// Bone-layer nodes the bone no longer holds because the skin above them
-  /// is undermined (ascending; ContinuumMeshOptions::underminedVertices).
+  /// The nodes of the undermined tissue's deep face (ascending;
+  /// ContinuumMeshOptions::underminedVertices): for a full-thickness cut
+  /// the bone-layer nodes the bone no longer holds; for a cut of partial
+  /// depth the raised tissue's own nodes on the plane at the cut's root,
+  /// each beside the node of the tissue below, which stays whole and held.
   std::vector<int> underminedNodes;
+  /// The undermined nodes that slide on the deep plane
+  /// (UnderminedBase::Sliding; ascending by node): the freed tissue glides
+  /// over what lies beneath, neither glued to it nor lifting off. Normals
+  /// are the deep surface's (the plane's faces around the node,
+  /// area-weighted), so on a curved plane the node slides on its tangent
+  /// plane in the reference state (no contact search: good while the slide
+  /// is short against the plane's radius of curvature). A sutured group (a
+  /// node and those sewn onto it) slides once, at its root, on the mean
+  /// plane of its members; nodes the clamped rim holds stay held.
+  std::vector<SlidingNode> slidingNodes;
   /// Every node of the rim's vertex and edge columns (ascending).
   std::vector<int> rimNodes;
 
@@ -142,7 +181,9 @@ struct ContinuumMesh
   std::vector<int> elementPolygon;
   std::vector<int> elementLayer;
 
-  /// The fixed nodes and sutures as constraints for LinearStaticAnalysis.
+  /// The fixed nodes, the sutures and the sliding nodes (one equation
+  /// u . n = 0 each, its dependent DOF the normal's largest component) as
+  /// constraints for the analyses.
   Constraints constraints() const;
   /// Index of the surface edge joining vertices @a a and @a b, or -1.
   int edgeIndex(int a, int b) const;

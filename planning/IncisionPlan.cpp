@@ -222,6 +222,32 @@ bool IncisionPlan::isExcision() const
   return !offsets_.empty();
 }
 
+const char* cutDepthId(CutDepth depth)
+{
+  return depth == CutDepth::Fascia ? "fascia" : "bone";
+}
+
+std::optional<CutDepth> cutDepthFromId(const std::string& id)
+{
+  for (CutDepth d : {CutDepth::Bone, CutDepth::Fascia})
+    if (id == cutDepthId(d))
+      return d;
+  return std::nullopt;
+}
+
+int layersCutTo(CutDepth depth, int layerCount)
+{
+  return depth == CutDepth::Fascia && layerCount > 1 ? layerCount - 1 : layerCount;
+}
+
+void IncisionPlan::setUnderminingBand(double millimetres)
+{
+  if (!(millimetres >= 0.0) || !std::isfinite(millimetres))
+    throw std::invalid_argument("the undermining band must be 0 (none) or a positive number of mm, not " +
+                                std::to_string(millimetres));
+  underminingBand_ = millimetres;
+}
+
 void IncisionPlan::setSutures(std::vector<SutureEdges> written)
 {
   sutures_ = resolveSutures(holeLoopSize(pointCount()), written);

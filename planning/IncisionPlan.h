@@ -5,6 +5,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -80,6 +81,26 @@ std::vector<std::vector<int>> sutureClasses(int loopSize, const std::vector<fem:
 /// coordinates (§4.2.2); the last point joins the first.
 using UnderminedRegion = std::vector<Eigen::Vector2d>;
 
+/// How deep a procedure cuts (thesis §3.2.2: cutting to a depth) and so the
+/// plane its undermined tissue is raised in and slides on.
+enum class CutDepth
+{
+  /// Through every layer to the bone, raised on the periosteum: the
+  /// thesis's model (§4.5.2).
+  Bone,
+  /// Through the skin and the subcutaneous layers, raised on the deep
+  /// fascia / SMAS: every layer of the model but the deepest, which stays
+  /// whole on the bone. How facial flaps are raised.
+  Fascia,
+};
+
+/// "bone" or "fascia": the name in procedure files, scenes and plan.json.
+const char* cutDepthId(CutDepth depth);
+/// The depth of an id of cutDepthId(); empty for any other text.
+std::optional<CutDepth> cutDepthFromId(const std::string& id);
+/// The layers a cut to @a depth goes through in a model of @a layerCount layers.
+int layersCutTo(CutDepth depth, int layerCount);
+
 /// @class IncisionPlan
 /// @brief A surgical plan on one skin range map: the cut path in normalised
 /// cylindrical coordinates (§4.2.2), excision offsets and sutures.
@@ -132,9 +153,24 @@ public:
   /// @throws SutureError (see resolveSutures); the plan keeps its old sutures then.
   void setSutures(std::vector<SutureEdges> written);
 
+  /// The band along the sutured edges the procedure undermines by default
+  /// (mm on the skin; ProcedureTemplate, DefaultUndermining), 0 for a
+  /// hand-drawn cut; SimulationOptions::underminingWidth, when the surgeon
+  /// sets it, replaces it (underminingWidthFor()).
+  double underminingBand() const { return underminingBand_; }
+  /// @throws std::invalid_argument for a negative or non-finite width.
+  void setUnderminingBand(double millimetres);
+
+  /// How deep the procedure cuts and where it raises what it undermines
+  /// (CutDepth); the thesis's full thickness for a hand-drawn cut.
+  /// SimulationOptions::cutLayers, when the surgeon sets it, replaces it
+  /// (cutLayersFor()).
+  CutDepth cutDepth() const { return cutDepth_; }
+  void setCutDepth(CutDepth depth) { cutDepth_ = depth; }
+
   /// @name Undermined regions (thesis §3.2.2, §3.2.4 item 2)
   /// Regions of skin the surgeon frees from what lies beneath, besides the
-  /// default band along the sutured edges (SimulationOptions::underminingWidth):
+  /// band along the sutured edges (underminingBand()):
   /// closed polygons of points (θn, zn) in normalised cylindrical
   /// coordinates like the cut path, the last point joined to the first. The
   /// undermined skin is their union. Undermining.h checks them and finds the
@@ -160,6 +196,8 @@ private:
   std::vector<SutureEdges> written_;
   std::vector<fem::SutureEdgePair> sutures_;
   std::vector<UnderminedRegion> underminedRegions_;
+  double underminingBand_ = 0.0;
+  CutDepth cutDepth_ = CutDepth::Bone;
 };
 
 /// Checks a plan can be cut on this skin: at least two cut points, no two

@@ -480,10 +480,12 @@ json recipeToJson(const PlanRecipe& recipe)
          {"operations", std::move(operations)}};
   if (recipe.elementSize > 0.0)
     j["simulation"] = {{"elementSize", recipe.elementSize}};
-  if (recipe.cutLayers > 0)
-    j["simulation"]["cutLayers"] = recipe.cutLayers;
+  if (recipe.elementSize > 0.0 && recipe.cutLayers)
+    j["simulation"]["cutLayers"] = *recipe.cutLayers;
   if (recipe.elementSize > 0.0 && recipe.model != TissueModel::LinearElastic)
     j["simulation"]["model"] = tissueModelId(recipe.model);
+  if (recipe.elementSize > 0.0 && recipe.underminingWidth)
+    j["simulation"]["underminingWidth"] = *recipe.underminingWidth;
   if (recipe.prediction)
     j["prediction"] = predictionCheckToJson(*recipe.prediction);
   return j;
@@ -539,6 +541,13 @@ PlanRecipe recipeFromJson(const json& j)
       if (!known)
         bad("\"model\" in \"simulation\" must be \"linear\" or \"large-deformation\", not " + model->dump());
       recipe.model = *known;
+    }
+    if (const auto width = simulation->find("underminingWidth"); width != simulation->end())
+    {
+      if (!width->is_number() || !(width->get<double>() >= 0.0) || !(width->get<double>() <= 100.0))
+        bad("\"underminingWidth\" in \"simulation\" must be the undermining band in mm (0 to 100), not " +
+            width->dump());
+      recipe.underminingWidth = width->get<double>();
     }
   }
   if (const auto prediction = j.find("prediction"); prediction != j.end() && !prediction->is_null())

@@ -135,12 +135,17 @@ struct PlanRecipe
   /// The element size at the wound (mm, SimulationOptions) the prediction
   /// was made with, so a replay meshes the same; 0 when not recorded.
   double elementSize = 0.0;
-  /// The incision depth the prediction was made with: tissue layers cut
-  /// from the skin (SimulationOptions::cutLayers); 0 = full thickness.
-  int cutLayers = 0;
+  /// The incision depth the surgeon chose: tissue layers cut from the skin
+  /// (SimulationOptions::cutLayers); 0 = full thickness; unset: the
+  /// procedure's own depth, which the replay's placement gives again.
+  std::optional<int> cutLayers;
   /// The model of the tissue the prediction was made with (a file without
   /// one was made by the linear model, the only one then).
   TissueModel model = TissueModel::LinearElastic;
+  /// The undermining band the surgeon chose (mm, SimulationOptions::
+  /// underminingWidth); unset: the procedure's own, which the replay's
+  /// placement gives again.
+  std::optional<double> underminingWidth;
   /// How the prediction made from these operations checked out, written
   /// after the solve so anyone can read it from the file; a replay makes
   /// and checks its own.
@@ -205,13 +210,16 @@ inline constexpr int recipeFormatVersion = 1;
 ///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 },
 ///     { "operation": "undermine", "region": [[-0.52, 0.01], [-0.46, 0.01], [-0.46, 0.06], [-0.52, 0.06]] },
 ///     { "operation": "clear-undermining" } ],
-///   "simulation": { "elementSize": 2.5, "cutLayers": 1, "model": "large-deformation" },
+///   "simulation": { "elementSize": 2.5, "cutLayers": 1, "model": "large-deformation", "underminingWidth": 8 },
 ///   "prediction": { "model": "large-deformation", "converged": true, "closureFraction": 1.0,
 ///                   "increments": 6, "iterations": 31, "minDetF": 0.42, "maxStretch": 1.61,
 ///                   "invertedElements": 0, "admissible": true, "problem": "" } }
 /// @endcode
-/// "simulation" is left out when elementSize is 0; "cutLayers" when the cut
-/// is full thickness (0); "model" when it is "linear" (tissueModelId()).
+/// "simulation" is left out when elementSize is 0; "cutLayers" when the
+/// procedure's own depth is used (files from before procedures stated one
+/// were cut through every layer: they replay at the procedure's depth now);
+/// "model" when it is "linear" (tissueModelId()); "underminingWidth" when
+/// the procedure's own band is used.
 /// "prediction" is the check of the prediction made (PredictionCheck),
 /// left out until there is one. "undermine" and
 /// "clear-undermining" came later within format 1: files without them read

@@ -1,6 +1,7 @@
 #include "planning/PlanSimulation.h"
 
 #include <algorithm>
+#include <map>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -60,10 +61,10 @@ void checkOptions(const SimulationOptions& o)
     bad("the depth used where there is no bone must be positive");
   if (o.threads < 1)
     bad("at least one thread");
-  if (!(o.underminingWidth >= 0.0) || !std::isfinite(o.underminingWidth))
+  if (o.underminingWidth && (!(*o.underminingWidth >= 0.0) || !std::isfinite(*o.underminingWidth)))
     bad("the undermining width must be 0 (none) or a positive number of mm");
-  if (o.cutLayers < 0 || o.cutLayers > o.layerCount)
-    bad("the cut goes through " + std::to_string(o.cutLayers) + " layers of " + std::to_string(o.layerCount) +
+  if (o.cutLayers && (*o.cutLayers < 0 || *o.cutLayers > o.layerCount))
+    bad("the cut goes through " + std::to_string(*o.cutLayers) + " layers of " + std::to_string(o.layerCount) +
         ": give 1.." + std::to_string(o.layerCount) + ", or 0 for full thickness");
 }
 
@@ -428,22 +429,24 @@ private:
     const fem::TissueGeometry geometry = skinToBoneGeometry(chart_, skin_, boneForDepth);
     fem::ContinuumMeshOptions continuumOptions = options_.continuumMeshOptions();
     continuumOptions.rim = options_.rim;
-    continuumOptions.cutLayers = options_.cutLayers;
-    out_.underminedVertices = fem::underminingBand(surface, out_.sutures, options_.underminingWidth);
+    continuumOptions.cutLayers = cutLayersFor(options_, plan_);
+    continuumOptions.underminedBase = options_.underminedBase;
+    out_.underminingWidth = underminingWidthFor(options_, plan_);
+    out_.underminedVertices = fem::underminingBand(surface, out_.sutures, out_.underminingWidth);
     addUnderminedRegions(surface, plan_, chart_, out_.underminedVertices); // and the plan's regions (Undermining.h)
     continuumOptions.underminedVertices = out_.underminedVertices;
     out_.continuum = fem::meshContinuum(surface, out_.sutures, geometry, continuumOptions);
     out_.excisedTissue = fem::meshExcisedTissue(surface, geometry, continuumOptions);
     out_.excisedVolume = fem::meshVolume(out_.excisedTissue.mesh);
     out_.layerCount = options_.layerCount;
-    out_.cutLayers = options_.cutLayers == 0 ? options_.layerCount : options_.cutLayers;
+    out_.cutLayers = continuumOptions.cutLayers;
   }
 
   /// The thesis's counts (§4.5.2), for a cut through every layer (a partial
   /// one shares nodes and adds the hole's floor).
   void checkTheThesisCounts() const
   {
-    if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
+    if (out_.cutLayers != options_.layerCount)
       return;
     const fem::SurfaceMesh& surface = out_.surface.mesh;
     const Eigen::Index nv = Eigen::Index(surface.vertices.size());
@@ -589,6 +592,18 @@ private:
     }
     for (int node : out_.continuum.fixedNodes)
       closure.supportReaction += out_.nodalForces.segment<3>(3 * Eigen::Index(node));
+    // The deep plane pushes back along its normal on each sliding node: the
+    // node's own K U less what the sutures sewn onto it pull with.
+    std::map<int, Eigen::Vector3d> sewnOnto;
+    for (const SutureForce& s : closure.sutures)
+      sewnOnto.try_emplace(s.target, Eigen::Vector3d::Zero()).first->second += s.force;
+    for (const fem::SlidingNode& sliding : out_.continuum.slidingNodes)
+    {
+      Eigen::Vector3d onThePlane = out_.nodalForces.segment<3>(3 * Eigen::Index(sliding.node));
+      if (const auto it = sewnOnto.find(sliding.node); it != sewnOnto.end())
+        onThePlane += it->second;
+      closure.supportReaction += onThePlane;
+    }
     // The refined sub-pairs of each plan pair follow one another in
     // out_.sutures (refineHole()), as many as its segment's pieces.
     const int n = plan_.pointCount();
@@ -735,6 +750,18 @@ std::optional<TissueModel> tissueModelFromId(const std::string& id)
   if (id == "large-deformation")
     return TissueModel::LargeDeformation;
   return std::nullopt;
+}
+
+double underminingWidthFor(const SimulationOptions& options, const IncisionPlan& plan)
+{
+  return options.underminingWidth.value_or(plan.underminingBand());
+}
+
+int cutLayersFor(const SimulationOptions& options, const IncisionPlan& plan)
+{
+  if (options.cutLayers)
+    return *options.cutLayers == 0 ? options.layerCount : *options.cutLayers;
+  return layersCutTo(plan.cutDepth(), options.layerCount);
 }
 
 std::string checkSummary(const PredictionCheck& c)

@@ -150,14 +150,22 @@ struct SimulationOptions : TissueDepthOptions
   /// within this distance (mm, measured on the skin chart) of the sutured
   /// hole border edges is freed from what lies beneath, so the bone nodes
   /// under it are not fixed (fem::underminingBand()). 0: no undermining.
-  double underminingWidth = 0.0;
+  /// Unset: the band the plan's procedure undermines by default
+  /// (IncisionPlan::underminingBand(); underminingWidthFor()).
+  std::optional<double> underminingWidth;
+  /// What holds the undermined tissue on the deep plane: it slides on it
+  /// (u . n = 0, the default: the surgeon frees the tissue in a plane, over
+  /// the fascia or periosteum, and it glides there) or nothing does.
+  fem::UnderminedBase underminedBase = fem::UnderminedBase::Sliding;
   /// Incision depth (thesis §3.2.2: cutting to a depth): the layers, from
   /// the skin, the cut goes through; 0 = all (full thickness down to the
-  /// deep layer, the default). Below a cut of partial depth the tissue stays
-  /// whole and the sutures sew only the layers cut
-  /// (fem::ContinuumMeshOptions::cutLayers). With the default three layers:
-  /// 1 = through the skin, 2 = through the fat as well.
-  int cutLayers = 0;
+  /// deep layer). Below a cut of partial depth the tissue stays whole, the
+  /// sutures sew only the layers cut and undermined tissue is raised in the
+  /// plane at the cut's root (fem::ContinuumMeshOptions::cutLayers). With
+  /// the default three layers: 1 = through the skin, 2 = through the fat as
+  /// well. Unset: the depth the plan's procedure states
+  /// (IncisionPlan::cutDepth(); cutLayersFor()).
+  std::optional<int> cutLayers;
   /// Threads of the assembly.
   int threads = 1;
   /// Called by simulatePlan() between its phases (surface mesh, continuum
@@ -168,6 +176,13 @@ struct SimulationOptions : TissueDepthOptions
   /// Empty: not called.
   seg::ProgressCallback progress;
 };
+
+/// The undermining band a prediction of @a plan uses (mm):
+/// options.underminingWidth if set, else the plan's procedure default.
+double underminingWidthFor(const SimulationOptions& options, const IncisionPlan& plan);
+/// The layers a prediction of @a plan cuts through (1..layerCount):
+/// options.cutLayers if set (0: all), else the plan's procedure depth.
+int cutLayersFor(const SimulationOptions& options, const IncisionPlan& plan);
 
 /// The skin surface after the operation, for a display: one entry per
 /// surface-mesh vertex (its skin node), and the surface polygons.
@@ -255,6 +270,8 @@ struct PlanPrediction
   /// (IncisionPlan::underminedRegions()); the bone nodes released are
   /// continuum.underminedNodes.
   std::vector<char> underminedVertices;
+  /// The band along the sutured edges undermined (mm; underminingWidthFor()).
+  double underminingWidth = 0.0;
   ClosureForces closure;
   /// The tissue the excision removes (§3.1.3): wedges over the hole's floor
   /// through the layers cut (fem::meshExcisedTissue()), with the depths of

@@ -61,6 +61,21 @@ struct ProcedureCut
   std::vector<ChartPoint> offsets; ///< per hole-loop vertex (§4.4.4), holeLoopSize() long
 };
 
+/// The undermining a procedure states by default (thesis §3.2.2, §3.2.4
+/// item 2): a band along the sutured edges, `millimetres` wide plus
+/// `factor` times the length parameter `parameter` (if named), so the band
+/// grows with the procedure.
+struct DefaultUndermining
+{
+  double millimetres = 0.0;
+  double factor = 0.0;
+  std::string parameter; ///< a length (mm) parameter of the procedure, or empty
+  int line = 0;          ///< where the file states it; 0: not stated (no undermining)
+
+  /// The band's width (mm) for complete parameter values (API units).
+  double width(const std::map<std::string, double>& values) const;
+};
+
 /// @class ProcedureTemplate
 /// @brief One procedure read from its file: generator, parameters, sutures.
 class ProcedureTemplate
@@ -82,6 +97,11 @@ public:
   /// Sutures as written in the file (zip lines expanded) and resolved.
   const std::vector<SutureEdges>& writtenSutures() const { return written_; }
   const std::vector<fem::SutureEdgePair>& sutures() const { return sutures_; }
+  /// What the procedure undermines unless the surgeon says otherwise.
+  const DefaultUndermining& undermining() const { return undermining_; }
+  /// How deep it cuts and where it raises the undermined tissue (the file's
+  /// `depth`; the thesis's full thickness when the file says nothing).
+  CutDepth depth() const { return depth_; }
 
   /// Defaults overridden by values (API units); every parameter filled in.
   /// @throws std::invalid_argument for an unknown name or a value out of range.
@@ -92,7 +112,9 @@ public:
   /// The plan of this procedure centred at a skin point: the cut rotated by
   /// its axis_angle parameter (from the direction of increasing θ towards
   /// increasing z, i.e. towards superior) in the chart about that point,
-  /// stored in normalised cylindrical coordinates, with the sutures.
+  /// stored in normalised cylindrical coordinates, with the sutures, the
+  /// procedure's default undermining (IncisionPlan::underminingBand()) and
+  /// its depth (IncisionPlan::cutDepth()).
   /// @throws std::invalid_argument for bad values or when the cut does not
   /// fit on the measured skin (checkPlan()).
   IncisionPlan place(const seg::RangeMap& skin, const SkinPoint& at,
@@ -105,6 +127,8 @@ private:
   std::vector<ProcedureParameter> parameters_;
   std::vector<SutureEdges> written_;
   std::vector<fem::SutureEdgePair> sutures_;
+  DefaultUndermining undermining_;
+  CutDepth depth_ = CutDepth::Bone;
 };
 
 /// The cut generators a procedure file can name: "ellipse", "z",

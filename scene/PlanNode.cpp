@@ -1,5 +1,8 @@
 #include "scene/PlanNode.h"
 
+#include <cmath>
+#include <utility>
+
 #include "scene/JsonFields.h"
 #include "scene/SceneError.h"
 
@@ -47,6 +50,20 @@ void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures)
 void PlanNode::setGenerator(std::string generator)
 {
   generator_ = std::move(generator);
+  modified();
+}
+
+void PlanNode::setUnderminingBand(double millimetres)
+{
+  underminingBand_ = millimetres;
+  modified();
+}
+
+void PlanNode::setCutDepth(std::string depth)
+{
+  if (depth != "bone" && depth != "fascia")
+    throw SceneError("the plan's cut depth must be \"bone\" or \"fascia\", not \"" + depth + "\"");
+  cutDepth_ = std::move(depth);
   modified();
 }
 
@@ -109,6 +126,10 @@ void PlanNode::writeFields(nlohmann::json& j) const
     path.push_back({p.x(), p.y()});
   j["sutures"] = sutures_;
   j["generator"] = generator_;
+  if (underminingBand_ > 0.0)
+    j["underminingBand"] = underminingBand_;
+  if (cutDepth_ != "bone")
+    j["cutDepth"] = cutDepth_;
   j["centre"] = {centre_.x(), centre_.y()};
   auto& offsets = j["borderOffsets"] = nlohmann::json::array();
   for (const auto& d : borderOffsets_)
@@ -148,6 +169,16 @@ void PlanNode::readFields(const nlohmann::json& j)
     centre_ = Eigen::Vector2d((*c)[0].get<double>(), (*c)[1].get<double>());
   }
   jsonfields::read(j, "generator", generator_);
+  double band = underminingBand_;
+  jsonfields::read(j, "underminingBand", band);
+  if (!(band >= 0.0) || !std::isfinite(band))
+    throw SceneError("the plan's undermining band must be 0 or a positive number of mm, not " + std::to_string(band));
+  underminingBand_ = band;
+  std::string depth = cutDepth_;
+  jsonfields::read(j, "cutDepth", depth);
+  if (depth != "bone" && depth != "fascia")
+    throw SceneError("the plan's cut depth must be \"bone\" or \"fascia\", not \"" + depth + "\"");
+  cutDepth_ = std::move(depth);
   if (const auto* given = jsonfields::find(j, "sutures"))
   {
     std::vector<std::array<int, 4>> sutures;

@@ -42,6 +42,17 @@ public:
   const std::string& generator() const { return generator_; }
   void setGenerator(std::string generator);
 
+  /// The band along the sutured edges the procedure undermines by default
+  /// (mm on the skin, 0 for none; scenes saved before procedures stated one
+  /// read 0, as they were predicted).
+  double underminingBand() const { return underminingBand_; }
+  void setUnderminingBand(double millimetres);
+
+  /// How deep the procedure cuts: "bone" (every layer; scenes saved before
+  /// procedures stated it read so, as they were predicted) or "fascia".
+  const std::string& cutDepth() const { return cutDepth_; }
+  void setCutDepth(std::string depth);
+
   /// Where the plan's skin chart is centred: (θ radians, z mm) on the range map's frame.
   const Eigen::Vector2d& centre() const { return centre_; }
   void setCentre(const Eigen::Vector2d& thetaZ);
@@ -89,6 +100,8 @@ private:
   std::vector<Eigen::Vector2d> cutPath_;
   std::vector<std::array<int, 4>> sutures_;
   std::string generator_;
+  double underminingBand_ = 0.0;
+  std::string cutDepth_ = "bone";
   Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
   std::vector<Eigen::Vector2d> borderOffsets_;
   nlohmann::json operations_ = nlohmann::json::array();

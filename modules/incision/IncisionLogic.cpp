@@ -45,6 +45,8 @@ void IncisionLogic::writePlan(const planning::IncisionPlan& plan, PlanNode& node
   node.setProcedure(plan.procedure());
   node.setGenerator(plan.generator());
   node.setParameters(plan.parameters());
+  node.setUnderminingBand(plan.underminingBand());
+  node.setCutDepth(planning::cutDepthId(plan.cutDepth()));
   node.setCutPath(plan.cutPath());
   node.setCentre(Eigen::Vector2d(plan.centre().theta, plan.centre().z));
   const auto offsets = plan.borderOffsets();
@@ -62,6 +64,8 @@ planning::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
   plan.setProcedure(node.procedure());
   plan.setGenerator(node.generator());
   plan.setParameters(node.parameters());
+  plan.setUnderminingBand(node.underminingBand());
+  plan.setCutDepth(planning::cutDepthFromId(node.cutDepth()).value_or(planning::CutDepth::Bone));
   const int loop = planning::holeLoopSize(plan.pointCount());
   const auto& offsets = node.borderOffsets();
   if (!offsets.empty() && int(offsets.size()) != loop)
@@ -216,9 +220,15 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
   };
   number("elementSize", options.elementSize, 1e-3);
   number("regionRadius", options.regionRadius, 1e-3);
-  number("underminingWidth", options.underminingWidth, 0.0);
+  double width = -1.0; // absent: the procedure's band (planning::underminingWidthFor())
+  number("underminingWidth", width, 0.0);
+  if (width >= 0.0)
+    options.underminingWidth = width;
   integer("layerCount", options.layerCount, 1, 16);
-  integer("cutLayers", options.cutLayers, 0, options.layerCount);
+  int cut = -1; // absent: the procedure's depth (planning::cutLayersFor())
+  integer("cutLayers", cut, 0, options.layerCount);
+  if (cut >= 0)
+    options.cutLayers = cut;
   if (const auto model = s.find("model"); model != s.end() && model->is_string())
     options.model = planning::tissueModelFromId(model->get<std::string>()).value_or(options.model);
   if (const auto materials = s.find("materials"); materials != s.end() && materials->is_array())
@@ -246,10 +256,14 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
 
 nlohmann::json IncisionLogic::simulationRecord(const planning::SimulationOptions& options)
 {
-  nlohmann::json j = {
-    {"elementSize", options.elementSize},           {"cutLayers", options.cutLayers},
-    {"regionRadius", options.regionRadius},         {"layerCount", options.layerCount},
-    {"underminingWidth", options.underminingWidth}, {"model", planning::tissueModelId(options.model)}};
+  nlohmann::json j = {{"elementSize", options.elementSize},
+                      {"regionRadius", options.regionRadius},
+                      {"layerCount", options.layerCount},
+                      {"model", planning::tissueModelId(options.model)}};
+  if (options.underminingWidth)
+    j["underminingWidth"] = *options.underminingWidth;
+  if (options.cutLayers)
+    j["cutLayers"] = *options.cutLayers;
   const fem::MaterialTable materials =
     options.materials.empty() ? planning::defaultFacialTissueMaterials(options.layerCount) : options.materials;
   nlohmann::json list = nlohmann::json::array();

@@ -68,7 +68,8 @@ public:
   /// defaults, then what the node's simulation() records: elementSize and
   /// cutLayers (as `caps plan` writes them), and regionRadius, layerCount,
   /// underminingWidth and materials when the Simulate panel wrote them.
-  /// Values that do not read are left at the default.
+  /// Values that do not read are left at the default; cutLayers and
+  /// underminingWidth, when absent, stay unset: the plan's procedure says.
   static planning::SimulationOptions simulationOptions(const PlanNode& node);
   /// The simulation() record of a prediction made with @a options:
   /// {"elementSize", "cutLayers"} (the plan file's fields, PlanRecipe) and

@@ -73,17 +73,23 @@ const char* kPlanUsage =
   "                       (around the head, along the axis) to make an excision; repeatable\n"
   "  --undermine-region \"THETA,Z;THETA,Z;...\"\n"
   "                       undermines the skin inside the closed polygon of these points\n"
-  "                       (degrees, mm; at least 3, the last joined to the first): its bone\n"
-  "                       nodes are released (§3.2.4); repeatable, the regions add up; kept\n"
-  "                       in plan.json, tinted blue and hatched in skin_colour of the VTP\n"
+  "                       (degrees, mm; at least 3, the last joined to the first), besides\n"
+  "                       the band; repeatable, the regions add up; kept in plan.json,\n"
+  "                       tinted blue and hatched in skin_colour of the VTP\n"
+  "  --undermining MM     the band undermined along the sutured edges (§3.2.4), 0 for none;\n"
+  "                       default the procedure's own (its file's `undermining`, e.g. the\n"
+  "                       Z-plasty's flaps and a margin), or the replayed plan's. Undermined\n"
+  "                       tissue slides on the deep plane: u.n = 0 there, free along it\n"
   "  --replay PLAN.json   instead of --procedure/--at/--param: rebuilds the plan of a plan.json\n"
   "                       from its operations; refused when it was made on another CT\n"
   "  --other-ct           replays a plan made on another CT (another scan or patient) anyway\n"
   "  --element-size MM    element size at the wound (default 2, or the replayed plan's)\n"
   "  --cut-depth N        the cut goes through the top N of the model's 3 tissue layers\n"
-  "                       (1: the skin, 2: skin and fat, 3: down to the bone, the default;\n"
-  "                       or the replayed plan's); below it the tissue stays whole and only\n"
-  "                       the layers cut are sutured (§3.2.2)\n"
+  "                       (1: the skin, 2: skin and fat, 3: down to the bone); default the\n"
+  "                       procedure's depth (its file's `depth`: the shipped ones cut skin\n"
+  "                       and fat and raise their flaps on the fascia), or the replayed\n"
+  "                       plan's; below it the tissue stays whole, only the layers cut are\n"
+  "                       sutured, and undermined tissue slides on the plane at its root\n"
   "  --undermine W,W,...  also closes the plan with the skin undermined W mm around the\n"
   "                       sutured edges (§3.2.4: freed from the bone), for each width, and\n"
   "                       writes undermining.csv: closure force and peak skin stress near\n"
@@ -124,9 +130,10 @@ struct PlanArgs : cli::CtCommandArgs
   std::optional<fs::path> replay;
   bool otherCt = false;
   std::optional<double> elementSize;          ///< mm; default 2, or the replayed plan's
-  std::optional<int> cutLayers;               ///< --cut-depth; default all layers, or the replayed plan's
+  std::optional<int> cutLayers;               ///< --cut-depth; default the procedure's, or the replayed plan's
   std::vector<double> undermineWidths;        ///< mm, the --undermine study; empty: none
   std::optional<planning::TissueModel> model; ///< --model; default linear, or the replayed plan's
+  std::optional<double> underminingWidth;     ///< --undermining mm; default the procedure's, or the replayed plan's
 };
 
 /// "W,W,..." of undermining widths in mm, each in [0, 100].
@@ -259,6 +266,13 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
           return "--model needs linear (the small-strain preview) or large-deformation (the final prediction)";
         ++i;
       }
+      else if (a == "--undermining")
+      {
+        double width = 0.0;
+        if (!hasValue || !cli::parseNumber(args[++i], width) || width < 0.0 || width > 100.0)
+          return "--undermining needs the band undermined along the sutured edges in mm, 0 (none) to 100";
+        parsed.underminingWidth = width;
+      }
       else if (a == "--undermine")
       {
         if (!hasValue || !parseWidths(args[++i], parsed.undermineWidths))
@@ -334,6 +348,8 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
   // How far to trust the numbers below (thesis §5.5): the model and its checks.
   const planning::PredictionCheck& c = p.check;
+  out << "undermining band,along the sutured edges,," << p.underminingWidth << ",mm\n";
+  out << "deep nodes sliding,undermined,," << p.continuum.slidingNodes.size() << ",\n";
   out << "prediction model," << planning::tissueModelId(c.model) << ",,,\n";
   out << "prediction admissible,checks,," << (c.admissible() ? 1 : 0) << ",\n";
   out << "solve converged at full closure,increments,," << (c.converged ? 1 : 0) << ",\n";
@@ -505,14 +521,20 @@ private:
   {
     const double elementSize =
       args_.elementSize.value_or(replay_ && replay_->elementSize > 0.0 ? replay_->elementSize : 2.0);
-    const int cutLayers = args_.cutLayers.value_or(replay_ ? replay_->cutLayers : 0);
+    const std::optional<int> cutLayers = args_.cutLayers ? args_.cutLayers
+                                         : replay_       ? replay_->cutLayers
+                                                         : std::nullopt;
     const planning::TissueModel model =
       args_.model.value_or(replay_ ? replay_->model : planning::TissueModel::LinearElastic);
     saved_ = recorded_->recipe();
     saved_.elementSize = elementSize;
     saved_.cutLayers = cutLayers;
     saved_.model = model;
+    saved_.underminingWidth = args_.underminingWidth ? args_.underminingWidth
+                              : replay_              ? replay_->underminingWidth
+                                                     : std::nullopt;
     planning::writeRecipe(saved_, args_.out / "plan.json");
+    options_.underminingWidth = saved_.underminingWidth;
     options_.elementSize = elementSize;
     options_.cutLayers = cutLayers;
     options_.model = model;
@@ -544,6 +566,28 @@ private:
     peakAt_ = maps_.skin.frame().toCylindrical(woundStress_.original);
   }
 
+  /// "Undermined: 12.0 mm band along the sutured edges (the procedure's),
+  /// 1 region; 310 deep nodes slide on the deep plane".
+  void printTheUndermining()
+  {
+    const planning::IncisionPlan& plan = recorded_->plan();
+    const planning::PlanPrediction& p = prediction_;
+    const double band = planning::underminingWidthFor(options_, plan);
+    out_ << "Undermined: ";
+    if (band > 0.0)
+      out_ << std::fixed << std::setprecision(1) << band << " mm band along the sutured edges ("
+           << (options_.underminingWidth ? "as asked" : "the procedure's default") << ")";
+    else
+      out_ << "no band" << (options_.underminingWidth ? "" : " (the procedure states none)");
+    if (!plan.underminedRegions().empty())
+      out_ << ", " << plan.underminedRegions().size() << " region(s)";
+    if (p.continuum.underminedNodes.empty())
+      out_ << "; the bone holds the whole deep face\n";
+    else
+      out_ << "; " << p.continuum.underminedNodes.size() << " deep nodes freed, " << p.continuum.slidingNodes.size()
+           << " of them sliding on the deep plane\n";
+  }
+
   void printThePrediction()
   {
     const planning::IncisionPlan& plan = recorded_->plan();
@@ -560,17 +604,15 @@ private:
     if (measured_.excisedArea > 0.0)
       out_ << "  excised area: " << measured_.excisedArea << " mm2, volume " << p.excisedVolume << " mm3 (elements; "
            << excisedVolume_ << " mm3 to the bone by the range maps)\n";
-    if (options_.cutLayers != 0 && options_.cutLayers != options_.layerCount)
-      out_ << "  cut through " << options_.cutLayers << " of " << options_.layerCount
-           << " tissue layers: the tissue below stays whole\n";
+    if (p.cutLayers != p.layerCount)
+      out_ << "  cut through " << p.cutLayers << " of " << p.layerCount << " tissue layers"
+           << (options_.cutLayers ? "" : " (the procedure's depth)") << ": the tissue below stays whole\n";
     out_ << "Tissue model: " << planning::tissueModelDescription(p.check.model) << "\n";
     out_ << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
          << p.dofCount << " DOF (" << p.reducedDofCount << " free); mesh " << std::setprecision(3) << p.times.mesh
          << " s, assemble " << p.times.assemble << " s, factor " << p.times.factor << " s, solve " << p.times.solve
          << " s\n";
-    if (!plan.underminedRegions().empty())
-      out_ << "Undermined: " << plan.underminedRegions().size() << " region(s), " << p.continuum.underminedNodes.size()
-           << " bone nodes released\n";
+    printTheUndermining();
     printTheChecks();
     out_ << std::setprecision(2) << "Wound " << p.maxSutureGapBefore << " mm wide before, sutures within "
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";

@@ -139,7 +139,8 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
   cutDepth_->setSpecialValueText(tr("full thickness"));
   cutDepth_->setSuffix(tr(" layer(s)"));
   cutDepth_->setToolTip(tr("Layers the incision goes through from the skin (\u00a73.2.2); the tissue below stays "
-                           "whole. 0: through every layer."));
+                           "whole and undermined tissue slides on the plane at the cut's root. 0: through every "
+                           "layer. Starts at the depth the procedure states."));
   form->addRow(tr("Cut depth"), cutDepth_);
   model_ = new QComboBox(meshBox);
   model_->setObjectName("simulate.model");
@@ -156,7 +157,8 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
   undermining_->setSuffix(" mm");
   undermining_->setSpecialValueText(tr("none"));
   undermining_->setToolTip(tr("Skin freed from the tissue beneath within this distance of the sutured edges "
-                              "(\u00a73.2.4)."));
+                              "(\u00a73.2.4); it slides on the deep plane. Starts at the band the procedure "
+                              "undermines by default."));
   form->addRow(tr("Undermining"), undermining_);
   estimate_ = new QLabel(meshBox);
   estimate_->setObjectName("simulate.estimate");
@@ -202,7 +204,7 @@ void SimulatePanel::setDefaults()
   cutDepth_->setRange(0, defaults.layerCount);
   regionRadius_->setValue(defaults.regionRadius);
   elementSize_->setValue(defaults.elementSize);
-  undermining_->setValue(defaults.underminingWidth);
+  undermining_->setValue(0.0); // until a plan is chosen: loadPlanOptions() shows its band
   resizeMaterials(defaults.layerCount);
 }
 
@@ -307,10 +309,11 @@ void SimulatePanel::loadPlanOptions()
   loading_ = true;
   layers_->setValue(o.layerCount);
   cutDepth_->setMaximum(o.layerCount);
-  cutDepth_->setValue(o.cutLayers);
+  cutDepth_->setValue(o.cutLayers.value_or(planning::layersCutTo(
+    planning::cutDepthFromId(node->cutDepth()).value_or(planning::CutDepth::Bone), o.layerCount)));
   regionRadius_->setValue(o.regionRadius);
   elementSize_->setValue(o.elementSize);
-  undermining_->setValue(o.underminingWidth);
+  undermining_->setValue(o.underminingWidth.value_or(node->underminingBand()));
   model_->setCurrentIndex(std::max(0, model_->findData(QString(planning::tissueModelId(o.model)))));
   loading_ = false;
   if (o.materials.empty())

@@ -42,6 +42,9 @@ TEST(PlanNode, EveryProcedureRoundTripsThroughTheScene)
     EXPECT_EQ(back.centre().z, plan.centre().z) << t.id();
     EXPECT_EQ(back.borderOffsets(), plan.borderOffsets()) << t.id();
     EXPECT_EQ(back.writtenSutures(), plan.writtenSutures()) << t.id();
+    EXPECT_GT(plan.underminingBand(), 0.0) << t.id();
+    EXPECT_EQ(back.underminingBand(), plan.underminingBand()) << t.id();
+    EXPECT_EQ(back.cutDepth(), plan.cutDepth()) << t.id();
     ASSERT_EQ(back.sutures().size(), plan.sutures().size()) << t.id();
     for (std::size_t k = 0; k < plan.sutures().size(); ++k)
     {

@@ -230,7 +230,7 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   const fs::path ct = phantomCt(folder);
   const fs::path out = folder / "plan";
   auto r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
-                   "--element-size 2.5 --out " + quoted(out.string()));
+                   "--element-size 2.5 --cut-depth 3 --out " + quoted(out.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::smatch m;
   ASSERT_TRUE(
@@ -273,6 +273,15 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   EXPECT_NEAR(std::stod(m[2]), -90.0, 30.0) << r.output; // on the front, near the plan
   EXPECT_NE(text.find("peak skin von Mises near wound,skin within 10 mm of the wound,,"), std::string::npos) << text;
   EXPECT_NE(text.find("mean skin von Mises near wound,"), std::string::npos) << text;
+  // The ellipse undermines its own band unless told otherwise, and the freed tissue slides on the deep plane.
+  std::smatch u;
+  ASSERT_TRUE(std::regex_search(r.output, u,
+                                std::regex("Undermined: ([0-9.]+) mm band along the sutured edges \\(the procedure's "
+                                           "default\\); ([0-9]+) deep nodes freed, ([0-9]+) of them sliding")))
+    << r.output;
+  EXPECT_NEAR(std::stod(u[1]), 7.0, 1e-9) << r.output;
+  EXPECT_GT(std::stoi(u[3]), 0) << r.output;
+  EXPECT_LE(std::stoi(u[3]), std::stoi(u[2])) << r.output;
 
   // A cut through the skin layer only (§3.2.2: cutting to a depth): less
   // tissue removed, the depth kept in plan.json and replayed the same.
@@ -286,6 +295,18 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   EXPECT_GT(excisedShallow, 0.2 * excisedFull) << shallowText;
   EXPECT_LT(excisedShallow, 0.5 * excisedFull) << shallowText;
   EXPECT_EQ(nlohmann::json::parse(fileText(shallow / "plan.json"))["simulation"]["cutLayers"], 1);
+  // Left to the procedure, the ellipse is cut through the skin and the fat
+  // (its file's depth = fascia) and plan.json records no depth of its own.
+  const fs::path ownDepth = folder / "own-depth";
+  r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
+              "--element-size 2.5 --out " + quoted(ownDepth.string()));
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("cut through 2 of 3 tissue layers (the procedure's depth)"), std::string::npos) << r.output;
+  const double excisedOwn =
+    csvValue(fileText(ownDepth / "measurements.csv"), "excised volume (elements; cut through 2 of 3 layers)");
+  EXPECT_GT(excisedOwn, excisedShallow);
+  EXPECT_LT(excisedOwn, excisedFull);
+  EXPECT_FALSE(nlohmann::json::parse(fileText(ownDepth / "plan.json"))["simulation"].contains("cutLayers"));
   r = runCaps("plan " + quoted(ct.string()) + " --replay " + quoted((shallow / "plan.json").string()) + " --out " +
               quoted(shallowAgain.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
@@ -298,7 +319,7 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   // The undermining study: one row per width, the force falls as the band widens.
   const fs::path study = folder / "undermined";
   r = runCaps("plan " + quoted(ct.string()) + " --procedure elliptical-excision --at -90,0 --param length=20 " +
-              "--element-size 2.5 --undermine 0,10 --out " + quoted(study.string()));
+              "--element-size 2.5 --cut-depth 3 --undermine 0,7 --out " + quoted(study.string()));
   ASSERT_EQ(r.exitCode, 0) << r.output;
   std::ifstream rows(study / "undermining.csv");
   std::string header, line;
@@ -321,7 +342,8 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   EXPECT_GT(table[1][1], 0.0);
   EXPECT_GT(table[0][2], table[1][2]) << r.output;
   EXPECT_LT(table[1][4], 1e-9);
-  // Without undermining the peak stress is the one of the plain run (same plan, same mesh).
+  // The study's 7 mm row is the plain run (same plan, same mesh, the
+  // procedure's own band: 0.35 x the 20 mm length).
   EXPECT_GT(table[0][5], 0.0);
   EXPECT_GT(table[1][5], 0.0);
   for (const auto& row : table) // the band's mean is below its peak
@@ -329,7 +351,7 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
     EXPECT_GT(row[6], 0.0);
     EXPECT_LT(row[6], row[5]);
   }
-  EXPECT_NEAR(table[0][5], peakKpa, 0.051 + 1e-3 * peakKpa) << r.output;
+  EXPECT_NEAR(table[1][5], peakKpa, 0.051 + 1e-3 * peakKpa) << r.output;
   // And the plot of both against the width.
   ASSERT_TRUE(fs::exists(study / "undermining.png")) << r.output;
   {

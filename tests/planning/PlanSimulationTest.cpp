@@ -362,8 +362,20 @@ TEST(PlanSimulation, SutureForcesBalanceTheBoneReactions)
     ASSERT_GT(c.magnitudeSum, 0.0);
     auto force = [&](int node) { return Eigen::Vector3d(p.nodalForces.segment<3>(3 * node)); };
 
+    // Undermined bone nodes slide on the deep plane, which can push only
+    // along its normal: the part of a force the plane cannot take.
+    std::map<int, Eigen::Vector3d> planeNormal;
+    for (const fem::SlidingNode& n : p.continuum.slidingNodes)
+      planeNormal[n.node] = n.normal;
+    EXPECT_EQ(planeNormal.empty(), width == 0.0);
+    auto offThePlane = [&](int node, const Eigen::Vector3d& f) {
+      const auto it = planeNormal.find(node);
+      return it == planeNormal.end() ? f : Eigen::Vector3d(f - f.dot(it->second) * it->second);
+    };
+
     // Each suture pulls its node and its target equally and oppositely: at
-    // a target, its own K U cancels the sum over the nodes sewn onto it.
+    // a target, its own K U cancels the sum over the nodes sewn onto it
+    // (less the deep plane's push where the target slides).
     std::map<int, Eigen::Vector3d> onTargets;
     for (const SutureForce& s : c.sutures)
     {
@@ -373,30 +385,26 @@ TEST(PlanSimulation, SutureForcesBalanceTheBoneReactions)
     }
     double pairImbalance = 0.0;
     for (const auto& [target, sum] : onTargets)
-      pairImbalance = std::max(pairImbalance, (force(target) + sum).norm() / c.largest);
+      pairImbalance = std::max(pairImbalance, offThePlane(target, force(target) + sum).norm() / c.largest);
 
-    // Global equilibrium without load: suture reactions (both ends) plus the
-    // bone's add up to zero; every other node carries no force.
-    Eigen::Vector3d total = c.supportReaction;
+    // Global equilibrium without load: the sutures pull both ways alike, so
+    // the bone's and the deep plane's reactions add up to zero; every other
+    // node carries no force, and a sliding one only along the plane's normal.
     std::set<int> constrained(p.continuum.fixedNodes.begin(), p.continuum.fixedNodes.end());
     for (const SutureForce& s : c.sutures)
       constrained.insert({s.node, s.target});
-    for (const auto& [target, sum] : onTargets)
-      total += force(target);
-    for (const SutureForce& s : c.sutures)
-      total += s.force;
     double freeForce = 0.0, supportMagnitude = 0.0;
     for (int node = 0; node < int(p.continuum.mesh.nodeCount()); ++node)
       if (!constrained.count(node))
-        freeForce = std::max(freeForce, force(node).norm());
+        freeForce = std::max(freeForce, offThePlane(node, force(node)).norm());
     for (int node : p.continuum.fixedNodes)
       supportMagnitude += force(node).norm();
-    const double globalImbalance = total.norm() / c.magnitudeSum;
+    const double globalImbalance = c.supportReaction.norm() / c.magnitudeSum;
     std::printf("[closure force, undermining %.0f mm] %zu sutures: sum of magnitudes %.6g N, largest %.4g N; "
-                "bone: sum of magnitudes %.6g N; relative imbalance per target %.2g, global %.2g; largest force "
-                "at a free node %.2g N\n",
-                width, c.sutures.size(), c.magnitudeSum, c.largest, supportMagnitude, pairImbalance, globalImbalance,
-                freeForce);
+                "bone: sum of magnitudes %.6g N; %zu nodes slide; relative imbalance per target %.2g, global %.2g; "
+                "largest force at a free node %.2g N\n",
+                width, c.sutures.size(), c.magnitudeSum, c.largest, supportMagnitude, planeNormal.size(), pairImbalance,
+                globalImbalance, freeForce);
     EXPECT_LT(pairImbalance, 1e-8);
     EXPECT_LT(globalImbalance, 1e-8);
     EXPECT_LT(freeForce, 1e-8 * c.magnitudeSum);
@@ -490,14 +498,16 @@ TEST(PlanSimulation, ExcisedVolumeFromTheElementsIsTheAnalyticShell)
 
 TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
 {
-  // A 60° Z-plasty cut through the skin layer only: the flaps stay bonded
-  // to the tissue below, so transposing them lengthens the central axis
-  // less than the full-thickness cut does; only the cut layer is sutured.
+  // A 60° Z-plasty cut through the skin layer only, not undermined: the
+  // flaps stay bonded to the tissue below, so transposing them lengthens
+  // the central axis less than the full-thickness cut does; only the cut
+  // layer is sutured.
   const IncisionPlan plan =
     test::shippedProcedure("z-plasty")
       .place(phantom().skin, {0.0, 0.0},
              {{"central_length", 16.0}, {"limb_angle", 60.0 * degree}, {"axis_angle", 90.0 * degree}});
   SimulationOptions o = testOptions();
+  o.underminingWidth = 0.0;
   const PlanPrediction full = simulatePlan(phantom().skin, phantom().bone, plan, o);
   o.cutLayers = 1;
   const PlanPrediction partial = simulatePlan(phantom().skin, phantom().bone, plan, o);
@@ -513,6 +523,33 @@ TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
   EXPECT_LT(partial.continuum.sutures.size(), full.continuum.sutures.size());
   EXPECT_LT(partial.continuum.mesh.nodeCount(), full.continuum.mesh.nodeCount()); // the twins below are one
   EXPECT_EQ(partial.excisedVolume, 0.0);                                          // a Z-plasty removes nothing
+
+  // Raised in the plane at the cut's root over the procedure's own band, as
+  // a surgeon raises skin flaps: the flaps slide on the tissue below, which
+  // stays held by the bone, and transpose further.
+  o.underminingWidth.reset();
+  const PlanPrediction raised = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  ASSERT_TRUE(raised.zPlasty);
+  EXPECT_LT(raised.maxSutureGap, 1e-9);
+  EXPECT_GT(raised.zPlasty->predicted.fraction, partial.zPlasty->predicted.fraction);
+  EXPECT_EQ(raised.continuum.fixedNodes, raised.continuum.boneNodes); // the bone holds all it held
+  ASSERT_FALSE(raised.continuum.slidingNodes.empty());
+  const double scale = raised.displacements.cwiseAbs().maxCoeff();
+  double apart = 0.0, slide = 0.0;
+  for (const fem::SlidingNode& n : raised.continuum.slidingNodes)
+  {
+    ASSERT_GE(n.beneath, 0) << "the raised tissue slides on the tissue below, not on the bone";
+    EXPECT_EQ(raised.continuum.mesh.nodes.col(n.node), raised.continuum.mesh.nodes.col(n.beneath));
+    const Eigen::Vector3d relative =
+      raised.displacements.segment<3>(3 * n.node) - raised.displacements.segment<3>(3 * n.beneath);
+    apart = std::max(apart, std::abs(relative.dot(n.normal)));
+    slide = std::max(slide, (relative - relative.dot(n.normal) * n.normal).norm());
+  }
+  std::printf("[Z 60°, cut through 1 of 3, raised] gain %.1f %%; %zu nodes slide on the tissue below, largest slide "
+              "%.3g mm, largest |(u - u_beneath).n| %.2g mm\n",
+              100 * raised.zPlasty->predicted.fraction, raised.continuum.slidingNodes.size(), slide, apart);
+  EXPECT_LT(apart, 1e-10 * scale);
+  EXPECT_GT(slide, 0.1);
 
   o.cutLayers = 4;
   EXPECT_THROW(simulatePlan(phantom().skin, phantom().bone, plan, o), std::invalid_argument);

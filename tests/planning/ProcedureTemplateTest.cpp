@@ -103,6 +103,63 @@ TEST(ProcedureFile, BadParameterRangesAreRefused)
   EXPECT_NE(e.find("'limb_angle' is measured in deg, not mm"), std::string::npos) << e;
 }
 
+TEST(ProcedureFile, TheDefaultUnderminingGrowsWithTheProcedure)
+{
+  const fs::path file = writeFile(
+    test::scratchFolder(), "z-undermined.procedure",
+    replaced(kGoodZ, "suture = ((5,0),(5,4))", "undermining = band 0.5 central_length + 2 mm\nsuture = ((5,0),(5,4))"));
+  const ProcedureTemplate t = ProcedureTemplate::load(file);
+  EXPECT_EQ(t.undermining().parameter, "central_length");
+  const auto skin = test::cylinderSkin(80.0);
+  EXPECT_DOUBLE_EQ(t.place(skin, {-test::pi / 2, 20.0}).underminingBand(), 0.5 * 20.0 + 2.0);
+  EXPECT_DOUBLE_EQ(t.place(skin, {-test::pi / 2, 20.0}, {{"central_length", 30.0}}).underminingBand(), 17.0);
+  // Without the key the procedure undermines nothing.
+  const fs::path plain = writeFile(test::scratchFolder(), "z.procedure", kGoodZ);
+  EXPECT_EQ(ProcedureTemplate::load(plain).place(skin, {-test::pi / 2, 20.0}).underminingBand(), 0.0);
+
+  std::string e =
+    loadError(replaced(kGoodZ, "suture = ((5,0),(5,4))", "undermining = band 0.5 limb_angle\nsuture = ((5,0),(5,4))"));
+  EXPECT_NE(e.find(":8: the undermining band is scaled by 'limb_angle', which is not a length"), std::string::npos)
+    << e;
+  e = loadError(replaced(kGoodZ, "suture = ((5,0),(5,4))", "undermining = 10\nsuture = ((5,0),(5,4))"));
+  EXPECT_NE(e.find(":8: expected 'undermining = band W mm'"), std::string::npos) << e;
+  e = loadError(
+    replaced(kGoodZ, "suture = ((5,0),(5,4))", "undermining = band 3 central_length\nsuture = ((5,0),(5,4))"));
+  EXPECT_NE(e.find("60.000000 mm wide at the default parameters"), std::string::npos) << e;
+}
+
+TEST(ProcedureFile, TheDepthSaysWhereTheFlapsAreRaised)
+{
+  const auto skin = test::cylinderSkin(80.0);
+  const fs::path plain = writeFile(test::scratchFolder(), "z.procedure", kGoodZ);
+  EXPECT_EQ(ProcedureTemplate::load(plain).place(skin, {-test::pi / 2, 20.0}).cutDepth(), CutDepth::Bone)
+    << "without the key: the thesis's full thickness";
+  const fs::path fascia =
+    writeFile(test::scratchFolder(), "z-fascia.procedure",
+              replaced(kGoodZ, "suture = ((5,0),(5,4))", "depth = fascia\nsuture = ((5,0),(5,4))"));
+  EXPECT_EQ(ProcedureTemplate::load(fascia).place(skin, {-test::pi / 2, 20.0}).cutDepth(), CutDepth::Fascia);
+  EXPECT_EQ(layersCutTo(CutDepth::Fascia, 3), 2);
+  EXPECT_EQ(layersCutTo(CutDepth::Fascia, 1), 1);
+  EXPECT_EQ(layersCutTo(CutDepth::Bone, 4), 4);
+  const std::string e = loadError(replaced(kGoodZ, "suture = ((5,0),(5,4))", "depth = muscle\nsuture = ((5,0),(5,4))"));
+  EXPECT_NE(e.find(":8: expected 'depth = fascia'"), std::string::npos) << e;
+}
+
+TEST(ProcedureFile, EveryShippedProcedureStatesItsUndermining)
+{
+  // Surgeons undermine every one of these closures (data/procedures/README.md
+  // gives each band and why): a few mm to a few cm, never none.
+  const auto skin = test::cylinderSkin(80.0);
+  for (const auto& t : test::shippedProcedures().procedures())
+  {
+    SCOPED_TRACE(t.id());
+    const IncisionPlan plan = t.place(skin, {-test::pi / 2, 20.0});
+    EXPECT_GE(plan.underminingBand(), 3.0);
+    EXPECT_LE(plan.underminingBand(), 25.0);
+    EXPECT_EQ(plan.cutDepth(), CutDepth::Fascia) << "facial flaps are raised on the fascia";
+  }
+}
+
 TEST(ProcedureFile, TopologyMistakesAreRefused)
 {
   std::string e = loadError(replaced(kGoodZ, "generator = z", "generator = w-plasty"));

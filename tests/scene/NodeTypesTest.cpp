@@ -220,6 +220,9 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk)
   p.setNotes("left cheek");
   p.setRangeMapId("RangeMap1");
   p.setGenerator("z");
+  p.setUnderminingBand(12.5);
+  p.setCutDepth("fascia");
+  EXPECT_THROW(p.setCutDepth("muscle"), SceneError);
   p.setCentre({-1.5707963267948966, -42.25});
   p.setBorderOffsets({{0, 0}, {0.5, -1.25}, {0, 0}, {-0.5, 1.25}});
   EXPECT_EQ(p.bulkFileExtension(), "");
@@ -233,11 +236,15 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk)
   EXPECT_EQ(q.notes(), "left cheek");
   EXPECT_EQ(q.rangeMapId(), "RangeMap1");
   EXPECT_EQ(q.generator(), "z");
+  EXPECT_EQ(q.underminingBand(), 12.5);
+  EXPECT_EQ(q.cutDepth(), "fascia");
   EXPECT_EQ(q.centre(), p.centre()); // exact: JSON keeps doubles to the last bit
   EXPECT_EQ(q.borderOffsets(), p.borderOffsets());
   EXPECT_EQ(q.toJson(), p.toJson());
   EXPECT_THROW(q.fromJson({{"centre", {1.0}}}), SceneError);
   EXPECT_THROW(q.fromJson({{"borderOffsets", {{1.0, "x"}}}}), SceneError);
+  EXPECT_THROW(q.fromJson({{"underminingBand", -3.0}}), SceneError);
+  EXPECT_THROW(q.fromJson({{"cutDepth", "muscle"}}), SceneError);
 }
 
 // A missing or null key keeps the field (the JsonFields rule) for lists too,
