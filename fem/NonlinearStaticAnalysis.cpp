@@ -379,13 +379,53 @@ private:
     const auto t0 = std::chrono::steady_clock::now();
     map_.reduceValues(k_, kbar_);
     solver_.factorize(kbar_);
+    ++result_.factorizations;
+    bool factored = solver_.status() == SolverStatus::Success;
+    if (!factored && newton_.shiftIndefiniteTangent)
+      factored = factorShifted();
     result_.factorSeconds += secondsSince(t0);
     reuse_.factorization.add(secondsSince(t0));
-    ++result_.factorizations;
-    if (solver_.status() == SolverStatus::Success)
+    if (factored)
       return true;
     reason = "the tangent stiffness is not positive definite (the tissue buckles or its material is unstable "
              "at this deformation)";
+    return false;
+  }
+
+  /// A tangent that is not positive definite away from equilibrium (the
+  /// trial state of a large step) gives no descent direction. Levenberg and
+  /// Marquardt's remedy (Nocedal & Wright, Numerical Optimization, 2006,
+  /// §3.4 "Newton's method with Hessian modification"): factor K̄ + mu D, D
+  /// its diagonal, with the smallest mu of 1e-3, 1e-2, ... 1 that is
+  /// positive definite, starting at the last one that was. The step is then
+  /// a descent direction of the energy and the line search finds its
+  /// minimum along it; the equilibrium reached is the same (the residual
+  /// decides convergence), only the path to it changes. An increment that
+  /// needs more than kShiftsPerIncrement shifted tangents is cut back
+  /// instead: near a true instability shifting only delays the cut. Each
+  /// shift is counted in the result.
+  bool factorShifted()
+  {
+    constexpr int kShiftsPerIncrement = 6;
+    if (shiftsThisIncrement_ >= kShiftsPerIncrement)
+      return false;
+    ++shiftsThisIncrement_;
+    const Eigen::VectorXd diagonal = kbar_.diagonal();
+    const double floor = diagonal.cwiseAbs().mean();
+    for (double mu = std::max(1e-4, 0.1 * lastShift_); mu <= 1.0 + 1e-12; mu *= 10.0)
+    {
+      for (Eigen::Index i = 0; i < kbar_.rows(); ++i)
+        kbar_.coeffRef(i, i) = diagonal[i] + mu * std::max(std::abs(diagonal[i]), 1e-3 * floor);
+      solver_.factorize(kbar_);
+      ++result_.factorizations;
+      if (solver_.status() == SolverStatus::Success)
+      {
+        lastShift_ = mu;
+        ++result_.shiftedFactorizations;
+        result_.largestShift = std::max(result_.largestShift, mu);
+        return true;
+      }
+    }
     return false;
   }
 
@@ -394,6 +434,7 @@ private:
   IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state)
   {
     IncrementOutcome out;
+    shiftsThisIncrement_ = 0;
     if (map_.reducedCount() == 0)
     { // everything prescribed: nothing to solve
       out.converged = true;
@@ -618,6 +659,8 @@ private:
   NonlinearResult result_;
   int lastWorst_ = -1;
   std::string lastReason_;
+  double lastShift_ = 0.0;      ///< the last shift that made K̄ + mu D positive definite
+  int shiftsThisIncrement_ = 0; ///< shifted tangents in the current increment
 };
 
 } // namespace

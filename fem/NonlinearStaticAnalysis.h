@@ -48,6 +48,10 @@ struct NewtonOptions
   bool lineSearch = true;
   double lineSearchRatio = 0.9;
   int maxLineSearchSteps = 5;
+  /// A tangent that is not positive definite is shifted towards its
+  /// diagonal until it is (Levenberg-Marquardt), rather than ending the
+  /// increment; the increment is still cut back if Newton does not converge.
+  bool shiftIndefiniteTangent = true;
 };
 
 /// The load increments: fractions of the load, the prescribed displacements
@@ -104,6 +108,10 @@ struct NonlinearResult
   std::vector<IncrementRecord> increments; ///< every attempt, in order
   std::vector<NewtonIteration> iterations; ///< every iteration, in order
   int factorizations = 0;
+  /// Factorizations of a tangent shifted to be positive definite
+  /// (NewtonOptions::shiftIndefiniteTangent), and the largest relative shift.
+  int shiftedFactorizations = 0;
+  double largestShift = 0.0;
   int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
   double assembleSeconds = 0.0; ///< in those evaluations
   double factorSeconds = 0.0;   ///< reducing and factoring K-bar

@@ -428,9 +428,12 @@ NonlinearStaticAnalysis compressedCube(double fraction)
 TEST(NonlinearStaticAnalysis, AnIncrementThatFailsIsCutBackAndRetried)
 {
   // 40 % in one increment: the linear predictor lands where the tangent is
-  // no longer positive definite; smaller increments get there.
+  // no longer positive definite; without the shift of such tangents
+  // (NewtonOptions::shiftIndefiniteTangent) smaller increments get there.
   NonlinearStaticAnalysis analysis = compressedCube(0.4);
-  const NonlinearResult r = analysis.solve(LoadCase{}); // one increment asked for
+  NewtonOptions plain;
+  plain.shiftIndefiniteTangent = false;
+  const NonlinearResult r = analysis.solve(LoadCase{}, {}, plain); // one increment asked for
   ASSERT_EQ(r.status, NonlinearStatus::Converged) << r.message;
   ASSERT_GE(r.increments.size(), 2u);
   EXPECT_FALSE(r.increments.front().accepted);
@@ -448,6 +451,14 @@ TEST(NonlinearStaticAnalysis, AnIncrementThatFailsIsCutBackAndRetried)
     {
       EXPECT_NEAR(r.displacements[3 * i + 2], -4.0, 1e-12);
     }
+
+  // Shifted towards its diagonal, the same tangent still gives a descent
+  // direction: one increment gets there, to the same equilibrium.
+  const NonlinearResult shifted = analysis.solve(LoadCase{});
+  ASSERT_EQ(shifted.status, NonlinearStatus::Converged) << shifted.message;
+  EXPECT_GT(shifted.shiftedFactorizations, 0);
+  EXPECT_LT(shifted.increments.size(), r.increments.size());
+  EXPECT_LT((shifted.displacements - r.displacements).norm(), 1e-7 * r.displacements.norm());
 }
 
 TEST(NonlinearStaticAnalysis, AnImpossibleLoadEndsWithAMessageNotAResult)
