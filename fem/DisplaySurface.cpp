@@ -6,8 +6,11 @@
 #include "fem/NodalStress.h"
 #include "fem/Quadrature.h"
 
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -385,9 +388,6 @@ void DisplaySurface::setRangeDetail(const Eigen::Matrix3Xd& offsets)
 
 void DisplaySurface::setSolution(const Eigen::VectorXd& u, const MaterialTable& materials)
 {
-  if (u.size() != 3 * meshNodeCount_)
-    throw std::invalid_argument("the solution has " + std::to_string(u.size()) +
-                                " displacements, but the displayed mesh has 3 x " + std::to_string(meshNodeCount_));
   std::map<int, Matrix6d> elasticity;
   for (const SupportElement& s : support_)
     if (!elasticity.count(s.region))
@@ -398,13 +398,51 @@ void DisplaySurface::setSolution(const Eigen::VectorXd& u, const MaterialTable& 
                                     " of the displayed elements");
       elasticity[s.region] = m->second.elasticityMatrix();
     }
+  // Small strain: e = sym(du/dx) (engineering shears), sigma = C e.
+  recoverAtTheDisplayNodes(u, [&](int region, const Eigen::Matrix3d& l, Vector6d& strain, Vector6d& stress) {
+    strain << l(0, 0), l(1, 1), l(2, 2), l(0, 1) + l(1, 0), l(1, 2) + l(2, 1), l(2, 0) + l(0, 2);
+    stress = elasticity.at(region) * strain;
+  });
+}
 
+void DisplaySurface::setSolution(const Eigen::VectorXd& u, const HyperelasticTable& materials)
+{
+  for (const SupportElement& s : support_)
+    if (!materials.count(s.region))
+      throw std::invalid_argument("no material for region " + std::to_string(s.region) + " of the displayed elements");
+  // Large deformation: F = I + du/dX, the Green-Lagrange strain E (engineering
+  // shears) and the Cauchy stress sigma = F S F^T / J of the material's S. A
+  // point turned inside out (det F <= 0; never in a converged large-deformation
+  // solve) has no stress: NaN, which the display leaves uncoloured.
+  recoverAtTheDisplayNodes(u, [&](int region, const Eigen::Matrix3d& l, Vector6d& strain, Vector6d& stress) {
+    const Eigen::Matrix3d f = Eigen::Matrix3d::Identity() + l;
+    const Eigen::Matrix3d c = f.transpose() * f;
+    strain << 0.5 * (c(0, 0) - 1.0), 0.5 * (c(1, 1) - 1.0), 0.5 * (c(2, 2) - 1.0), c(0, 1), c(1, 2), c(2, 0);
+    const double j = f.determinant();
+    if (!(j > 0.0))
+    {
+      stress.setConstant(std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
+    const Vector6d sv = materials.at(region).response(c, j, ResponseParts::Stress).stress;
+    Eigen::Matrix3d pk2;
+    pk2 << sv[0], sv[3], sv[5], sv[3], sv[1], sv[4], sv[5], sv[4], sv[2];
+    const Eigen::Matrix3d sigma = f * pk2 * f.transpose() / j;
+    stress << sigma(0, 0), sigma(1, 1), sigma(2, 2), sigma(0, 1), sigma(1, 2), sigma(2, 0);
+  });
+}
+
+void DisplaySurface::recoverAtTheDisplayNodes(const Eigen::VectorXd& u, const PointResponse& response)
+{
+  if (u.size() != 3 * meshNodeCount_)
+    throw std::invalid_argument("the solution has " + std::to_string(u.size()) +
+                                " displacements, but the displayed mesh has 3 x " + std::to_string(meshNodeCount_));
   // Nodal averages of the strain and stress extrapolated from the Gauss
   // points, within each region, at the display nodes only.
   const Eigen::Index d = regionWeights_.rows();
   Matrix6Xd nodalStrain = Matrix6Xd::Zero(6, d), nodalStress = Matrix6Xd::Zero(6, d);
   Eigen::Matrix<double, 3, kHex20NodeCount> ue;
-  Matrix6Xd gaussStrain;
+  Matrix6Xd gaussStrain, gaussStress;
   for (const SupportElement& s : support_)
   {
     for (int k = 0; k < kHex20NodeCount; ++k)
@@ -413,22 +451,24 @@ void DisplaySurface::setSolution(const Eigen::VectorXd& u, const MaterialTable& 
       ue.col(k) = node >= 0 ? Eigen::Vector3d(u.segment<3>(3 * Eigen::Index(node))) : Eigen::Vector3d::Zero();
     }
     gaussStrain.resize(6, Eigen::Index(s.gradients.size()));
+    gaussStress.resize(6, Eigen::Index(s.gradients.size()));
     for (std::size_t p = 0; p < s.gradients.size(); ++p)
     {
-      const Eigen::Matrix3d l = ue * s.gradients[p]; // l(i, j) = du_i / dx_j
-      gaussStrain.col(Eigen::Index(p)) << l(0, 0), l(1, 1), l(2, 2), l(0, 1) + l(1, 0), l(1, 2) + l(2, 1),
-        l(2, 0) + l(0, 2);
+      const Eigen::Matrix3d l = ue * s.gradients[p]; // l(i, j) = du_i / dX_j
+      Vector6d strain, stress;
+      response(s.region, l, strain, stress);
+      gaussStrain.col(Eigen::Index(p)) = strain;
+      gaussStress.col(Eigen::Index(p)) = stress;
     }
     const Eigen::MatrixXd& extrapolation = s.wedge ? wedgeExtrapolation_ : hexExtrapolation_;
-    const Matrix6d& c = elasticity.at(s.region);
     for (int k = 0; k < kHex20NodeCount; ++k)
     {
       const int target = s.displaySlot[std::size_t(k)];
       if (target < 0)
         continue;
-      const Vector6d strain = gaussStrain * extrapolation.row(k).transpose() / s.slotWeight[std::size_t(k)];
-      nodalStrain.col(target) += strain;
-      nodalStress.col(target) += c * strain;
+      const Eigen::VectorXd weights = extrapolation.row(k).transpose() / s.slotWeight[std::size_t(k)];
+      nodalStrain.col(target) += gaussStrain * weights;
+      nodalStress.col(target) += gaussStress * weights;
     }
   }
   for (Eigen::Index i = 0; i < d; ++i)

@@ -5,6 +5,7 @@
 
 #include "fem/BodyCoordinates.h"
 #include "fem/ContinuumMesher.h"
+#include "fem/HyperelasticMaterial.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/Mesh.h"
 
@@ -12,6 +13,7 @@
 #include <Eigen/SparseCore>
 
 #include <array>
+#include <functional>
 #include <vector>
 
 namespace caps::fem {
@@ -150,6 +152,11 @@ public:
    * region without a material in @a materials.
    */
   void setSolution(const Eigen::VectorXd& u, const MaterialTable& materials);
+  /// The same for a large-deformation solution: the strain is the
+  /// Green-Lagrange strain and the stress the Cauchy stress of the deformed
+  /// tissue (FiniteStrainIntegrator.h), recovered at the display nodes as the
+  /// linear ones are.
+  void setSolution(const Eigen::VectorXd& u, const HyperelasticTable& materials);
   bool hasSolution() const { return hasSolution_; }
 
   /// Vertex positions for @a mapping: undeformed + scale x displacement
@@ -184,6 +191,14 @@ public:
   const std::vector<int>& displayNodes() const { return displayNodes_; }
 
 private:
+  /// Strain and stress (Voigt, engineering shears) at one Gauss point of an
+  /// element of @a region from its displacement gradient du/dX.
+  using PointResponse =
+    std::function<void(int region, const Eigen::Matrix3d& gradient, Vector6d& strain, Vector6d& stress)>;
+  /// Both setSolution()s: @a response at every Gauss point of the support
+  /// elements, extrapolated to the nodes and averaged within each region.
+  void recoverAtTheDisplayNodes(const Eigen::VectorXd& u, const PointResponse& response);
+
   /// What setSolution() needs of one element around the display nodes: its
   /// world shape derivatives at the Gauss points and the extrapolation to
   /// its nodes (recoverNodalStresses' scheme), precalculated.

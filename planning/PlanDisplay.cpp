@@ -137,7 +137,11 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
   PlanDisplay out;
   out.rangeDetail = options.rangeDetail;
   out.surface = fem::DisplaySurface(continuum.mesh, fem::skinFaces(continuum), options.resolution);
-  out.surface.setSolution(prediction.displacements, prediction.materials);
+  // The stress of the model that made the prediction: Cauchy for a large-deformation one.
+  if (prediction.check.model == TissueModel::LargeDeformation && !prediction.hyperelasticMaterials.empty())
+    out.surface.setSolution(prediction.displacements, prediction.hyperelasticMaterials);
+  else
+    out.surface.setSolution(prediction.displacements, prediction.materials);
 
   // Table 4.9's range displacement and source colour, both read at the
   // vertex's undeformed (θ, z) (§4.7).

@@ -261,6 +261,58 @@ TEST(DisplaySurface, UniformStrainGivesTheAnalyticStressAtEveryVertex)
   }
 }
 
+TEST(DisplaySurface, AHomogeneousLargeDeformationGivesTheNeoHookeanCauchyStressAtEveryVertex)
+{
+  // x -> F X with a large F (stretches 1.4, 0.8, 0.95, rotated): the
+  // quadratic elements represent it exactly, so every vertex has the
+  // closed-form Cauchy stress of the compressible neo-Hookean law,
+  // sigma = 2 C10 / J dev(J^(-2/3) F F^T) + 2 / D1 (J - 1) I, written out
+  // here without the material class, and the Green-Lagrange strain.
+  const Eigen::Matrix3d rotation =
+    Eigen::AngleAxisd(0.5, Eigen::Vector3d(1.0, -2.0, 0.5).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d f = rotation * Eigen::Vector3d(1.4, 0.8, 0.95).asDiagonal();
+  const double c10 = 0.025, d1 = 1.2;
+  const double j = f.determinant();
+  const Eigen::Matrix3d bBar = std::pow(j, -2.0 / 3.0) * f * f.transpose();
+  const Eigen::Matrix3d sigma = 2.0 * c10 / j * (bBar - bBar.trace() / 3.0 * Eigen::Matrix3d::Identity()) +
+                                2.0 / d1 * (j - 1.0) * Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d e = 0.5 * (f.transpose() * f - Eigen::Matrix3d::Identity());
+  Vector6d stress, strain;
+  stress << sigma(0, 0), sigma(1, 1), sigma(2, 2), sigma(0, 1), sigma(1, 2), sigma(2, 0);
+  strain << e(0, 0), e(1, 1), e(2, 2), 2 * e(0, 1), 2 * e(1, 2), 2 * e(2, 0);
+  for (bool wedges : {false, true})
+  {
+    Mesh mesh = boxMesh(2, 2, 1, 20, 16, 8, Eigen::Vector3d(5, -3, 40), wedges);
+    for (Eigen::Index i = 0; i < mesh.nodeCount(); ++i)
+      mesh.nodes.col(i) = test::wobble(mesh.nodes.col(i), 0.4);
+    if (wedges)
+      mesh = withNativeWedges(mesh);
+    DisplaySurface s(mesh, boundaryFacesOnNodes(mesh, allNodes(mesh)), 3);
+    s.setSolution(
+      nodalField(mesh,
+                 [&](const Eigen::Vector3d& x) { return Eigen::Vector3d((f - Eigen::Matrix3d::Identity()) * x); }),
+      HyperelasticTable{{0, HyperelasticMaterial::neoHookean(c10, d1)}});
+    double worstStress = 0.0, worstStrain = 0.0;
+    for (Eigen::Index v = 0; v < s.vertexCount(); ++v)
+    {
+      worstStress = std::max(worstStress, (s.stresses().col(v) - stress).cwiseAbs().maxCoeff());
+      worstStrain = std::max(worstStrain, (s.strains().col(v) - strain).cwiseAbs().maxCoeff());
+    }
+    std::printf("[homogeneous large deformation, %s] %ld vertices: largest error of the Cauchy stress %.2g MPa "
+                "(of %.3g), of the Green-Lagrange strain %.2g\n",
+                wedges ? "native wedges" : "bricks", long(s.vertexCount()), worstStress, stress.cwiseAbs().maxCoeff(),
+                worstStrain);
+    EXPECT_LT(worstStress, 1e-10 * stress.cwiseAbs().maxCoeff());
+    EXPECT_LT(worstStrain, 1e-10);
+  }
+  // A region without a material is refused, as for the linear solution.
+  const Mesh cube = boxMesh(1, 1, 1, 10, 10, 10);
+  DisplaySurface s(cube, boundaryFacesOnNodes(cube, allNodes(cube)), 1);
+  EXPECT_THROW(s.setSolution(Eigen::VectorXd::Zero(cube.dofCount()),
+                             HyperelasticTable{{1, HyperelasticMaterial::neoHookean(c10, d1)}}),
+               std::invalid_argument);
+}
+
 TEST(DisplaySurface, EquivalentStrainIsTheStretchOfUniaxialIncompressibleStretch)
 {
   // e_xx = 0.01, e_yy = e_zz = -0.005: equivalent strain 0.01.
