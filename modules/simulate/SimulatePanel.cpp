@@ -144,8 +144,8 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
   form->addRow(tr("Cut depth"), cutDepth_);
   model_ = new QComboBox(meshBox);
   model_->setObjectName("simulate.model");
-  model_->addItem(tr("Linear (preview)"), QString(planning::tissueModelId(planning::TissueModel::LinearElastic)));
   model_->addItem(tr("Large deformation"), QString(planning::tissueModelId(planning::TissueModel::LargeDeformation)));
+  model_->addItem(tr("Linear (preview)"), QString(planning::tissueModelId(planning::TissueModel::LinearElastic)));
   model_->setToolTip(tr("Linear: small strain, one solve, instant, but its mesh can fold where the closure moves "
                         "tissue far (the checks say so). Large deformation: neo-Hookean layers closed over load "
                         "increments, the prediction to trust; slower."));

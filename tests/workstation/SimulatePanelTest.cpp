@@ -133,6 +133,7 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   planning::SimulationOptions options;
   options.elementSize = 3.0;
   options.threads = 2;
+  options.model = planning::TissueModel::LargeDeformation; // the panel's: the prediction, not the preview
   const planning::PlanPrediction direct =
     planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
 
