@@ -5,6 +5,10 @@
 #include <numeric>
 #include <sstream>
 
+#include <Eigen/Geometry>
+
+#include "planning/Undermining.h"
+
 namespace caps::planning {
 namespace {
 
@@ -248,10 +252,37 @@ void IncisionPlan::setUnderminingBand(double millimetres)
   underminingBand_ = millimetres;
 }
 
-void IncisionPlan::setSutures(std::vector<SutureEdges> written)
+void IncisionPlan::setSutures(std::vector<SutureEdges> written, std::vector<std::string> woundLineNames)
 {
+  if (!woundLineNames.empty() && woundLineNames.size() != written.size())
+    throw std::invalid_argument(
+      "a plan's sutures need one wound line name each or none: " + std::to_string(woundLineNames.size()) +
+      " names for " + std::to_string(written.size()) + " sutures");
   sutures_ = resolveSutures(holeLoopSize(pointCount()), written);
   written_ = std::move(written);
+  woundLineNames_ = std::move(woundLineNames);
+}
+
+std::string cutPointName(int loopVertex, int pathPoints)
+{
+  const int n = pathPoints;
+  std::ostringstream name;
+  if (loopVertex < n)
+    name << "p" << loopVertex;
+  else
+    name << "p" << 2 * (n - 1) - loopVertex << "'";
+  return name.str();
+}
+
+std::string woundLineName(const IncisionPlan& plan, int suture)
+{
+  const auto& names = plan.woundLineNames();
+  if (suture >= 0 && suture < int(names.size()) && !names[suture].empty())
+    return names[suture];
+  const fem::SutureEdgePair& s = plan.sutures().at(std::size_t(suture));
+  const int n = plan.pointCount();
+  return cutPointName(s.a[0], n) + "-" + cutPointName(s.a[1], n) + " onto " + cutPointName(s.b[0], n) + "-" +
+         cutPointName(s.b[1], n);
 }
 
 std::vector<ChartPoint> IncisionPlan::chartPath(const SkinChart& chart) const
@@ -267,6 +298,62 @@ fem::HoleLoop IncisionPlan::holeLoop(const SkinChart& chart) const
 {
   return makeHoleLoop(chartPath(chart), borderOffsets());
 }
+
+namespace {
+
+/// The plan must lie on skin the map measured, where the chart is true to
+/// the skin: every border edge and the inside of an excision has a surface
+/// under it, and nowhere does the chart stretch lengths on the skin by more
+/// than kMaxChartDistortion (there a plan drawn in the chart is another plan
+/// on the skin, and its measurements would not be the plan's).
+void checkTheSkinUnderTheHole(const fem::HoleLoop& loop, const SkinChart& chart)
+{
+  const int loopSize = int(loop.points.size());
+  const auto check = [&](const ChartPoint& p, const std::string& what) {
+    const double distortion = chartDistortion(chart, p);
+    if (!std::isfinite(chart.lift(p).x()) || std::isnan(distortion))
+    {
+      std::ostringstream o;
+      o << "the skin map has no surface under " << what;
+      if (std::isfinite(chart.lift(p).x()))
+        o << " (within a millimetre)";
+      o << " near " << whereText(chart.fromChart(p)) << ": move the cut onto measured skin";
+      throw std::invalid_argument(o.str());
+    }
+    if (!(distortion <= kMaxChartDistortion))
+    {
+      std::ostringstream o;
+      o.precision(3);
+      o << "the skin under " << what << " near " << whereText(chart.fromChart(p))
+        << " is too oblique to the head's axis for the skin map (the top of the head, under the chin, the side of "
+           "the nose): lengths on the skin there are "
+        << distortion
+        << " times what they are in the plan, so the plan on the skin would not be the plan drawn. Move the plan "
+           "where the skin faces away from the head's axis (lengths within "
+        << kMaxChartDistortion << " times)";
+      throw std::invalid_argument(o.str());
+    }
+  };
+  const double step = 0.5; // mm: finer than a range map cell on the sample CT
+  for (int e = 0; e < loopSize; ++e)
+  {
+    const ChartPoint a = loop.points[e], b = loop.points[(e + 1) % loopSize];
+    const int samples = std::max(1, int(std::ceil((b - a).norm() / step)));
+    const std::string what = "border edge (" + std::to_string(e) + "," + std::to_string((e + 1) % loopSize) + ")";
+    for (int k = 0; k <= samples; ++k)
+      check(a + (b - a) * (double(k) / samples), what);
+  }
+  // The inside of an excision, on a grid of the same step.
+  Eigen::AlignedBox2d box;
+  for (const ChartPoint& p : loop.points)
+    box.extend(p);
+  for (double v = box.min().y() + 0.5 * step; v < box.max().y(); v += step)
+    for (double u = box.min().x() + 0.5 * step; u < box.max().x(); u += step)
+      if (insidePolygon(loop.points, {u, v}))
+        check({u, v}, "the excision");
+}
+
+} // namespace
 
 void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSpacing)
 {
@@ -315,20 +402,7 @@ void checkPlan(const IncisionPlan& plan, const seg::RangeMap& skin, double minSp
     throw std::invalid_argument("the excision's sides are swapped: border points 1.." + std::to_string(n - 2) +
                                 " open to the left of the cut (walking from its first point), their twins to "
                                 "the right: offset each border point away from its twin, to its own side");
-  const double step = 0.5; // mm: finer than a range map cell on the sample CT
-  for (int e = 0; e < loopSize; ++e)
-  {
-    const ChartPoint a = loop.points[e], b = loop.points[(e + 1) % loopSize];
-    const int samples = std::max(1, int(std::ceil((b - a).norm() / step)));
-    for (int k = 0; k <= samples; ++k)
-    {
-      const ChartPoint p = a + (b - a) * (double(k) / samples);
-      if (!std::isfinite(chart.lift(p).x()))
-        throw std::invalid_argument("the skin map has no surface under border edge (" + std::to_string(e) + "," +
-                                    std::to_string((e + 1) % loopSize) + ") near " + whereText(chart.fromChart(p)) +
-                                    ": move the cut onto measured skin");
-    }
-  }
+  checkTheSkinUnderTheHole(loop, chart);
 }
 
 } // namespace caps::planning

@@ -101,6 +101,17 @@ std::optional<CutDepth> cutDepthFromId(const std::string& id);
 /// The layers a cut to @a depth goes through in a model of @a layerCount layers.
 int layersCutTo(CutDepth depth, int layerCount);
 
+class IncisionPlan;
+
+/// The name on the renders of hole-loop vertex @a loopVertex of a cut of
+/// @a pathPoints points: "p2" on the left of the cut, "p2'" its twin on the right.
+std::string cutPointName(int loopVertex, int pathPoints);
+
+/// The wound line suture @a suture of @a plan closes: the procedure's own
+/// words (IncisionPlan::woundLineNames()), else its edges by cut point
+/// ("p0-p1 onto p1'-p0").
+std::string woundLineName(const IncisionPlan& plan, int suture);
+
 /// @class IncisionPlan
 /// @brief A surgical plan on one skin range map: the cut path in normalised
 /// cylindrical coordinates (§4.2.2), excision offsets and sutures.
@@ -151,7 +162,13 @@ public:
   const std::vector<SutureEdges>& writtenSutures() const { return written_; }
   const std::vector<fem::SutureEdgePair>& sutures() const { return sutures_; }
   /// @throws SutureError (see resolveSutures); the plan keeps its old sutures then.
-  void setSutures(std::vector<SutureEdges> written);
+  /// @a woundLineNames: per written suture, the wound line it closes
+  /// (ProcedureTemplate::woundLineNames()), or empty.
+  /// @throws std::invalid_argument when names are given but not one per suture.
+  void setSutures(std::vector<SutureEdges> written, std::vector<std::string> woundLineNames = {});
+  /// Per written suture, the wound line it closes in the surgeon's words;
+  /// woundLineName() gives one for every suture.
+  const std::vector<std::string>& woundLineNames() const { return woundLineNames_; }
 
   /// The band along the sutured edges the procedure undermines by default
   /// (mm on the skin; ProcedureTemplate, DefaultUndermining), 0 for a
@@ -195,6 +212,7 @@ private:
   std::map<int, ChartPoint> offsets_;
   std::vector<SutureEdges> written_;
   std::vector<fem::SutureEdgePair> sutures_;
+  std::vector<std::string> woundLineNames_;
   std::vector<UnderminedRegion> underminedRegions_;
   double underminingBand_ = 0.0;
   CutDepth cutDepth_ = CutDepth::Bone;

@@ -284,7 +284,9 @@ IncisionPlan applyOperation(const IncisionPlan& plan, const PlanOperation& opera
           }
           const double count = double(o.points.size());
           IncisionPlan next(o.points, {seg::CylindricalFrame::wrapTheta(theta / count), z / count});
-          next.setSutures(straightClosureSutures(int(o.points.size())));
+          std::vector<SutureEdges> sewnBack = straightClosureSutures(int(o.points.size()));
+          const std::size_t sutureCount = sewnBack.size();
+          next.setSutures(std::move(sewnBack), std::vector<std::string>(sutureCount, "the cut"));
           return checked(std::move(next), skin);
         },
         [&](const ClearUndermining&) {
@@ -466,6 +468,39 @@ PredictionCheck predictionCheckFromJson(const json& j)
   return c;
 }
 
+/// "closure": {"force": N, "largestSuture": N, "peakWoundStress": MPa,
+/// "meanWoundStress": MPa, "woundRadius": mm}, every one a number >= 0.
+ClosureRecord closureRecordFromJson(const json& j)
+{
+  const auto bad = [](const std::string& what) { throw RecipeError(0, "\"closure\": " + what); };
+  if (!j.is_object())
+    bad("must be an object (the closure numbers of the prediction), not " + j.dump().substr(0, 80));
+  const auto number = [&](const char* key) {
+    const auto it = j.find(key);
+    if (it == j.end() || !it->is_number() || !(it->get<double>() >= 0.0) || !std::isfinite(it->get<double>()))
+      bad(std::string("\"") + key + "\" must be a number of 0 or more, not " +
+          (it == j.end() ? "missing" : it->dump()));
+    return it->get<double>();
+  };
+  ClosureRecord c;
+  c.force = number("force");
+  c.largestSuture = number("largestSuture");
+  c.peakWoundStress = number("peakWoundStress");
+  c.meanWoundStress = number("meanWoundStress");
+  c.woundRadius = number("woundRadius");
+  // The tension came later: absent in older files.
+  if (j.contains("tensionPerCentimetre"))
+  {
+    c.tensionPerCentimetre = number("tensionPerCentimetre");
+    c.peakTensionPerCentimetre = number("peakTensionPerCentimetre");
+    c.peakForcePerStitch = number("peakForcePerStitch");
+    c.stitchSpacing = number("stitchSpacing");
+    if (const auto line = j.find("peakTensionLine"); line != j.end() && line->is_string())
+      c.peakTensionLine = line->get<std::string>();
+  }
+  return c;
+}
+
 } // namespace
 
 json recipeToJson(const PlanRecipe& recipe)
@@ -488,6 +523,17 @@ json recipeToJson(const PlanRecipe& recipe)
     j["simulation"]["underminingWidth"] = *recipe.underminingWidth;
   if (recipe.prediction)
     j["prediction"] = predictionCheckToJson(*recipe.prediction);
+  if (recipe.closure)
+    j["closure"] = {{"force", recipe.closure->force},
+                    {"largestSuture", recipe.closure->largestSuture},
+                    {"peakWoundStress", recipe.closure->peakWoundStress},
+                    {"meanWoundStress", recipe.closure->meanWoundStress},
+                    {"woundRadius", recipe.closure->woundRadius},
+                    {"tensionPerCentimetre", recipe.closure->tensionPerCentimetre},
+                    {"peakTensionPerCentimetre", recipe.closure->peakTensionPerCentimetre},
+                    {"peakForcePerStitch", recipe.closure->peakForcePerStitch},
+                    {"stitchSpacing", recipe.closure->stitchSpacing},
+                    {"peakTensionLine", recipe.closure->peakTensionLine}};
   return j;
 }
 
@@ -552,7 +598,31 @@ PlanRecipe recipeFromJson(const json& j)
   }
   if (const auto prediction = j.find("prediction"); prediction != j.end() && !prediction->is_null())
     recipe.prediction = predictionCheckFromJson(*prediction);
+  if (const auto closure = j.find("closure"); closure != j.end() && !closure->is_null())
+    recipe.closure = closureRecordFromJson(*closure);
   return recipe;
+}
+
+ClosureRecord closureRecordOf(const PlanPrediction& prediction, const WoundStress& wound, const WoundTension& tension)
+{
+  ClosureRecord c;
+  c.force = prediction.closure.magnitudeSum;
+  c.largestSuture = prediction.closure.largest;
+  c.peakWoundStress = wound.peakVonMises;
+  c.meanWoundStress = wound.meanVonMises;
+  c.woundRadius = wound.radius;
+  double across = 0.0, length = 0.0;
+  for (const WoundLineTension& l : tension.lines)
+  {
+    across += l.acrossForce;
+    length += l.length;
+  }
+  c.tensionPerCentimetre = length > 0.0 ? 10.0 * across / length : 0.0;
+  c.peakTensionPerCentimetre = tension.peakPerCentimetre;
+  c.peakForcePerStitch = tension.peakPerStitch;
+  c.stitchSpacing = tension.stitchSpacing;
+  c.peakTensionLine = tension.peakLine;
+  return c;
 }
 
 void writeRecipe(const PlanRecipe& recipe, const fs::path& file)

@@ -22,6 +22,8 @@
 #include "planning/IncisionPlan.h"
 #include "planning/PlanSimulation.h"
 #include "planning/ProcedureTemplate.h"
+#include "planning/WoundStress.h"
+#include "planning/WoundTension.h"
 
 class vtkImageData;
 
@@ -124,6 +126,30 @@ private:
   int operation_;
 };
 
+/// The closure numbers of a prediction that need its solve: the sutures'
+/// reactions (ClosureForces) and the skin stress by the wound (WoundStress).
+struct ClosureRecord
+{
+  double force = 0.0;           ///< sum of the sutures' force magnitudes (N)
+  double largestSuture = 0.0;   ///< the largest one suture carries (N)
+  double peakWoundStress = 0.0; ///< peak von Mises stress of the skin within woundRadius of the wound (MPa)
+  double meanWoundStress = 0.0; ///< its mean over that band (MPa)
+  double woundRadius = 10.0;    ///< mm
+  /// The tension across the wound (WoundTension): over all its lines, the
+  /// force across per centimetre of closed line, and the largest on one
+  /// sutured piece with the force one stitch carries there; 0 in files from
+  /// before it was recorded.
+  double tensionPerCentimetre = 0.0;            ///< N/cm
+  double peakTensionPerCentimetre = 0.0;        ///< N/cm
+  double peakForcePerStitch = 0.0;              ///< N
+  double stitchSpacing = kDefaultStitchSpacing; ///< mm
+  std::string peakTensionLine;                  ///< the wound line it is on
+};
+
+/// The record of @a prediction with the skin stress @a wound by its wound.
+/// and the tension along its wound lines.
+ClosureRecord closureRecordOf(const PlanPrediction& prediction, const WoundStress& wound, const WoundTension& tension);
+
 /// The operations that made a plan, and what they were applied to.
 struct PlanRecipe
 {
@@ -150,6 +176,10 @@ struct PlanRecipe
   /// after the solve so anyone can read it from the file; a replay makes
   /// and checks its own.
   std::optional<PredictionCheck> prediction;
+  /// What holds the wound closed in that prediction (its solve's reactions
+  /// and the skin stress by the wound), kept with it so no view has to solve
+  /// the plan again to show them; unset in files from before.
+  std::optional<ClosureRecord> closure;
 };
 
 /// @brief Applies operation number `number` (1-based, for messages) to @a plan.

@@ -794,6 +794,26 @@ std::string materialProblem(double youngsModulusMPa, double poissonRatio)
   return {};
 }
 
+SkinDifference skinDifference(const PlanPrediction& a, const PlanPrediction& b)
+{
+  if (a.skin.original.size() != b.skin.original.size() || a.skin.displaced.size() != a.skin.original.size() ||
+      b.skin.displaced.size() != b.skin.original.size())
+    throw std::invalid_argument("the two predictions are not on one mesh: solve the same plan with the same element "
+                                "size, region and layers to compare them");
+  SkinDifference d;
+  for (std::size_t v = 0; v < a.skin.displaced.size(); ++v)
+  {
+    if ((a.skin.original[v] - b.skin.original[v]).norm() > 1e-9)
+      throw std::invalid_argument("the two predictions are not on one mesh: their skin vertices differ");
+    const double apart = (a.skin.displaced[v] - b.skin.displaced[v]).norm();
+    d.largest = std::max(d.largest, apart);
+    d.mean += apart;
+  }
+  if (!a.skin.displaced.empty())
+    d.mean /= double(a.skin.displaced.size());
+  return d;
+}
+
 PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                             const SimulationOptions& options)
 {

@@ -324,6 +324,18 @@ struct PlanPrediction
 PlanPrediction simulatePlan(const seg::RangeMap& skin, const seg::RangeMap& bone, const IncisionPlan& plan,
                             const SimulationOptions& options = {});
 
+/// How far apart two predictions of one plan on one mesh put the skin (mm):
+/// the largest and the mean distance between a skin vertex's two displaced
+/// positions, e.g. the linear preview against the large-deformation
+/// prediction (the report's "Model and assumptions").
+struct SkinDifference
+{
+  double largest = 0.0;
+  double mean = 0.0;
+};
+/// @throws std::invalid_argument when the two do not share the skin's vertices.
+SkinDifference skinDifference(const PlanPrediction& a, const PlanPrediction& b);
+
 /// @brief The meshes simulatePlan() would solve, without solving: the
 /// fields up to the continuum mesh (surface, hole, sutures,
 /// refinedVertexOf, underminedVertices, continuum, excisedTissue,

@@ -216,7 +216,9 @@ struct ProcedureFile
   std::vector<ProcedureParameter> parameters;
   std::vector<SutureEdges> written;
   std::vector<int> sutureLines;                          // file line of each written suture
+  std::vector<std::string> sutureNames;                  // the wound line each one closes ("" unnamed)
   std::vector<std::pair<int, std::pair<int, int>>> zips; // line, (from, to) cut points
+  std::vector<std::string> zipNames;
   DefaultUndermining undermining;
   CutDepth depth = CutDepth::Bone;
   std::map<std::string, int> seenKeys;
@@ -302,8 +304,19 @@ ProcedureParameter readParameter(const ProcedureFile& read, int lineNo, const st
   return p;
 }
 
-void readSuture(ProcedureFile& read, int lineNo, const std::string& value)
+/// 'EDGES : NAME': the suture's edges and the wound line it closes, in
+/// the surgeon's words ("" when the file gives none).
+std::pair<std::string, std::string> withWoundLineName(const std::string& value)
 {
+  const auto colon = value.find(':');
+  if (colon == std::string::npos)
+    return {value, ""};
+  return {trim(value.substr(0, colon)), trim(value.substr(colon + 1))};
+}
+
+void readSuture(ProcedureFile& read, int lineNo, const std::string& line)
+{
+  const auto [value, name] = withWoundLineName(line);
   static const std::regex edgePairRe(R"(^\(?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*,?\s*\(\s*(\d+)\s*,\s*(\d+)\s*\)\s*\)?$)");
   std::smatch m;
   if (!std::regex_match(value, m, edgePairRe))
@@ -313,11 +326,13 @@ void readSuture(ProcedureFile& read, int lineNo, const std::string& value)
                                value + "'");
   read.written.push_back({{std::stoi(m[1]), std::stoi(m[2])}, {std::stoi(m[3]), std::stoi(m[4])}});
   read.sutureLines.push_back(lineNo);
+  read.sutureNames.push_back(name);
 }
 
 /// Kept as written: its range can only be checked once the cut's points are known.
-void readZip(ProcedureFile& read, int lineNo, const std::string& value)
+void readZip(ProcedureFile& read, int lineNo, const std::string& line)
 {
+  const auto [value, name] = withWoundLineName(line);
   static const std::regex zipRe(R"(^(\d+)\s+(\d+)$)");
   std::smatch m;
   if (!std::regex_match(value, m, zipRe) || std::stoi(m[1]) >= std::stoi(m[2]))
@@ -326,6 +341,7 @@ void readZip(ProcedureFile& read, int lineNo, const std::string& value)
                              "LAST, got '" +
                                value + "'");
   read.zips.push_back({lineNo, {std::stoi(m[1]), std::stoi(m[2])}});
+  read.zipNames.push_back(name);
 }
 
 /// 'undermining = band W mm', 'band F PARAM' or 'band F PARAM + W mm':
@@ -488,8 +504,9 @@ void checkParameters(const ProcedureTemplate& t, const Generator& g, int generat
 /// Appends each zip's sutures to the written ones, with the zip's line.
 void expandZips(ProcedureFile& read, int pathPoints)
 {
-  for (const auto& [line, range] : read.zips)
+  for (std::size_t z = 0; z < read.zips.size(); ++z)
   {
+    const auto& [line, range] = read.zips[z];
     if (range.second >= pathPoints)
       throw ProcedureFileError(read.file, line,
                                "zip to cut point " + std::to_string(range.second) + ", but the cut has " +
@@ -499,6 +516,7 @@ void expandZips(ProcedureFile& read, int pathPoints)
     {
       read.written.push_back({{i, i + 1}, {rightSideVertex(i, pathPoints), rightSideVertex(i + 1, pathPoints)}});
       read.sutureLines.push_back(line);
+      read.sutureNames.push_back(read.zipNames[z]);
     }
   }
 }
@@ -608,6 +626,7 @@ ProcedureTemplate ProcedureTemplate::load(const fs::path& file)
   expandZips(read, t.pathPoints_);
   t.written_ = std::move(read.written);
   t.sutures_ = resolvedSutures(t, read.sutureLines);
+  t.woundLineNames_ = std::move(read.sutureNames);
   checkDefaultCut(t, read.generatorLine);
   t.undermining_ = checkedUndermining(t, read.undermining);
   t.depth_ = read.depth;
@@ -679,7 +698,7 @@ IncisionPlan ProcedureTemplate::place(const seg::RangeMap& skin, const SkinPoint
   for (int vertex = 0; vertex < int(local.offsets.size()); ++vertex)
     if (!local.offsets[vertex].isZero())
       plan.offsetBorderPoint(vertex, rotation * local.offsets[vertex]);
-  plan.setSutures(written_);
+  plan.setSutures(written_, woundLineNames_);
   plan.setUnderminingBand(undermining_.width(v));
   plan.setCutDepth(depth_);
   checkPlan(plan, skin);

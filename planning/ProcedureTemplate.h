@@ -97,6 +97,10 @@ public:
   /// Sutures as written in the file (zip lines expanded) and resolved.
   const std::vector<SutureEdges>& writtenSutures() const { return written_; }
   const std::vector<fem::SutureEdgePair>& sutures() const { return sutures_; }
+  /// Per written suture, the wound line it closes in the surgeon's words
+  /// (the file's `suture = EDGES : NAME`, a zip's name for each of its
+  /// sutures); "" where the file names none.
+  const std::vector<std::string>& woundLineNames() const { return woundLineNames_; }
   /// What the procedure undermines unless the surgeon says otherwise.
   const DefaultUndermining& undermining() const { return undermining_; }
   /// How deep it cuts and where it raises the undermined tissue (the file's
@@ -127,6 +131,7 @@ private:
   std::vector<ProcedureParameter> parameters_;
   std::vector<SutureEdges> written_;
   std::vector<fem::SutureEdgePair> sutures_;
+  std::vector<std::string> woundLineNames_;
   DefaultUndermining undermining_;
   CutDepth depth_ = CutDepth::Bone;
 };

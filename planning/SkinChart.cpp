@@ -1,8 +1,12 @@
 #include "planning/SkinChart.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include <Eigen/Eigenvalues>
 
 namespace caps::planning {
 namespace {
@@ -55,6 +59,22 @@ Eigen::Vector3d SkinChart::lift(const ChartPoint& p) const
   if (!std::isfinite(r))
     return Eigen::Vector3d::Constant(std::nan(""));
   return skin_->frame().toWorld(r, s.theta, s.z);
+}
+
+double chartDistortion(const SkinChart& chart, const ChartPoint& p, double step)
+{
+  const Eigen::Vector2d du(step, 0.0), dv(0.0, step);
+  Eigen::Matrix<double, 3, 2> jacobian;
+  jacobian.col(0) = (chart.lift(p + du) - chart.lift(p - du)) / (2.0 * step);
+  jacobian.col(1) = (chart.lift(p + dv) - chart.lift(p - dv)) / (2.0 * step);
+  if (!jacobian.allFinite())
+    return std::nan("");
+  // σ² are the eigenvalues of the 2 × 2 metric JᵀJ.
+  const Eigen::Vector2d sigmaSquared =
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(jacobian.transpose() * jacobian, Eigen::EigenvaluesOnly)
+      .eigenvalues();
+  const double smallest = std::sqrt(std::max(0.0, sigmaSquared(0))), largest = std::sqrt(sigmaSquared(1));
+  return smallest > 0.0 ? std::max(largest, 1.0 / smallest) : std::numeric_limits<double>::infinity();
 }
 
 SkinPoint skinPointFromNormalized(const seg::CylindricalFrame& frame, const Eigen::Vector2d& thetaZN)

@@ -68,6 +68,19 @@ private:
   double radius_;
 };
 
+/// How far the chart is from the skin at @a p: the largest factor by which
+/// the lift stretches or shrinks a chart length in any direction (1 where
+/// the chart is true to the skin; the singular values σ of d lift / d(u, v)
+/// over central differences @a step mm apart, max(σmax, 1/σmin)). It grows
+/// where the skin is oblique to the head's axis (the top of the head, under
+/// the chin, the side of the nose): there a plan drawn in the chart is not
+/// the plan on the skin. NaN when the map has no surface about @a p.
+double chartDistortion(const SkinChart& chart, const ChartPoint& p, double step = 1.0);
+
+/// Plans are refused where the chart stretches or shrinks lengths on the
+/// skin by more than this (chartDistortion()).
+inline constexpr double kMaxChartDistortion = 1.3;
+
 /// Normalised (θn, zn) ↔ cylindrical (θ, z) on a frame (§4.2.2).
 SkinPoint skinPointFromNormalized(const seg::CylindricalFrame& frame, const Eigen::Vector2d& thetaZN);
 Eigen::Vector2d normalizedFromSkinPoint(const seg::CylindricalFrame& frame, const SkinPoint& p);

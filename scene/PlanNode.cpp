@@ -44,6 +44,17 @@ void PlanNode::setCutPoint(std::size_t index, const Eigen::Vector2d& p)
 void PlanNode::setSutures(std::vector<std::array<int, 4>> sutures)
 {
   sutures_ = std::move(sutures);
+  if (woundLineNames_.size() != sutures_.size())
+    woundLineNames_.clear();
+  modified();
+}
+
+void PlanNode::setWoundLineNames(std::vector<std::string> names)
+{
+  if (!names.empty() && names.size() != sutures_.size())
+    throw SceneError("a plan needs one wound line name per suture or none: " + std::to_string(names.size()) +
+                     " names for " + std::to_string(sutures_.size()) + " sutures");
+  woundLineNames_ = std::move(names);
   modified();
 }
 
@@ -97,6 +108,30 @@ void PlanNode::setSoftwareVersion(std::string version)
   modified();
 }
 
+namespace {
+
+/// @a value when it is null or an object; else SceneError naming @a what.
+nlohmann::json objectOrNull(nlohmann::json value, const std::string& what)
+{
+  if (!value.is_null() && !value.is_object())
+    throw SceneError("a plan's " + what + " must be an object, not " + value.dump().substr(0, 80));
+  return value;
+}
+
+} // namespace
+
+void PlanNode::setPredictionCheck(nlohmann::json check)
+{
+  predictionCheck_ = objectOrNull(std::move(check), "prediction check");
+  modified();
+}
+
+void PlanNode::setClosure(nlohmann::json closure)
+{
+  closure_ = objectOrNull(std::move(closure), "closure record");
+  modified();
+}
+
 void PlanNode::setSimulation(nlohmann::json simulation)
 {
   if (!simulation.is_null() && !simulation.is_object())
@@ -125,6 +160,8 @@ void PlanNode::writeFields(nlohmann::json& j) const
   for (const auto& p : cutPath_)
     path.push_back({p.x(), p.y()});
   j["sutures"] = sutures_;
+  if (!woundLineNames_.empty())
+    j["woundLineNames"] = woundLineNames_;
   j["generator"] = generator_;
   if (underminingBand_ > 0.0)
     j["underminingBand"] = underminingBand_;
@@ -139,6 +176,10 @@ void PlanNode::writeFields(nlohmann::json& j) const
   j["softwareVersion"] = softwareVersion_;
   if (!simulation_.is_null())
     j["simulation"] = simulation_;
+  if (!predictionCheck_.is_null())
+    j["prediction"] = predictionCheck_;
+  if (!closure_.is_null())
+    j["closure"] = closure_;
   j["notes"] = notes_;
   j["rangeMapId"] = rangeMapId_;
 }
@@ -191,6 +232,21 @@ void PlanNode::readFields(const nlohmann::json& j)
     }
     sutures_ = std::move(sutures);
   }
+  woundLineNames_.clear();
+  if (const auto* given = jsonfields::find(j, "woundLineNames"))
+  {
+    std::vector<std::string> names;
+    for (const auto& name : jsonfields::list(*given, "woundLineNames"))
+    {
+      if (!name.is_string())
+        throw SceneError("a wound line name must be text, not " + name.dump());
+      names.push_back(name.get<std::string>());
+    }
+    if (names.size() != sutures_.size())
+      throw SceneError("the plan has " + std::to_string(names.size()) + " wound line names for " +
+                       std::to_string(sutures_.size()) + " sutures");
+    woundLineNames_ = std::move(names);
+  }
   if (const auto* operations = jsonfields::find(j, "operations"))
     operations_ = jsonfields::list(*operations, "the plan's operations");
   jsonfields::read(j, "ctSha256", ctSha256_);
@@ -201,6 +257,11 @@ void PlanNode::readFields(const nlohmann::json& j)
       throw SceneError("a plan's \"simulation\" must be an object, not " + simulation->dump());
     simulation_ = *simulation;
   }
+  if (const auto* check = jsonfields::find(j, "prediction"))
+    predictionCheck_ = objectOrNull(*check, "\"prediction\"");
+  if (const auto* closure = jsonfields::find(j, "closure"))
+    closure_ = objectOrNull(*closure, "\"closure\"");
+
   jsonfields::read(j, "notes", notes_);
   jsonfields::read(j, "rangeMapId", rangeMapId_);
 }

@@ -37,6 +37,10 @@ public:
   /// vertices), written as the thesis and the procedure files write them.
   const std::vector<std::array<int, 4>>& sutures() const { return sutures_; }
   void setSutures(std::vector<std::array<int, 4>> sutures);
+  /// Per suture, the wound line it closes in the procedure's words ("the
+  /// first limb"), or empty; SceneError when neither empty nor one per suture.
+  const std::vector<std::string>& woundLineNames() const { return woundLineNames_; }
+  void setWoundLineNames(std::vector<std::string> names);
 
   /// The cut generator of the procedure ("z", "ellipse", ...); empty for a hand-drawn cut.
   const std::string& generator() const { return generator_; }
@@ -81,6 +85,13 @@ public:
   const nlohmann::json& simulation() const { return simulation_; }
   /// Throws SceneError when @a simulation is neither null nor an object.
   void setSimulation(nlohmann::json simulation);
+  /// How that prediction checked out and what held its wound closed, as
+  /// plan.json's "prediction" and "closure" objects (PlanRecipe); null when
+  /// not recorded. Throws SceneError when neither null nor an object.
+  const nlohmann::json& predictionCheck() const { return predictionCheck_; }
+  void setPredictionCheck(nlohmann::json check);
+  const nlohmann::json& closure() const { return closure_; }
+  void setClosure(nlohmann::json closure);
   ///@}
 
   const std::string& notes() const { return notes_; }
@@ -99,12 +110,14 @@ private:
   std::map<std::string, double> parameters_;
   std::vector<Eigen::Vector2d> cutPath_;
   std::vector<std::array<int, 4>> sutures_;
+  std::vector<std::string> woundLineNames_;
   std::string generator_;
   double underminingBand_ = 0.0;
   std::string cutDepth_ = "bone";
   Eigen::Vector2d centre_ = Eigen::Vector2d::Zero();
   std::vector<Eigen::Vector2d> borderOffsets_;
   nlohmann::json operations_ = nlohmann::json::array();
+  nlohmann::json predictionCheck_, closure_;
   std::string ctSha256_;
   std::string softwareVersion_;
   nlohmann::json simulation_;

@@ -56,6 +56,7 @@ void IncisionLogic::writePlan(const planning::IncisionPlan& plan, PlanNode& node
   for (const auto& s : plan.writtenSutures())
     sutures.push_back({s.a[0], s.a[1], s.b[0], s.b[1]});
   node.setSutures(std::move(sutures));
+  node.setWoundLineNames(plan.woundLineNames());
 }
 
 planning::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
@@ -78,7 +79,8 @@ planning::IncisionPlan IncisionLogic::readPlan(const PlanNode& node)
   std::vector<planning::SutureEdges> written;
   for (const auto& s : node.sutures())
     written.push_back({{s[0], s[1]}, {s[2], s[3]}});
-  plan.setSutures(std::move(written)); // throws SutureError (an invalid_argument) naming the pair
+  // throws SutureError (an invalid_argument) naming the pair
+  plan.setSutures(std::move(written), node.woundLineNames());
   // The undermined regions as the node's recipe leaves them (placing a
   // procedure starts afresh, "clear-undermining" empties them).
   const nlohmann::json& operations = node.operations();
@@ -114,6 +116,8 @@ void IncisionLogic::writeRecipe(const planning::PlanRecipe& recipe, PlanNode& no
   node.setSoftwareVersion(recipe.softwareVersion);
   const nlohmann::json written = planning::recipeToJson(recipe);
   node.setSimulation(written.contains("simulation") ? written["simulation"] : nlohmann::json());
+  node.setPredictionCheck(written.contains("prediction") ? written["prediction"] : nlohmann::json());
+  node.setClosure(written.contains("closure") ? written["closure"] : nlohmann::json());
 }
 
 std::optional<planning::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& node)
@@ -128,7 +132,9 @@ std::optional<planning::PlanRecipe> IncisionLogic::readRecipe(const PlanNode& no
                                      {"softwareVersion", node.softwareVersion()},
                                      {"ctSha256", node.ctSha256()},
                                      {"operations", node.operations()},
-                                     {"simulation", node.simulation()}});
+                                     {"simulation", node.simulation()},
+                                     {"prediction", node.predictionCheck()},
+                                     {"closure", node.closure()}});
   }
   catch (const planning::RecipeError& e)
   {
@@ -206,8 +212,11 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
 {
   planning::SimulationOptions options;
   const nlohmann::json& s = node.simulation();
-  if (!s.is_object())
+  if (!s.is_object() || s.empty())
+  { // not predicted yet: the prediction is the large-deformation one
+    options.model = planning::TissueModel::LargeDeformation;
     return options;
+  }
   auto number = [&s](const char* key, double& out, double lowest) {
     const auto it = s.find(key);
     if (it != s.end() && it->is_number() && std::isfinite(it->get<double>()) && it->get<double>() >= lowest)

@@ -70,6 +70,8 @@ public:
   /// underminingWidth and materials when the Simulate panel wrote them.
   /// Values that do not read are left at the default; cutLayers and
   /// underminingWidth, when absent, stay unset: the plan's procedure says.
+  /// A plan not predicted yet (no record) gets the large-deformation model,
+  /// the prediction; a record without a model was made by the linear one.
   static planning::SimulationOptions simulationOptions(const PlanNode& node);
   /// The simulation() record of a prediction made with @a options:
   /// {"elementSize", "cutLayers"} (the plan file's fields, PlanRecipe) and

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <numbers>
+#include <regex>
 #include <sstream>
 
 #include <vtkCellArray.h>
@@ -20,14 +21,18 @@
 #include <vtkSmartPointer.h>
 
 #include "fem/ElementGeometry.h"
+#include "fem/FiniteStrainStress.h"
+#include "fem/NodalStress.h"
 #include "fem/VtuWriter.h"
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanDisplay.h"
 #include "planning/PlanRecipe.h"
 #include "planning/PlanSimulation.h"
 #include "planning/UnderminingStudy.h"
+#include "planning/ConvergenceStudy.h"
 #include "render/XyPlot.h"
 #include "planning/WoundStress.h"
+#include "planning/WoundTension.h"
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/volumes/CommandLine.h"
 #include "scene/RangeMapNode.h"
@@ -60,7 +65,8 @@ const char* kPlanUsage =
   "                       tissue under the skin; displacement (mm), von Mises and mean\n"
   "                       stress (kPa), strain and body coordinates as point data\n"
   "  skin-after.vtp       the same surface after it\n"
-  "  model.vtu            the finite element model with its displacements\n"
+  "  model.vtu            the finite element model of the prediction with its displacements\n"
+  "                       and nodal stresses (Cauchy, det F and stretch in large deformation)\n"
   "  plan.json            the plan as the operations that made it, with the CT's SHA-256\n"
   "                       and the CAPS version: --replay makes the same plan and prediction\n"
   "\n"
@@ -84,6 +90,8 @@ const char* kPlanUsage =
   "                       from its operations; refused when it was made on another CT\n"
   "  --other-ct           replays a plan made on another CT (another scan or patient) anyway\n"
   "  --element-size MM    element size at the wound (default 2, or the replayed plan's)\n"
+  "  --stitch-spacing MM  the spacing of the skin stitches the tension per stitch is given\n"
+  "                       for (default 4; the tension per cm does not depend on it)\n"
   "  --cut-depth N        the cut goes through the top N of the model's 3 tissue layers\n"
   "                       (1: the skin, 2: skin and fat, 3: down to the bone); default the\n"
   "                       procedure's depth (its file's `depth`: the shipped ones cut skin\n"
@@ -94,12 +102,17 @@ const char* kPlanUsage =
   "                       sutured edges (§3.2.4: freed from the bone), for each width, and\n"
   "                       writes undermining.csv: closure force and peak skin stress near\n"
   "                       the wound against undermining width, plotted in undermining.png\n"
+  "  --study convergence  also solves the plan with the mesh refined (element sizes 1.5 h,\n"
+  "                       h, h/1.5), with 2, 3 and 4 tissue layers, and with the meshed\n"
+  "                       region 15, 25 and 35 mm wide, rim free and clamped, and writes\n"
+  "                       convergence.csv: tension per cm, mean and peak wound stress,\n"
+  "                       gain, largest displacement and the change from level to level\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
   "  --model linear|large-deformation\n"
-  "                       the model of the tissue (default linear, or the replayed plan's):\n"
-  "                       linear elastic, small strain (the instant preview), or\n"
-  "                       compressible neo-Hookean layers in large deformation with the\n"
-  "                       sutures closed over load increments\n"
+  "                       the model of the tissue (default large-deformation, or the\n"
+  "                       replayed plan's): compressible neo-Hookean layers in large\n"
+  "                       deformation with the sutures closed over load increments (the\n"
+  "                       prediction), or linear elastic, small strain (the instant preview)\n"
   "\n"
   "The tissue has assumed moduli (skin 0.15, fat 0.01, muscle 0.05 MPa, Poisson 0.45),\n"
   "the bone fixed: a first prediction, not a measurement. Every prediction is checked:\n"
@@ -132,9 +145,41 @@ struct PlanArgs : cli::CtCommandArgs
   std::optional<double> elementSize;          ///< mm; default 2, or the replayed plan's
   std::optional<int> cutLayers;               ///< --cut-depth; default the procedure's, or the replayed plan's
   std::vector<double> undermineWidths;        ///< mm, the --undermine study; empty: none
-  std::optional<planning::TissueModel> model; ///< --model; default linear, or the replayed plan's
+  std::optional<planning::TissueModel> model; ///< --model; default large deformation, or the replayed plan's
   std::optional<double> underminingWidth;     ///< --undermining mm; default the procedure's, or the replayed plan's
+  double stitchSpacing = planning::kDefaultStitchSpacing; ///< mm, --stitch-spacing
+  bool convergenceStudy = false;                          ///< --study convergence
 };
+
+/// model.vtu's point data: the prediction's displacements and the stress of
+/// the model that made it at the nodes (averaged within each tissue layer):
+/// Cauchy stress, det F and the largest stretch for a large-deformation
+/// prediction, the small-strain stress for the linear preview.
+std::vector<fem::VtuArray> modelArrays(const planning::PlanPrediction& p)
+{
+  const Eigen::Map<const Eigen::Matrix3Xd> u(p.displacements.data(), 3, p.displacements.size() / 3);
+  std::vector<fem::VtuArray> arrays{{"displacement_mm", Eigen::MatrixXd(u)}};
+  if (p.check.model == planning::TissueModel::LargeDeformation && !p.hyperelasticMaterials.empty())
+  {
+    const fem::FiniteStrainNodalField f =
+      fem::recoverFiniteStrainNodalField(p.continuum.mesh, p.hyperelasticMaterials, p.displacements);
+    arrays.push_back({"cauchy_stress_MPa", f.cauchy});
+    arrays.push_back({"det_F", f.detF.transpose()});
+    arrays.push_back({"largest_stretch", f.maxStretch().transpose()});
+  }
+  else
+    arrays.push_back({"stress_MPa", fem::recoverNodalStresses(p.continuum.mesh, p.materials, p.displacements).stress});
+  return arrays;
+}
+
+/// The tissue layer (1 = the skin) of each element, as cell data.
+Eigen::MatrixXd layerOfEachElement(const planning::PlanPrediction& p)
+{
+  Eigen::MatrixXd layer(1, Eigen::Index(p.continuum.elementLayer.size()));
+  for (std::size_t e = 0; e < p.continuum.elementLayer.size(); ++e)
+    layer(0, Eigen::Index(e)) = p.continuum.elementLayer[e] + 1;
+  return layer;
+}
 
 /// "W,W,..." of undermining widths in mm, each in [0, 100].
 bool parseWidths(const std::string& text, std::vector<double>& widths)
@@ -185,6 +230,64 @@ bool parseEdit(const std::string& text, bool move, PlanEdit& edit)
     return false;
   edit.index = index;
   return true;
+}
+
+/// The options of the model and its studies (--element-size ... --undermine).
+std::optional<std::string> parseModelOption(const std::string& a, const std::vector<std::string>& args, std::size_t& i,
+                                            PlanArgs& parsed)
+{
+  const bool hasValue = i + 1 < args.size();
+  if (a == "--element-size")
+  {
+    double size = 0.0;
+    if (!hasValue || !cli::parseNumber(args[++i], size) || size <= 0.2 || size > 20.0)
+      return "--element-size needs a length in mm between 0.2 and 20";
+    parsed.elementSize = size;
+  }
+  else if (a == "--stitch-spacing")
+  {
+    double spacing = 0.0;
+    if (!hasValue || !cli::parseNumber(args[++i], spacing) || spacing < 1.0 || spacing > 20.0)
+      return "--stitch-spacing needs the distance between two skin stitches in mm, between 1 and 20";
+    parsed.stitchSpacing = spacing;
+  }
+  else if (a == "--cut-depth")
+  {
+    double layers = 0.0;
+    if (!hasValue || !cli::parseNumber(args[++i], layers) || (layers != 1.0 && layers != 2.0 && layers != 3.0))
+      return "--cut-depth needs the number of tissue layers the cut goes through: 1 (skin), 2 (skin and fat) "
+             "or 3 (down to the bone)";
+    parsed.cutLayers = int(layers);
+  }
+  else if (a == "--model")
+  {
+    parsed.model = hasValue ? planning::tissueModelFromId(args[i + 1]) : std::nullopt;
+    if (!parsed.model)
+      return "--model needs linear (the small-strain preview) or large-deformation (the final prediction)";
+    ++i;
+  }
+  else if (a == "--undermining")
+  {
+    double width = 0.0;
+    if (!hasValue || !cli::parseNumber(args[++i], width) || width < 0.0 || width > 100.0)
+      return "--undermining needs the band undermined along the sutured edges in mm, 0 (none) to 100";
+    parsed.underminingWidth = width;
+  }
+  else if (a == "--study")
+  {
+    if (!hasValue || args[++i] != "convergence")
+      return "--study needs convergence (the plan solved again with the mesh refined, the layers and the "
+             "region changed)";
+    parsed.convergenceStudy = true;
+  }
+  else if (a == "--undermine")
+  {
+    if (!hasValue || !parseWidths(args[++i], parsed.undermineWidths))
+      return "--undermine needs undermining widths in mm from 0 to 100, e.g. 0,5,10,20";
+  }
+  else
+    return "unknown option " + a;
+  return std::nullopt;
 }
 
 std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs& parsed)
@@ -244,42 +347,8 @@ std::optional<std::string> parse(const std::vector<std::string>& argv, PlanArgs&
       }
       else if (a == "--other-ct")
         parsed.otherCt = true;
-      else if (a == "--element-size")
-      {
-        double size = 0.0;
-        if (!hasValue || !cli::parseNumber(args[++i], size) || size <= 0.2 || size > 20.0)
-          return "--element-size needs a length in mm between 0.2 and 20";
-        parsed.elementSize = size;
-      }
-      else if (a == "--cut-depth")
-      {
-        double layers = 0.0;
-        if (!hasValue || !cli::parseNumber(args[++i], layers) || (layers != 1.0 && layers != 2.0 && layers != 3.0))
-          return "--cut-depth needs the number of tissue layers the cut goes through: 1 (skin), 2 (skin and fat) "
-                 "or 3 (down to the bone)";
-        parsed.cutLayers = int(layers);
-      }
-      else if (a == "--model")
-      {
-        parsed.model = hasValue ? planning::tissueModelFromId(args[i + 1]) : std::nullopt;
-        if (!parsed.model)
-          return "--model needs linear (the small-strain preview) or large-deformation (the final prediction)";
-        ++i;
-      }
-      else if (a == "--undermining")
-      {
-        double width = 0.0;
-        if (!hasValue || !cli::parseNumber(args[++i], width) || width < 0.0 || width > 100.0)
-          return "--undermining needs the band undermined along the sutured edges in mm, 0 (none) to 100";
-        parsed.underminingWidth = width;
-      }
-      else if (a == "--undermine")
-      {
-        if (!hasValue || !parseWidths(args[++i], parsed.undermineWidths))
-          return "--undermine needs undermining widths in mm from 0 to 100, e.g. 0,5,10,20";
-      }
       else
-        return "unknown option " + a;
+        return parseModelOption(a, args, i, parsed);
       return std::nullopt;
     });
   if (problem || parsed.help)
@@ -330,7 +399,7 @@ constexpr double kWoundStressRadius = 10.0;
 
 void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m, const planning::PlanPrediction& p,
                        double excisedVolumeToBone, const planning::WoundStress& stress,
-                       const seg::CylindricalPoint& peakAt)
+                       const seg::CylindricalPoint& peakAt, const planning::WoundTension& tension)
 {
   std::ofstream out(file);
   out << std::setprecision(10) << "quantity,where,chart,skin,unit\n";
@@ -364,6 +433,21 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "largest skin displacement,skin,," << largestMove << ",mm\n";
   out << "closure force (sum over sutures),sutures,," << p.closure.magnitudeSum << ",N\n";
   out << "largest suture force,sutures,," << p.closure.largest << ",N\n";
+  // The tension a surgeon reads: per centimetre of each wound line and per stitch.
+  const auto csvText = [](const std::string& text) {
+    return text.find_first_of(",\"") == std::string::npos
+             ? text
+             : "\"" + std::regex_replace(text, std::regex("\""), "\"\"") + "\"";
+  };
+  for (const planning::WoundLineTension& l : tension.lines)
+  {
+    out << "wound line length," << csvText(l.name) << ",," << l.length << ",mm\n";
+    out << "wound tension," << csvText(l.name) << ",," << l.perCentimetre << ",N/cm\n";
+    out << "wound tension peak," << csvText(l.name + " between " + l.peakBetween) << ",," << l.peakPerCentimetre
+        << ",N/cm\n";
+    out << "force per stitch every " << tension.stitchSpacing << " mm," << csvText(l.name) << ",," << l.perStitch
+        << ",N\n";
+  }
   // §4.7: the skin's nodal stress within stress.radius mm of the hole border.
   const std::string band = "skin within " + std::to_string(int(std::lround(stress.radius))) + " mm of the wound";
   out << "peak skin von Mises near wound," << band << ",," << 1e3 * stress.peakVonMises << ",kPa\n";
@@ -402,6 +486,8 @@ public:
     writeTheFiles();
     if (!args_.undermineWidths.empty())
       studyTheUndermining();
+    if (args_.convergenceStudy)
+      studyTheConvergence();
   }
 
   /// A large-deformation solve that stopped short of the closure or gave a
@@ -525,7 +611,7 @@ private:
                                          : replay_       ? replay_->cutLayers
                                                          : std::nullopt;
     const planning::TissueModel model =
-      args_.model.value_or(replay_ ? replay_->model : planning::TissueModel::LinearElastic);
+      args_.model.value_or(replay_ ? replay_->model : planning::TissueModel::LargeDeformation);
     saved_ = recorded_->recipe();
     saved_.elementSize = elementSize;
     saved_.cutLayers = cutLayers;
@@ -550,7 +636,12 @@ private:
     options_.progress = cli::consoleProgress(err_);
     prediction_ = planning::simulatePlan(maps_.skin, maps_.bone, plan, options_);
     options_.progress = {};
-    saved_.prediction = prediction_.check; // plan.json says how the prediction checked out
+    woundStress_ = planning::woundSkinStress(prediction_, kWoundStressRadius);
+    tension_ = planning::woundTension(prediction_, plan, args_.stitchSpacing);
+    peakAt_ = maps_.skin.frame().toCylindrical(woundStress_.original);
+    // plan.json says how the prediction checked out, and what holds the wound closed
+    saved_.prediction = prediction_.check;
+    saved_.closure = planning::closureRecordOf(prediction_, woundStress_, tension_);
     planning::writeRecipe(saved_, args_.out / "plan.json");
     excisedVolume_ = planning::excisedVolume(plan, maps_.skin, maps_.bone, options_.noBoneDepth);
     // The meshed region cut short (a shape the mesher could not grow round,
@@ -562,8 +653,6 @@ private:
                                                   "and run again"
                                                 : "")
            << "\n";
-    woundStress_ = planning::woundSkinStress(prediction_, kWoundStressRadius);
-    peakAt_ = maps_.skin.frame().toCylindrical(woundStress_.original);
   }
 
   /// "Undermined: 12.0 mm band along the sutured edges (the procedure's),
@@ -618,6 +707,7 @@ private:
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
     out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum
          << " N over all sutures, largest suture " << p.closure.largest << " N\n";
+    printTheWoundTension();
     const planning::WoundStress& w = woundStress_;
     out_ << std::setprecision(1) << "Skin stress within " << kWoundStressRadius << " mm of the wound: peak von Mises "
          << 1e3 * w.peakVonMises << " kPa at theta " << peakAt_.theta / kDegree << " deg, z " << peakAt_.z << " mm ("
@@ -627,6 +717,17 @@ private:
       out_ << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * p.zPlasty->predicted.fraction
            << " %, theoretical " << 100.0 * p.zPlasty->theoretical << " % (Fig. 2.2)\n";
     out_.unsetf(std::ios::floatfield);
+  }
+
+  /// Per wound line, the tension across it per centimetre and per stitch.
+  void printTheWoundTension()
+  {
+    out_ << std::setprecision(2) << "Wound tension across each line (all layers sewn), a stitch every "
+         << tension_.stitchSpacing << " mm:\n";
+    for (const planning::WoundLineTension& l : tension_.lines)
+      out_ << "  " << l.name << ": " << std::setprecision(1) << l.length << " mm closed, " << std::setprecision(2)
+           << l.perCentimetre << " N/cm (peak " << l.peakPerCentimetre << " N/cm between " << l.peakBetween << "), "
+           << l.perStitch << " N per stitch (peak " << l.peakPerStitch << " N), " << l.stitches << " stitches\n";
   }
 
   /// How far to trust what follows: the solve and det F (thesis §5.5).
@@ -644,19 +745,65 @@ private:
   void writeTheFiles()
   {
     const planning::IncisionPlan& plan = recorded_->plan();
-    writeMeasurements(args_.out / "measurements.csv", measured_, prediction_, excisedVolume_, woundStress_, peakAt_);
+    writeMeasurements(args_.out / "measurements.csv", measured_, prediction_, excisedVolume_, woundStress_, peakAt_,
+                      tension_);
     const seg::ColourMap shade = seg::skinShadeFromCt(volume_->image(), maps_.skin);
     const planning::PlanDisplay display = planning::buildPlanDisplay(prediction_, maps_.skin, &shade);
     planning::writePlanDisplay(display, args_.out / "skin-before.vtp", args_.out / "skin-after.vtp");
     const std::string name =
       procedure_->title() + " " + std::to_string(logic_.scene().nodesOfType(NodeType::Plan).size() + 1);
     logic_.addPrediction(name, plan, saved_, prediction_, display, skinMapId_);
-    const Eigen::Map<const Eigen::Matrix3Xd> u(prediction_.displacements.data(), 3,
-                                               prediction_.displacements.size() / 3);
-    fem::writeVtu((args_.out / "model.vtu").string(), prediction_.continuum.mesh,
-                  {{"displacement_mm", Eigen::MatrixXd(u)}});
+    fem::writeVtu((args_.out / "model.vtu").string(), prediction_.continuum.mesh, modelArrays(prediction_),
+                  {{"tissue_layer", layerOfEachElement(prediction_)}});
     for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
       out_ << "wrote " << (args_.out / file).string() << "\n";
+  }
+
+  /// How much the numbers depend on the model's own choices (thesis §5.5):
+  /// planning::studyConvergence(), as convergence.csv and a table.
+  void studyTheConvergence()
+  {
+    out_ << "Convergence and sensitivity study (skin stress within " << std::lround(kWoundStressRadius)
+         << " mm of the wound; the peak at a wound corner is singular and grows as the mesh is refined, so the "
+            "band mean is the stress to read):\n";
+    const planning::ConvergenceStudy study = planning::studyConvergence(
+      maps_.skin, maps_.bone, recorded_->plan(), options_, {}, kWoundStressRadius, cli::consoleProgress(err_));
+    const fs::path csv = args_.out / "convergence.csv";
+    std::ofstream table(csv);
+    table << std::setprecision(10)
+          << "series,level,solved,tension (N/cm),change (%),mean wound stress (kPa),change (%),peak wound stress "
+             "(kPa; singular),z-plasty gain (%),change (%),largest displacement (mm),change (%),closure force "
+             "(sum over node sutures) (N),change (%),smallest det F,problem\n";
+    const auto shown = [](double v, int digits) {
+      std::ostringstream text;
+      if (std::isnan(v))
+        text << "-";
+      else
+        text << std::fixed << std::setprecision(digits) << v;
+      return text.str();
+    };
+    for (const planning::ConvergenceRow& r : study.rows)
+    {
+      table << r.series << "," << r.value << "," << (r.solved ? 1 : 0) << "," << r.tensionPerCentimetre << ","
+            << shown(r.tensionChange, 3) << "," << r.meanWoundStressKPa << "," << shown(r.meanStressChange, 3) << ","
+            << r.peakWoundStressKPa << "," << shown(r.gainPercent, 4) << "," << shown(r.gainChange, 3) << ","
+            << r.largestDisplacement << "," << shown(r.displacementChange, 3) << "," << r.closureForce << ","
+            << shown(r.forceChange, 3) << "," << r.minDetF << ",\"" << r.problem << "\"\n";
+      out_ << "  " << r.series << " " << shown(r.value, 1) << ": ";
+      if (!r.computed)
+      {
+        out_ << "not solved: " << r.problem << "\n";
+        continue;
+      }
+      out_ << shown(r.tensionPerCentimetre, 3) << " N/cm (" << shown(r.tensionChange, 1) << " %), mean stress "
+           << shown(r.meanWoundStressKPa, 1) << " kPa (" << shown(r.meanStressChange, 1) << " %), peak "
+           << shown(r.peakWoundStressKPa, 1) << " kPa, gain " << shown(r.gainPercent, 1) << " % ("
+           << shown(r.gainChange, 1) << " %), largest displacement " << shown(r.largestDisplacement, 2) << " mm ("
+           << shown(r.displacementChange, 1) << " %)" << (r.solved ? "" : "; NOT A PREDICTION: " + r.problem) << "\n";
+    }
+    if (!table)
+      throw std::runtime_error("cannot write " + csv.string() + ": check the folder's permissions and space");
+    out_ << "wrote " << csv.string() << "\n";
   }
 
   /// The surgeon's question: how far must I undermine? The same plan and
@@ -728,6 +875,7 @@ private:
   planning::PlanPrediction prediction_;
   double excisedVolume_ = 0.0;
   planning::WoundStress woundStress_;
+  planning::WoundTension tension_;
   seg::CylindricalPoint peakAt_;
 };
 

@@ -72,6 +72,16 @@ struct PlanFacts
   planning::PlanMeasurements measured;
   planning::PlanPrediction prediction;
   planning::WoundStress woundStress;
+  /// The linear preview of the same plan on the same mesh, beside a
+  /// large-deformation prediction: how far it puts the skin from the
+  /// prediction and its own check; unset for a linear prediction.
+  struct Preview
+  {
+    planning::SkinDifference difference;
+    planning::PredictionCheck check;
+    double tensionPerCentimetre = 0.0;
+  };
+  std::optional<Preview> preview;
   double woundStressTheta = 0.0, woundStressZ = 0.0; ///< where the peak is (radians, mm)
   double excisedVolumeToBone = 0.0;                  ///< by the range maps (mm³), the second method
   /// Soft-tissue thickness under the cut path (mm), sampled every 0.5 mm

@@ -195,6 +195,25 @@ ClosureJob ResultsLogic::closureJob(const PlanNode& node)
   return job;
 }
 
+namespace {
+
+ClosureNumbers numbersOf(const planning::ClosureRecord& c)
+{
+  ClosureNumbers numbers;
+  numbers.closureForce = c.force;
+  numbers.largestSutureForce = c.largestSuture;
+  numbers.peakWoundStress = 1e3 * c.peakWoundStress;
+  numbers.woundRadius = c.woundRadius;
+  numbers.tensionPerCentimetre = c.tensionPerCentimetre;
+  numbers.peakTensionPerCentimetre = c.peakTensionPerCentimetre;
+  numbers.peakForcePerStitch = c.peakForcePerStitch;
+  numbers.stitchSpacing = c.stitchSpacing;
+  numbers.peakTensionLine = c.peakTensionLine;
+  return numbers;
+}
+
+} // namespace
+
 std::optional<ClosureNumbers> ResultsLogic::computeClosure(const ClosureJob& job, const TaskProgress& progress)
 {
   if (progress && !progress(0.05, "Predicting " + job.planName + " again for its closure force"))
@@ -203,12 +222,39 @@ std::optional<ClosureNumbers> ResultsLogic::computeClosure(const ClosureJob& job
   if (progress && !progress(0.95, "Wound stress of " + job.planName))
     return std::nullopt;
   const planning::WoundStress wound = planning::woundSkinStress(prediction, kWoundStressRadius);
-  ClosureNumbers numbers;
-  numbers.closureForce = prediction.closure.magnitudeSum;
-  numbers.largestSutureForce = prediction.closure.largest;
-  numbers.peakWoundStress = 1e3 * wound.peakVonMises;
-  numbers.woundRadius = kWoundStressRadius;
-  return numbers;
+  return numbersOf(planning::closureRecordOf(prediction, wound, planning::woundTension(prediction, job.plan)));
+}
+
+namespace {
+
+/// The plan's recipe, or nothing when it has none or it does not read (the
+/// callers then fall back to solving again, which names the problem).
+std::optional<planning::PlanRecipe> recipeOf(const PlanNode& plan)
+{
+  try
+  {
+    return IncisionLogic::readRecipe(plan);
+  }
+  catch (const std::exception&)
+  {
+    return std::nullopt;
+  }
+}
+
+} // namespace
+
+std::optional<ClosureNumbers> ResultsLogic::recordedClosure(const PlanNode& plan)
+{
+  const std::optional<planning::PlanRecipe> recipe = recipeOf(plan);
+  if (!recipe || !recipe->closure)
+    return std::nullopt;
+  return numbersOf(*recipe->closure);
+}
+
+std::optional<planning::PredictionCheck> ResultsLogic::recordedCheck(const PlanNode& plan)
+{
+  const std::optional<planning::PlanRecipe> recipe = recipeOf(plan);
+  return recipe ? recipe->prediction : std::nullopt;
 }
 
 IncisionProfile ResultsLogic::incisionProfile(const PlanNode& node, vtkPolyData* before) const

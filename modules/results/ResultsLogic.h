@@ -17,6 +17,7 @@
 #include "modules/core/Module.h"
 #include "planning/IncisionPlan.h"
 #include "planning/PlanSimulation.h"
+#include "planning/WoundTension.h"
 #include "scene/SnapshotNode.h"
 #include "segmentation/RangeMap.h"
 
@@ -68,6 +69,13 @@ struct ClosureNumbers
   double largestSutureForce = 0.0; ///< N
   double peakWoundStress = 0.0;    ///< largest von Mises stress in the skin within woundRadius of the wound (kPa)
   double woundRadius = 10.0;       ///< mm
+  /// The tension across the wound (planning::WoundTension): mean over the
+  /// wound and peak per centimetre of line, the force one stitch carries at
+  /// the peak, and on which line; 0 when not known.
+  double tensionPerCentimetre = 0.0, peakTensionPerCentimetre = 0.0; ///< N/cm
+  double peakForcePerStitch = 0.0;                                   ///< N
+  double stitchSpacing = planning::kDefaultStitchSpacing;            ///< mm
+  std::string peakTensionLine;
 };
 
 /// What a re-prediction needs, copied out of the scene so a worker thread
@@ -133,7 +141,18 @@ public:
   static std::optional<ClosureNumbers> computeClosure(const ClosureJob& job, const TaskProgress& progress = {});
   /// A key that changes when the plan or its prediction settings change.
   static std::string closureKey(const PlanNode& plan);
+  /// The numbers the prediction kept with it (planning::ClosureRecord in
+  /// the plan's recipe, written by caps plan and the Simulate module), so
+  /// nothing is solved again; std::nullopt for a plan predicted before
+  /// predictions kept them.
+  static std::optional<ClosureNumbers> recordedClosure(const PlanNode& plan);
   ///@}
+
+  /// How the plan's prediction checked out (planning::PredictionCheck, kept
+  /// in its recipe): which model made it, whether it converged and whether
+  /// its deformation is a body; std::nullopt for a plan predicted before
+  /// predictions kept their check.
+  static std::optional<planning::PredictionCheck> recordedCheck(const PlanNode& plan);
 
   /// The skin's values along the cut path: the path in the plan's chart,
   /// sampled every 0.5 mm, each sample lifted onto the skin before the

@@ -416,8 +416,10 @@ void ResultsPanel::refresh()
     plan_->setCurrentIndex(index >= 0 ? index : (plans.empty() ? -1 : 0));
   }
   const bool any = !plans.empty();
-  for (QWidget* w : std::initializer_list<QWidget*>{plan_, deformation_, prePost_, play_, colourBy_})
+  for (QWidget* w : std::initializer_list<QWidget*>{plan_, colourBy_})
     w->setEnabled(any);
+  for (QWidget* w : std::initializer_list<QWidget*>{deformation_, prePost_, play_})
+    w->setEnabled(any && !shownFailed_);
   {
     const QSignalBlocker block(compareWith_);
     const QString other = compareWith_->currentText();
@@ -566,6 +568,21 @@ void ResultsPanel::showPlan(const std::string& name, bool again)
     headCutId_ = scene.addNode(std::move(cut))->id();
     head->setVisible(false);
   }
+  // A large-deformation solve that stopped short of the closure is not a
+  // prediction: the face is shown before the operation, the deformation
+  // held there, and the summary says what failed and what to try.
+  const auto* planNode = scene.nodeAs<PlanNode>(shown_.plan);
+  const std::optional<planning::PredictionCheck> check =
+    planNode ? ResultsLogic::recordedCheck(*planNode) : std::nullopt;
+  const bool failed = check && !check->converged;
+  shownFailed_ = failed;
+  for (QWidget* control : std::initializer_list<QWidget*>{deformation_, play_, prePost_})
+    control->setEnabled(!failed);
+  if (failed)
+  {
+    const QSignalBlocker block(deformation_);
+    deformation_->setValue(0);
+  }
   result_ = ResultsLogic::makeResultSurface(before_);
   ResultsLogic::deform(before_, result_, deformation_->value() / 100.0);
   setDeformation(deformation_->value()); // the labels: there is no node to move yet
@@ -576,13 +593,16 @@ void ResultsPanel::showPlan(const std::string& name, bool again)
   setColouring(*node);
   resultId_ = scene.addNode(std::move(node))->id();
 
-  if (const auto* planNode = scene.nodeAs<PlanNode>(shown_.plan))
+  if (planNode)
   {
     if (const auto camera = logic_.planCamera(*planNode, before_))
       host_.setThreeDViewCamera(*camera);
     try
     {
-      plot_->setProfile(logic_.incisionProfile(*planNode, before_));
+      if (failed)
+        plot_->setProfile({}, "No profile along the incision: the solve did not reach the closure.");
+      else
+        plot_->setProfile(logic_.incisionProfile(*planNode, before_));
     }
     catch (const std::exception& e)
     {
@@ -590,7 +610,8 @@ void ResultsPanel::showPlan(const std::string& name, bool again)
     }
   }
   updateSummary();
-  startClosure();
+  if (!failed)
+    startClosure();
 }
 
 void ResultsPanel::setDeformation(int percent)
@@ -649,6 +670,23 @@ void ResultsPanel::updateSummary()
     return QString::fromStdString(plain).toHtmlEscaped().toStdString();
   };
   std::string text = "<b>" + html(shown_.name) + "</b><br>";
+  const auto* planNode = logic_.scene().nodeAs<PlanNode>(shown_.plan);
+  if (const std::optional<planning::PredictionCheck> check =
+        planNode ? ResultsLogic::recordedCheck(*planNode) : std::nullopt)
+  {
+    // Which model made it and how it checked out; a failed check first, in red.
+    if (const std::string warning = planning::checkWarning(*check); !warning.empty())
+      text += "<span style=\"color:#b00020\"><b>" + html(warning) + "</b>" +
+              (check->converged ? std::string() : std::string(" The face is shown before the operation.")) +
+              "</span><br>";
+    text += "Model: " + html(planning::tissueModelDescription(check->model)) + "; " +
+            html(planning::checkSummary(*check)) + "<br>";
+  }
+  if (shownFailed_)
+  { // the numbers of a state short of the closure are not results
+    summary_->setText(QString::fromStdString(text));
+    return;
+  }
   text +=
     "Largest displacement: " + fixed(ResultsLogic::arrayMaximum(before_, "displacement_magnitude_mm"), 2) + " mm<br>";
   text +=
@@ -658,6 +696,10 @@ void ResultsPanel::updateSummary()
   if (const auto it = closure_.find(key); it != closure_.end())
   {
     const ClosureNumbers& c = it->second;
+    if (c.peakTensionPerCentimetre > 0.0)
+      text += "Wound tension: " + fixed(c.tensionPerCentimetre, 2) + " N/cm, at most " +
+              fixed(c.peakTensionPerCentimetre, 2) + " N/cm on " + html(c.peakTensionLine) + " (" +
+              fixed(c.peakForcePerStitch, 2) + " N per stitch every " + fixed(c.stitchSpacing, 0) + " mm)<br>";
     text += "Closure force: " + fixed(c.closureForce, 2) + " N summed over the sutures (largest suture " +
             fixed(c.largestSutureForce, 3) + " N)<br>";
     text += "Peak wound stress: " + fixed(c.peakWoundStress, 1) + " kPa (von Mises, skin within " +
@@ -686,6 +728,12 @@ void ResultsPanel::startClosure()
   const std::string key = ResultsLogic::closureKey(*plan);
   if (closure_.count(key))
     return;
+  if (const std::optional<ClosureNumbers> recorded = ResultsLogic::recordedClosure(*plan))
+  { // kept with the prediction: nothing to solve again
+    closure_[key] = *recorded;
+    updateSummary();
+    return;
+  }
   closureError_.erase(key);
   std::shared_ptr<ClosureJob> job;
   try

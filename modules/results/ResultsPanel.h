@@ -103,6 +103,7 @@ private:
 
   /// The plan shown and the nodes the panel changed or added for it.
   PredictedPlan shown_;
+  bool shownFailed_ = false; ///< the shown plan's solve stopped short: no deformation to show
   NodeId resultId_, headId_, headCutId_;
   bool beforeWasVisible_ = false, afterWasVisible_ = true, headWasVisible_ = true;
   vtkSmartPointer<vtkPolyData> before_;

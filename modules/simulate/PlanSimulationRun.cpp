@@ -148,6 +148,7 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   const seg::CylindricalPoint at = input.skin.frame().toCylindrical(r.woundStress.original);
   r.woundStressTheta = at.theta;
   r.woundStressZ = at.z;
+  r.tension = planning::woundTension(r.prediction, input.plan);
   r.stressSeconds = secondsSince(start);
 
   seg::reportProgress(progress, 0.98, "Model drawing");
@@ -161,6 +162,10 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
   planning::PlanRecipe recipe = input.recipe;
   recipe.elementSize = input.options.elementSize;
   recipe.cutLayers = input.options.cutLayers;
+  recipe.underminingWidth = input.options.underminingWidth;
+  recipe.model = input.options.model;
+  recipe.prediction = result.prediction.check;
+  recipe.closure = planning::closureRecordOf(result.prediction, result.woundStress, result.tension);
 
   // What the old prediction was, found before the new nodes share its names.
   std::vector<NodeId> old;

@@ -82,6 +82,8 @@ struct PlanRunResult
   /// (θ radians, z mm on the skin map's frame, before the operation).
   planning::WoundStress woundStress;
   double woundStressTheta = 0.0, woundStressZ = 0.0;
+  /// The tension across each wound line, per centimetre and per stitch.
+  planning::WoundTension tension;
   /// Why the skin is grey, when it is (no CT, or its shade failed); empty otherwise.
   std::string shadeNote;
   double shadeSeconds = 0.0, displaySeconds = 0.0, stressSeconds = 0.0;

@@ -8,6 +8,7 @@
 #include "modules/incision/IncisionLogic.h"
 #include "planning/PlanSimulation.h"
 #include "scene/PlanNode.h"
+#include "scene/SceneError.h"
 
 namespace caps::planning {
 namespace {
@@ -42,6 +43,11 @@ TEST(PlanNode, EveryProcedureRoundTripsThroughTheScene)
     EXPECT_EQ(back.centre().z, plan.centre().z) << t.id();
     EXPECT_EQ(back.borderOffsets(), plan.borderOffsets()) << t.id();
     EXPECT_EQ(back.writtenSutures(), plan.writtenSutures()) << t.id();
+    // Every shipped procedure names its wound lines, and they come back.
+    ASSERT_EQ(plan.woundLineNames().size(), plan.writtenSutures().size()) << t.id();
+    for (const std::string& name : plan.woundLineNames())
+      EXPECT_FALSE(name.empty()) << t.id();
+    EXPECT_EQ(back.woundLineNames(), plan.woundLineNames()) << t.id();
     EXPECT_GT(plan.underminingBand(), 0.0) << t.id();
     EXPECT_EQ(back.underminingBand(), plan.underminingBand()) << t.id();
     EXPECT_EQ(back.cutDepth(), plan.cutDepth()) << t.id();
@@ -94,6 +100,13 @@ TEST(PlanNode, AHandEditedNodeThatDoesNotFitIsRefused)
   IncisionLogic::writePlan(z, sutures);
   sutures.setSutures({{0, 1, 0, 9}}); // vertex 9 is not on the border
   EXPECT_THROW(IncisionLogic::readPlan(sutures), std::invalid_argument);
+  PlanNode names;
+  IncisionLogic::writePlan(z, names);
+  EXPECT_THROW(names.setWoundLineNames({"the first limb"}), SceneError); // three sutures
+  nlohmann::json edited = names.toJson();
+  edited["woundLineNames"] = {"the first limb", 2, "the new central limb"};
+  PlanNode read;
+  EXPECT_THROW(read.fromJson(edited), SceneError);
 }
 
 } // namespace caps::planning

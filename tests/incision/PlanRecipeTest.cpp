@@ -715,3 +715,63 @@ TEST(PlanRecipe, KeepsTheTissueModelAndThePredictionCheck)
 }
 
 } // namespace caps::planning
+
+namespace caps::planning {
+
+TEST(PlanRecipe, KeepsTheClosureAndItsTensionAndReadsFilesFromBeforeTheTension)
+{
+  PlanRecipe recipe;
+  recipe.ctSha256 = std::string(64, 'e');
+  recipe.operations.push_back(placeZ());
+  recipe.elementSize = 2.0;
+  SimulationOptions options;
+  options.elementSize = 2.5;
+  options.regionRadius = 15.0;
+  const IncisionPlan plan = applyRecipe(recipe, phantom().skin, library());
+  const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, plan, options);
+  const WoundTension tension = woundTension(p, plan, 5.0);
+  recipe.closure = closureRecordOf(p, woundSkinStress(p, 10.0), tension);
+  EXPECT_EQ(recipe.closure->force, p.closure.magnitudeSum);
+  EXPECT_EQ(recipe.closure->peakTensionPerCentimetre, tension.peakPerCentimetre);
+  EXPECT_EQ(recipe.closure->peakForcePerStitch, tension.peakPerStitch);
+  EXPECT_EQ(recipe.closure->stitchSpacing, 5.0);
+  EXPECT_EQ(recipe.closure->peakTensionLine, tension.peakLine);
+  // The mean over the wound is the lines' forces over their lengths.
+  double across = 0.0, length = 0.0;
+  for (const WoundLineTension& l : tension.lines)
+  {
+    across += l.acrossForce;
+    length += l.length;
+  }
+  EXPECT_NEAR(recipe.closure->tensionPerCentimetre, 10.0 * across / length, 1e-12);
+
+  const nlohmann::json written = recipeToJson(recipe);
+  const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
+  ASSERT_TRUE(read.closure);
+  EXPECT_EQ(read.closure->tensionPerCentimetre, recipe.closure->tensionPerCentimetre);
+  EXPECT_EQ(read.closure->peakTensionLine, recipe.closure->peakTensionLine);
+  EXPECT_EQ(recipeToJson(read), written);
+
+  nlohmann::json before = written; // a plan.json from before the tension was recorded
+  for (const char* key :
+       {"tensionPerCentimetre", "peakTensionPerCentimetre", "peakForcePerStitch", "stitchSpacing", "peakTensionLine"})
+    before["closure"].erase(key);
+  const PlanRecipe old = recipeFromJson(before);
+  ASSERT_TRUE(old.closure);
+  EXPECT_EQ(old.closure->force, recipe.closure->force);
+  EXPECT_EQ(old.closure->peakTensionPerCentimetre, 0.0);
+
+  nlohmann::json bad = written;
+  bad["closure"]["peakForcePerStitch"] = -1.0;
+  try
+  {
+    recipeFromJson(bad);
+    ADD_FAILURE() << "a negative stitch force was accepted";
+  }
+  catch (const RecipeError& e)
+  {
+    EXPECT_TRUE(contains(e.what(), "\"peakForcePerStitch\" must be a number of 0 or more")) << e.what();
+  }
+}
+
+} // namespace caps::planning

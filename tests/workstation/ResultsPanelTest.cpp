@@ -15,6 +15,8 @@
 #include <QListWidget>
 #include <QPushButton>
 #include <QSlider>
+#include <QSpinBox>
+#include <QTest>
 
 #include <vtkCellArray.h>
 #include <vtkDataArray.h>
@@ -293,6 +295,9 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
     if (recipe->elementSize > 0.0)
       options.elementSize = recipe->elementSize;
     options.cutLayers = recipe->cutLayers;
+    options.underminingWidth = recipe->underminingWidth;
+    options.model = recipe->model; // the demo's plans are predicted in large deformation
+    EXPECT_EQ(options.model, planning::TissueModel::LargeDeformation);
     const planning::PlanPrediction prediction = planning::simulatePlan(skin, bone, replayed, options);
     const planning::WoundStress wound = planning::woundSkinStress(prediction, 10.0);
     const std::string force = "Closure force: " + fixed(prediction.closure.magnitudeSum, 2) + " N";
@@ -374,10 +379,22 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
     EXPECT_FALSE(before->visible());
     ASSERT_NE(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 result"), nullptr);
     EXPECT_FALSE(test::nodeNamed<SurfaceNode>(scene, "Elliptical excision 2 skin after")->visible());
-    // Its closure force is computed in the background meanwhile.
-    EXPECT_TRUE(summary->text().contains("computing...")) << summary->text().toStdString();
-    ASSERT_TRUE(workstation.waitUntilIdle(600));
-    EXPECT_TRUE(summary->text().contains("Closure force:")) << summary->text().toStdString();
+    // Its closure force is the one recorded with its prediction: shown at
+    // once, with no second solve behind it.
+    const PlanNode* excision = test::nodeNamed<PlanNode>(scene, "Elliptical excision 2");
+    ASSERT_NE(excision, nullptr);
+    ASSERT_TRUE(excision->closure().is_object());
+    const std::string recorded = "Closure force: " + fixed(excision->closure().at("force").get<double>(), 2) + " N";
+    EXPECT_TRUE(summary->text().contains(QString::fromStdString(recorded)))
+      << recorded << " in " << summary->text().toStdString();
+    EXPECT_FALSE(summary->text().contains("computing...")) << summary->text().toStdString();
+    // And the tension across the wound, per centimetre of the closure line.
+    const std::string tension =
+      "Wound tension: " + fixed(excision->closure().at("tensionPerCentimetre").get<double>(), 2) + " N/cm";
+    EXPECT_TRUE(summary->text().contains(QString::fromStdString(tension)))
+      << tension << " in " << summary->text().toStdString();
+    EXPECT_TRUE(summary->text().contains("the closure line")) << summary->text().toStdString();
+    EXPECT_TRUE(workstation.waitUntilIdle(5));
   }
 
   // Another module: the plan's own surfaces come back, the panel's go.
@@ -513,6 +530,79 @@ TEST(ResultsPanel, TwoPlansSideBySide)
   workstation.settle(500);
   workstation.screenshot("results-" + otherName);
   EXPECT_TRUE(workstation.errors().empty()) << workstation.errors();
+}
+
+} // namespace
+} // namespace caps
+
+namespace caps {
+namespace {
+
+// A prediction whose solve fails is shown as failed, not as a face: the
+// demo's Z-plasty re-run in the Simulate module cut through every layer and
+// held to the bone (no undermining), which the large-deformation solve
+// cannot close; the Results panel then says NOT A PREDICTION with what to
+// try, keeps the face before the operation and the deformation controls off.
+TEST(ResultsPanel, AFailedSolveIsShownAsAFailureNotAsAFace)
+{
+  const std::filesystem::path bundle = test::reportDemoFolder() / "sample.caps";
+  test::Workstation workstation;
+  workstation.window().openPath(bundle);
+  ASSERT_TRUE(workstation.waitUntilIdle(300)) << workstation.errors();
+  Scene& scene = workstation.scene();
+
+  workstation.selectModule("simulate");
+  auto* planChoice = workstation.widget<QComboBox>("simulate.plan");
+  auto* cutDepth = workstation.widget<QSpinBox>("simulate.cutDepth");
+  auto* undermining = workstation.widget<QDoubleSpinBox>("simulate.undermining");
+  auto* elementSize = workstation.widget<QDoubleSpinBox>("simulate.elementSize");
+  auto* model = workstation.widget<QComboBox>("simulate.model");
+  ASSERT_TRUE(planChoice && cutDepth && undermining && elementSize && model);
+  planChoice->setCurrentIndex(planChoice->findText("Z-plasty 1"));
+  workstation.settle(200);
+  cutDepth->setValue(0);      // through every layer ...
+  undermining->setValue(0.0); // ... and held to the bone
+  elementSize->setValue(3.0);
+  model->setCurrentIndex(model->findData("large-deformation"));
+  QTest::mouseClick(workstation.widget<QPushButton>("simulate.run"), Qt::LeftButton);
+  ASSERT_TRUE(workstation.waitUntilIdle(600)) << workstation.errors();
+  const std::string simulated = workstation.widget<QLabel>("simulate.summary")->text().toStdString();
+  std::cout << "Simulate summary: " << simulated << "\n";
+  EXPECT_NE(simulated.find("NOT A PREDICTION"), std::string::npos) << simulated;
+  const PlanNode* node = test::nodeNamed<PlanNode>(scene, "Z-plasty 1");
+  ASSERT_NE(node, nullptr);
+  const std::optional<planning::PredictionCheck> check = ResultsLogic::recordedCheck(*node);
+  ASSERT_TRUE(check.has_value()) << "the run keeps its check with the plan";
+  EXPECT_FALSE(check->converged);
+  EXPECT_LT(check->closureFraction, 1.0);
+
+  workstation.selectModule("results");
+  auto* plan = workstation.widget<QComboBox>("results.plan");
+  auto* slider = workstation.widget<QSlider>("results.deformation");
+  auto* play = workstation.widget<QPushButton>("results.play");
+  auto* summary = workstation.widget<QLabel>("results.summary");
+  ASSERT_TRUE(plan && slider && summary);
+  plan->setCurrentIndex(plan->findText("Z-plasty 2"));
+  plan->setCurrentIndex(plan->findText("Z-plasty 1"));
+  workstation.settle(300);
+  const std::string text = summary->text().toStdString();
+  std::cout << "Results summary: " << text << "\n";
+  EXPECT_NE(text.find("NOT A PREDICTION"), std::string::npos) << text;
+  EXPECT_NE(text.find("The face is shown before the operation"), std::string::npos) << text;
+  EXPECT_NE(text.find("Try "), std::string::npos) << "what to try: " << text;
+  EXPECT_EQ(text.find("Closure force"), std::string::npos) << "no numbers of a state short of the closure: " << text;
+  EXPECT_EQ(slider->value(), 0);
+  EXPECT_FALSE(slider->isEnabled());
+  if (play)
+  {
+    EXPECT_FALSE(play->isEnabled());
+  }
+  SurfaceNode* result = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 result");
+  SurfaceNode* before = test::nodeNamed<SurfaceNode>(scene, "Z-plasty 1 skin before");
+  ASSERT_TRUE(result && before);
+  EXPECT_LT(largestGap(result->polyData(), before->polyData(), before->polyData(), 0.0), 1e-9)
+    << "the face shown is the one before the operation";
+  workstation.screenshot("results-failed-solve");
 }
 
 } // namespace
