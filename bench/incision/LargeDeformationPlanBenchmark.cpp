@@ -45,7 +45,7 @@ double secondsSince(std::chrono::steady_clock::time_point start)
 struct Arguments
 {
   bool ccx = true;
-  double thetaDeg = -44.0, zMm = -45.0, elementSize = 2.0; // the demo's Z-plasty
+  double thetaDeg = -40.0, zMm = -47.0, elementSize = 2.0; // the demo's Z-plasty
   int repeats = 1;
 };
 
