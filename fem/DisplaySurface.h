@@ -5,6 +5,7 @@
 
 #include "fem/BodyCoordinates.h"
 #include "fem/ContinuumMesher.h"
+#include "fem/FacePressure.h"
 #include "fem/HyperelasticMaterial.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/Mesh.h"
@@ -21,15 +22,6 @@ namespace caps::fem {
 /// Six values per column: strain or stress in Voigt order xx, yy, zz, xy,
 /// yz, zx (engineering shear strain), as everywhere in fem/.
 using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
-
-/// One face of one element, numbered as FacePressure numbers them (the
-/// CalculiX faces: 1..6 of a hexahedron, 1..5 of a native wedge; thesis
-/// Table 4.8 numbers the hexahedron's faces 1, 0, 4, 5, 2, 3 from 0).
-struct ElementFace
-{
-  int element = -1;
-  int face = 0;
-};
 
 /**
  * @brief The boundary faces of @a mesh whose nodes all belong to @a nodes:

@@ -41,6 +41,15 @@ struct FacePressure
   double pressure = 0.0; ///< MPa = N/mm^2, positive into the element
 };
 
+/// One face of one element, numbered as FacePressure numbers them (the
+/// CalculiX faces: 1..6 of a hexahedron, 1..5 of a native wedge; thesis
+/// Table 4.8 numbers the hexahedron's faces 1, 0, 4, 5, 2, 3 from 0).
+struct ElementFace
+{
+  int element = -1;
+  int face = 0;
+};
+
 /// Number of faces of an element of @a kind: 6 (Hex20) or 5 (Wedge15).
 int faceCount(ElementKind kind);
 

@@ -104,7 +104,8 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
 void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
                                  const ReferencePoints& reference, const ElementDisplacements& u,
                                  const HyperelasticMaterial& material, const IntegrationRule& rule, int elementIndex,
-                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check)
+                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check,
+                                 const Eigen::Matrix3d* initialStress)
 {
   // A native wedge uses slots 0..14 only; absent slots have zero gradients.
   const int slots = shape.kind() == ElementKind::Wedge15 ? kWedge15NodeCount : kHex20NodeCount;
@@ -142,7 +143,8 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
     const Eigen::Matrix3d c = f.transpose() * f;
     const MaterialResponse response = material.response(c, detF, parts);
     const double w = reference.weights[q];
-    const Eigen::Matrix3d stress = tensorOf(response.stress);
+    const Eigen::Matrix3d stress =
+      initialStress ? Eigen::Matrix3d(tensorOf(response.stress) + *initialStress) : tensorOf(response.stress);
     forces.noalias() += dh * (w * (f * stress)).transpose();
 
     addToCheck(check, c, detF, w * response.energy);
@@ -186,7 +188,8 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
 
 FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const ElementCoordinates& x,
                                             const ElementDisplacements& u, const HyperelasticMaterial& material,
-                                            const Eigen::Vector3d& rst, int elementIndex)
+                                            const Eigen::Vector3d& rst, int elementIndex,
+                                            const Eigen::Matrix3d* initialStress)
 {
   PointGeometry g;
   evaluateGeometry(shape, x, rst, elementIndex, g);
@@ -199,9 +202,11 @@ FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const Ele
     throwInverted(elementIndex, "det F", p.detF, rst, g.world);
   const Eigen::Matrix3d c = p.deformationGradient.transpose() * p.deformationGradient;
   const MaterialResponse response = material.response(c, p.detF);
-  p.secondPiolaKirchhoff = response.stress;
+  const Eigen::Matrix3d s =
+    initialStress ? Eigen::Matrix3d(tensorOf(response.stress) + *initialStress) : tensorOf(response.stress);
+  p.secondPiolaKirchhoff = voigtOf(s);
   const Eigen::Matrix3d f = p.deformationGradient;
-  p.cauchy = voigtOf(f * tensorOf(response.stress) * f.transpose() / p.detF);
+  p.cauchy = voigtOf(f * s * f.transpose() / p.detF);
   p.greenLagrange = voigtOf(0.5 * (c - Eigen::Matrix3d::Identity()));
   p.greenLagrange.tail<3>() *= 2.0;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c, Eigen::EigenvaluesOnly);

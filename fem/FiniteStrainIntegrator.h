@@ -127,16 +127,22 @@ void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordin
 
 /// The same on reference geometry computed before (referencePoints() of the
 /// same shape, coordinates and rule); @a shape and @a x name the point in
-/// the message of an inversion.
+/// the message of an inversion. @a initialStress, when given, is a second
+/// Piola-Kirchhoff stress the element carries in its reference state (skin
+/// pre-tension, InitialStress.h): S = S(C) + S0 at every point, in the
+/// forces and in the geometric (initial-stress) stiffness.
 void assembleElementFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
                                  const ReferencePoints& reference, const ElementDisplacements& u,
                                  const HyperelasticMaterial& material, const IntegrationRule& rule, int elementIndex,
-                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check);
+                                 ElementVector& fint, ElementMatrix* kt, FiniteStrainElementCheck& check,
+                                 const Eigen::Matrix3d* initialStress = nullptr);
 
 /// Kinematics and stresses at natural point @a rst of one element (for
-/// output); throws as assembleElementFiniteStrain().
+/// output), @a initialStress included in S and sigma when given; throws as
+/// assembleElementFiniteStrain().
 FiniteStrainPoint evaluateFiniteStrainPoint(const ElementShape& shape, const ElementCoordinates& x,
                                             const ElementDisplacements& u, const HyperelasticMaterial& material,
-                                            const Eigen::Vector3d& rst, int elementIndex);
+                                            const Eigen::Vector3d& rst, int elementIndex,
+                                            const Eigen::Matrix3d* initialStress = nullptr);
 
 } // namespace caps::fem

@@ -54,7 +54,8 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
                                       const ReferencePoints& reference, const ElementDisplacements& u,
                                       const HyperelasticMaterial& material, const IntegrationRule& rule,
                                       int elementIndex, ElementVector& fint, ElementMatrix* kt,
-                                      FiniteStrainElementCheck& check, MixedElementFields* fields)
+                                      FiniteStrainElementCheck& check, MixedElementFields* fields,
+                                      const Eigen::Matrix3d* initialStress)
 {
   if (!material.hasVolumetricSplit())
     throw std::invalid_argument("element " + std::to_string(elementIndex) +
@@ -126,7 +127,8 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
     const MaterialResponse dev = material.deviatoricResponse(c, p.detF, parts);
     const double pt = p.n.dot(pressure);
     const Vector6d jci = p.detF * voigtOf(ci); // dJ/dE
-    const Vector6d stress = dev.stress + pt * jci;
+    const Vector6d stress =
+      initialStress ? Vector6d(dev.stress + pt * jci + voigtOf(*initialStress)) : Vector6d(dev.stress + pt * jci);
     const double w = p.weight;
     forces.noalias() += dh * (w * (f * tensorOf(stress))).transpose();
 

@@ -65,11 +65,13 @@ void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCo
                                       MixedElementFields* fields = nullptr);
 
 /// The same on reference geometry computed before (referencePoints() of the
-/// same shape, coordinates and rule).
+/// same shape, coordinates and rule), with the element's @a initialStress
+/// (S0, InitialStress.h) added to S when given.
 void assembleElementMixedFiniteStrain(const ElementShape& shape, const ElementCoordinates& x,
                                       const ReferencePoints& reference, const ElementDisplacements& u,
                                       const HyperelasticMaterial& material, const IntegrationRule& rule,
                                       int elementIndex, ElementVector& fint, ElementMatrix* kt,
-                                      FiniteStrainElementCheck& check, MixedElementFields* fields = nullptr);
+                                      FiniteStrainElementCheck& check, MixedElementFields* fields = nullptr,
+                                      const Eigen::Matrix3d* initialStress = nullptr);
 
 } // namespace caps::fem

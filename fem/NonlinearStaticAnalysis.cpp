@@ -2,6 +2,7 @@
 
 #include "fem/FiniteStrainIntegrator.h"
 #include "fem/MixedFiniteStrainIntegrator.h"
+#include "fem/VoigtNotation.h"
 
 #include <algorithm>
 #include <chrono>
@@ -148,8 +149,14 @@ Eigen::VectorXd NonlinearStaticAnalysis::loadVector(const LoadCase& load) const
   return assembleLoadVector(mesh_, linear_, dead, options_);
 }
 
-DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k,
-                                                   Eigen::VectorXd* fint) const
+void NonlinearStaticAnalysis::setInitialStress(InitialStress s0)
+{
+  s0.validate(mesh_);
+  initialStress_ = std::move(s0);
+}
+
+DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, double initialStressScale,
+                                                   Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) const
 {
   if (u.size() != mesh_.dofCount())
     throw std::invalid_argument("the displacement vector has " + std::to_string(u.size()) + " entries for a model of " +
@@ -168,12 +175,16 @@ DeformationCheck NonlinearStaticAnalysis::evaluate(const Eigen::VectorXd& u, Eig
     const ElementCoordinates x = mesh_.elementCoordinates(e);
     const ReferencePoints reference = reference_.empty() ? referencePoints(shape, x, rule, int(e)) : ReferencePoints{};
     const ReferencePoints& ref = reference_.empty() ? reference : reference_[e];
+    Eigen::Matrix3d s0;
+    const bool stressed = !initialStress_.empty() && !initialStress_.elementStress[e].isZero(0.0);
+    if (stressed)
+      s0 = initialStressScale * tensorOf(initialStress_.elementStress[e]);
     if (options_.volumetric == VolumetricFormulation::MixedPressure)
       assembleElementMixedFiniteStrain(shape, x, ref, ue, materials_.at(el.region), rule, int(e), re ? *re : local, ke,
-                                       checks[e]);
+                                       checks[e], nullptr, stressed ? &s0 : nullptr);
     else
       assembleElementFiniteStrain(shape, x, ref, ue, materials_.at(el.region), rule, int(e), re ? *re : local, ke,
-                                  checks[e]);
+                                  checks[e], stressed ? &s0 : nullptr);
   };
   Eigen::VectorXd scratch;
   assembleElements(mesh_, options_.threads, kernel, k, fint ? fint : &scratch);
@@ -220,20 +231,20 @@ void NonlinearStaticAnalysis::cacheReferenceGeometry()
 Eigen::VectorXd NonlinearStaticAnalysis::internalForces(const Eigen::VectorXd& u) const
 {
   Eigen::VectorXd f;
-  evaluate(u, nullptr, &f);
+  evaluate(u, 1.0, nullptr, &f);
   return f;
 }
 
 Eigen::SparseMatrix<double> NonlinearStaticAnalysis::tangentStiffness(const Eigen::VectorXd& u) const
 {
   Eigen::SparseMatrix<double> k = stiffnessPattern(mesh_);
-  evaluate(u, &k, nullptr);
+  evaluate(u, 1.0, &k, nullptr);
   return k;
 }
 
 DeformationCheck NonlinearStaticAnalysis::deformationCheck(const Eigen::VectorXd& u) const
 {
-  return evaluate(u, nullptr, nullptr);
+  return evaluate(u, 1.0, nullptr, nullptr);
 }
 
 namespace {
@@ -248,14 +259,18 @@ namespace {
 class NewtonSolve
 {
 public:
+  /// Forces (and tangent) at a displacement and load fraction.
   using Evaluate =
-    std::function<DeformationCheck(const Eigen::VectorXd&, Eigen::SparseMatrix<double>*, Eigen::VectorXd*)>;
+    std::function<DeformationCheck(const Eigen::VectorXd&, double, Eigen::SparseMatrix<double>*, Eigen::VectorXd*)>;
 
+  /// @a initialStressForce: the internal force of the whole initial stress
+  /// in the reference state (empty: none), for the predictor.
   NewtonSolve(const Mesh& mesh, const HyperelasticTable& materials, const Constraints& constraints,
-              const std::function<Eigen::VectorXd()>& loadVector, Evaluate evaluate, const NewtonOptions& newton,
-              const NewtonMonitor& monitor)
-    : map_(resolveConstraints(mesh, constraints)), fext_(loadVector()), k_(stiffnessPattern(mesh)),
-      kbar_(map_.reduceMatrix(k_)), evaluate_(std::move(evaluate)), newton_(newton), monitor_(monitor),
+              const std::function<Eigen::VectorXd()>& loadVector, Evaluate evaluate, Eigen::VectorXd initialStressForce,
+              const NewtonOptions& newton, const NewtonMonitor& monitor)
+    : map_(resolveConstraints(mesh, constraints)), fext_(loadVector()),
+      initialStressForce_(std::move(initialStressForce)), k_(stiffnessPattern(mesh)), kbar_(map_.reduceMatrix(k_)),
+      evaluate_(std::move(evaluate)), newton_(newton), monitor_(monitor),
       fullNewton_(newton.tangentUpdate == TangentUpdate::EveryIteration),
       roundoffForce_(roundoffForceOf(mesh, materials))
   {
@@ -359,7 +374,8 @@ private:
   }
 
   /// Forces (and tangent) at u, timed.
-  void timedEvaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* tangent, Eigen::VectorXd* forces)
+  void timedEvaluate(const Eigen::VectorXd& u, double lambda, Eigen::SparseMatrix<double>* tangent,
+                     Eigen::VectorXd* forces)
   {
     const auto t0 = std::chrono::steady_clock::now();
     struct Tally
@@ -368,7 +384,7 @@ private:
       std::chrono::steady_clock::time_point start;
       ~Tally() { total += secondsSince(start); }
     } tally{result_.assembleSeconds, t0};
-    evaluate_(u, tangent, forces);
+    evaluate_(u, lambda, tangent, forces);
     ++result_.assemblies;
     (tangent ? reuse_.tangent : reuse_.forces).add(secondsSince(t0));
   }
@@ -450,11 +466,16 @@ private:
         return out;
       // b. The out-of-balance force; the first iteration is the predictor:
       //    the prescribed increment (lambda1 - lambda0) g enters as a load
-      //    through the (factored) tangent.
+      //    through the (factored) tangent; the initial stress's increment
+      //    by its force in the reference state (its balance is in f_ext:
+      //    without it the predictor would push by the balance alone).
       if (it == 1)
       {
         const Eigen::VectorXd dg = (lambda1 - lambda0) * map_.offset;
-        rbar = map_.reduceVector(lin_.fint - lambda1 * fext_ + k_.selfadjointView<Eigen::Upper>() * dg).col(0);
+        Eigen::VectorXd r = lin_.fint - lambda1 * fext_ + k_.selfadjointView<Eigen::Upper>() * dg;
+        if (initialStressForce_.size() == r.size())
+          r += (lambda1 - lambda0) * initialStressForce_;
+        rbar = map_.reduceVector(r).col(0);
       }
       const auto solveStart = std::chrono::steady_clock::now();
       const Eigen::VectorXd delta = -solver_.solve(rbar);
@@ -520,7 +541,7 @@ private:
     {
       try
       {
-        timedEvaluate(expand(trial, lambdaAtTrial), refresh ? &k_ : nullptr, &lin_.fint);
+        timedEvaluate(expand(trial, lambdaAtTrial), lambdaAtTrial, refresh ? &k_ : nullptr, &lin_.fint);
       }
       catch (const InvertedElementError& e)
       { // cannot happen at an accepted state, but be safe
@@ -557,7 +578,7 @@ private:
       const bool withTangent = fullNewton_ && ls == 0;
       try
       {
-        timedEvaluate(expand(step.next, lambda1), withTangent ? &k_ : nullptr, &step.fint);
+        timedEvaluate(expand(step.next, lambda1), lambda1, withTangent ? &k_ : nullptr, &step.fint);
       }
       catch (const InvertedElementError& e)
       {
@@ -616,7 +637,7 @@ private:
     NonlinearResult& result = result_;
     result.loadFraction = lambda;
     result.displacements = expand(ubar, lambda);
-    result.check = evaluate_(result.displacements, nullptr, nullptr);
+    result.check = evaluate_(result.displacements, lambda, nullptr, nullptr);
     if (result.status == NonlinearStatus::Cancelled)
       return std::move(result_);
     if (lambda >= 1.0 - 1e-12)
@@ -646,6 +667,7 @@ private:
 
   const ConstraintMap map_;
   const Eigen::VectorXd fext_;
+  const Eigen::VectorXd initialStressForce_;
   Eigen::SparseMatrix<double> k_;
   Eigen::SparseMatrix<double> kbar_;
   SparseCholeskySolver solver_;
@@ -676,10 +698,10 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
   NewtonSolve newtonSolve(
     mesh_, materials_, constraints_, [&] { return loadVector(load); },
-    [this](const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
-      return evaluate(u, k, fint);
+    [this](const Eigen::VectorXd& u, double lambda, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
+      return evaluate(u, lambda, k, fint);
     },
-    newton, monitor);
+    initialStress_.empty() ? Eigen::VectorXd() : initialStressForces(mesh_, initialStress_, options_), newton, monitor);
   return newtonSolve.run(control);
 }
 

@@ -4,6 +4,7 @@
 #include "fem/Constraints.h"
 #include "fem/FiniteStrainIntegrator.h"
 #include "fem/HyperelasticMaterial.h"
+#include "fem/InitialStress.h"
 #include "fem/Mesh.h"
 #include "fem/SparseCholeskySolver.h"
 #include "fem/StaticAnalysis.h"
@@ -151,10 +152,23 @@ public:
   NonlinearResult solve(const LoadCase& load, const IncrementControl& control = {}, const NewtonOptions& newton = {},
                         const NewtonMonitor& monitor = {});
 
+  /**
+   * @brief A stress the tissue carries in its reference state (skin
+   *        pre-tension; InitialStress.h), ramped with the load fraction
+   *        like every load: at fraction lambda the elements carry
+   *        S(C) + lambda S0. The load that balances it on the intact tissue
+   *        (initialStressBalance()) is the caller's to add to the load case,
+   *        as a dead load it is ramped with S0. Empty: none (the default).
+   *        Throws std::invalid_argument as InitialStress::validate().
+   */
+  void setInitialStress(InitialStress s0);
+  const InitialStress& initialStress() const { return initialStress_; }
+
   /// Full load vector (3N) of @a load at fraction 1.
   Eigen::VectorXd loadVector(const LoadCase& load) const;
-  /// Internal forces f_int(u) (3N; at constrained DOFs the reactions).
-  /// Throws InvertedElementError where u turns an element inside out.
+  /// Internal forces f_int(u) (3N; at constrained DOFs the reactions), the
+  /// whole initial stress included. Throws InvertedElementError where u
+  /// turns an element inside out.
   Eigen::VectorXd internalForces(const Eigen::VectorXd& u) const;
   /// Upper triangle of the tangent K_t(u) (3N x 3N).
   Eigen::SparseMatrix<double> tangentStiffness(const Eigen::VectorXd& u) const;
@@ -167,8 +181,10 @@ public:
   const MaterialTable& smallStrainMaterials() const { return linear_; }
 
 private:
-  /// f_int and (if @a k) K_t at @a u into @a fint / @a k; returns the checks.
-  DeformationCheck evaluate(const Eigen::VectorXd& u, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) const;
+  /// f_int and (if @a k) K_t at @a u, with @a initialStressScale S0, into
+  /// @a fint / @a k; returns the checks.
+  DeformationCheck evaluate(const Eigen::VectorXd& u, double initialStressScale, Eigen::SparseMatrix<double>* k,
+                            Eigen::VectorXd* fint) const;
   void validate(const LoadCase& load) const;
   /// Keeps each element's reference geometry (ReferencePoints) when it fits
   /// kReferenceCacheBytes; evaluations compute it on the fly otherwise.
@@ -180,6 +196,7 @@ private:
   Constraints constraints_;
   AssemblyOptions options_;
   std::vector<ReferencePoints> reference_; ///< per element, or empty
+  InitialStress initialStress_;
 };
 
 } // namespace caps::fem
