@@ -178,6 +178,27 @@ std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<
   return band;
 }
 
+namespace {
+
+/// (u - u_beneath) . n = 0 for @a sliding, the dependent DOF the normal's
+/// largest component.
+LinearConstraint slidingEquation(const SlidingNode& sliding)
+{
+  Eigen::Index dependent = 0;
+  sliding.normal.cwiseAbs().maxCoeff(&dependent);
+  LinearConstraint onThePlane;
+  onThePlane.terms.push_back({sliding.node, int(dependent), sliding.normal[dependent]});
+  for (int d = 0; d < 3; ++d)
+    if (d != int(dependent) && sliding.normal[d] != 0.0)
+      onThePlane.terms.push_back({sliding.node, d, sliding.normal[d]});
+  for (int d = 0; sliding.beneath >= 0 && d < 3; ++d)
+    if (sliding.normal[d] != 0.0)
+      onThePlane.terms.push_back({sliding.beneath, d, -sliding.normal[d]});
+  return onThePlane;
+}
+
+} // namespace
+
 Constraints ContinuumMesh::constraints() const
 {
   Constraints c;
@@ -186,19 +207,44 @@ Constraints ContinuumMesh::constraints() const
   for (const Suture& s : sutures)
     c.suture(s.node, s.target);
   for (const SlidingNode& sliding : slidingNodes)
+    c.equation(slidingEquation(sliding));
+  return c;
+}
+
+Constraints ContinuumMesh::openWoundConstraints() const
+{
+  Constraints c;
+  for (int n : fixedNodes)
+    c.fixNode(n);
+  std::map<int, int> sewnOnto; // sutured node -> its target
+  for (const Suture& s : sutures)
+    sewnOnto[s.node] = s.target;
+  std::map<int, const SlidingNode*> slides;
+  for (const SlidingNode& sliding : slidingNodes)
   {
-    // (u - u_beneath) . n = 0, the dependent DOF the normal's largest component.
-    Eigen::Index dependent = 0;
-    sliding.normal.cwiseAbs().maxCoeff(&dependent);
-    LinearConstraint onThePlane;
-    onThePlane.terms.push_back({sliding.node, int(dependent), sliding.normal[dependent]});
-    for (int d = 0; d < 3; ++d)
-      if (d != int(dependent) && sliding.normal[d] != 0.0)
-        onThePlane.terms.push_back({sliding.node, d, sliding.normal[d]});
-    for (int d = 0; sliding.beneath >= 0 && d < 3; ++d)
-      if (sliding.normal[d] != 0.0)
-        onThePlane.terms.push_back({sliding.beneath, d, -sliding.normal[d]});
-    c.equation(std::move(onThePlane));
+    slides[sliding.node] = &sliding;
+    c.equation(slidingEquation(sliding));
+  }
+  for (const auto& [node, target] : sewnOnto)
+  {
+    if (!std::binary_search(boneNodes.begin(), boneNodes.end(), node) &&
+        !std::binary_search(underminedNodes.begin(), underminedNodes.end(), node))
+      continue; // tissue above the deep plane: free once the suture is gone
+    if (!std::binary_search(underminedNodes.begin(), underminedNodes.end(), node))
+    {
+      c.fixNode(node); // the bone holds it
+      continue;
+    }
+    // Undermined: slides as its group's root does (constraints()), if it does.
+    int root = target;
+    for (int hops = 0; hops < int(sewnOnto.size()) && sewnOnto.count(root); ++hops)
+      root = sewnOnto.at(root);
+    if (const auto it = slides.find(root); it != slides.end())
+    {
+      SlidingNode own = *it->second;
+      own.node = node;
+      c.equation(slidingEquation(own));
+    }
   }
   return c;
 }

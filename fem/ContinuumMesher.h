@@ -185,6 +185,12 @@ struct ContinuumMesh
   /// u . n = 0 each, its dependent DOF the normal's largest component) as
   /// constraints for the analyses.
   Constraints constraints() const;
+  /// The wound as cut, before any suture (how far it gapes under the skin's
+  /// pre-tension): what holds the tissue without the sutures. Every bone
+  /// node the bone holds is fixed, the sutured ones too unless undermined;
+  /// an undermined sutured node slides on the plane its group slides on in
+  /// constraints(), on its own; the rim as in constraints().
+  Constraints openWoundConstraints() const;
   /// Index of the surface edge joining vertices @a a and @a b, or -1.
   int edgeIndex(int a, int b) const;
 };
