@@ -237,6 +237,18 @@ vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, dou
   return surface;
 }
 
+vtkSmartPointer<vtkPolyData> gapingSkinPolyData(const PlanDisplay& display, const PlanPrediction& prediction)
+{
+  if (!prediction.gape || !prediction.gape->problem.empty())
+    return nullptr;
+  PlanDisplay gaping = display;
+  if (prediction.check.model == TissueModel::LargeDeformation && !prediction.hyperelasticMaterials.empty())
+    gaping.surface.setSolution(prediction.gape->displacements, prediction.hyperelasticMaterials);
+  else
+    gaping.surface.setSolution(prediction.gape->displacements, prediction.materials);
+  return planDisplayPolyData(gaping, 1.0);
+}
+
 void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& before,
                       const std::filesystem::path& after)
 {

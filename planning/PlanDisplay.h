@@ -153,6 +153,12 @@ PlanDisplay buildPlanDisplay(const PlanPrediction& prediction, const seg::RangeM
 /// the scale.
 vtkSmartPointer<vtkPolyData> planDisplayPolyData(const PlanDisplay& display, double scale);
 
+/// The wound as cut, gaping under the skin's pre-tension before it is
+/// sutured (PlanPrediction::gape): @a display's surface under the gape's
+/// displacements, the middle step of intact → gaping → closed. Null when
+/// the prediction has no gape or its solve did not converge.
+vtkSmartPointer<vtkPolyData> gapingSkinPolyData(const PlanDisplay& display, const PlanPrediction& prediction);
+
 /// Writes the surface before (scale 0) and after (scale 1) the operation as
 /// VTK XML PolyData. @throws std::runtime_error naming a file that cannot be written.
 void writePlanDisplay(const PlanDisplay& display, const std::filesystem::path& before,

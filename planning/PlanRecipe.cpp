@@ -503,6 +503,27 @@ ClosureRecord closureRecordFromJson(const json& j)
 
 } // namespace
 
+namespace {
+
+/// {"alongLines": N/mm, "acrossLines": N/mm}, each in [0, 1].
+std::array<double, 2> preTensionFromJson(const json& j)
+{
+  std::array<double, 2> t{};
+  const char* names[2] = {"alongLines", "acrossLines"};
+  for (int k = 0; k < 2; ++k)
+  {
+    const auto it = j.is_object() ? j.find(names[k]) : j.end();
+    if (it == j.end() || !it->is_number() || !(it->get<double>() >= 0.0) || !(it->get<double>() <= 1.0))
+      throw RecipeError(0, "\"preTension\" in \"simulation\" must be {\"alongLines\": N/mm, \"acrossLines\": N/mm}, "
+                           "each from 0 to 1, not " +
+                             j.dump());
+    t[std::size_t(k)] = it->get<double>();
+  }
+  return t;
+}
+
+} // namespace
+
 json recipeToJson(const PlanRecipe& recipe)
 {
   json operations = json::array();
@@ -521,6 +542,8 @@ json recipeToJson(const PlanRecipe& recipe)
     j["simulation"]["model"] = tissueModelId(recipe.model);
   if (recipe.elementSize > 0.0 && recipe.underminingWidth)
     j["simulation"]["underminingWidth"] = *recipe.underminingWidth;
+  if (recipe.elementSize > 0.0 && recipe.preTension)
+    j["simulation"]["preTension"] = {{"alongLines", (*recipe.preTension)[0]}, {"acrossLines", (*recipe.preTension)[1]}};
   if (recipe.prediction)
     j["prediction"] = predictionCheckToJson(*recipe.prediction);
   if (recipe.closure)
@@ -595,6 +618,8 @@ PlanRecipe recipeFromJson(const json& j)
             width->dump());
       recipe.underminingWidth = width->get<double>();
     }
+    if (const auto tension = simulation->find("preTension"); tension != simulation->end())
+      recipe.preTension = preTensionFromJson(*tension);
   }
   if (const auto prediction = j.find("prediction"); prediction != j.end() && !prediction->is_null())
     recipe.prediction = predictionCheckFromJson(*prediction);

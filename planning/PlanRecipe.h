@@ -172,6 +172,10 @@ struct PlanRecipe
   /// underminingWidth); unset: the procedure's own, which the replay's
   /// placement gives again.
   std::optional<double> underminingWidth;
+  /// The skin's pre-tension the prediction carried (SimulationOptions::
+  /// preTension): N/mm along and across the relaxed skin tension lines;
+  /// unset: none, the slack skin of the thesis (files from before).
+  std::optional<std::array<double, 2>> preTension;
   /// How the prediction made from these operations checked out, written
   /// after the solve so anyone can read it from the file; a replay makes
   /// and checks its own.
@@ -240,7 +244,8 @@ inline constexpr int recipeFormatVersion = 1;
 ///     { "operation": "set-parameter", "name": "limb_angle", "value": 0.7853981633974483 },
 ///     { "operation": "undermine", "region": [[-0.52, 0.01], [-0.46, 0.01], [-0.46, 0.06], [-0.52, 0.06]] },
 ///     { "operation": "clear-undermining" } ],
-///   "simulation": { "elementSize": 2.5, "cutLayers": 1, "model": "large-deformation", "underminingWidth": 8 },
+///   "simulation": { "elementSize": 2.5, "cutLayers": 1, "model": "large-deformation", "underminingWidth": 8,
+///                   "preTension": { "alongLines": 0.01, "acrossLines": 0.005 } },
 ///   "prediction": { "model": "large-deformation", "converged": true, "closureFraction": 1.0,
 ///                   "increments": 6, "iterations": 31, "minDetF": 0.42, "maxStretch": 1.61,
 ///                   "invertedElements": 0, "admissible": true, "problem": "" } }
@@ -249,7 +254,8 @@ inline constexpr int recipeFormatVersion = 1;
 /// procedure's own depth is used (files from before procedures stated one
 /// were cut through every layer: they replay at the procedure's depth now);
 /// "model" when it is "linear" (tissueModelId()); "underminingWidth" when
-/// the procedure's own band is used.
+/// the procedure's own band is used; "preTension" (N/mm) when the skin
+/// carried none.
 /// "prediction" is the check of the prediction made (PredictionCheck),
 /// left out until there is one. "undermine" and
 /// "clear-undermining" came later within format 1: files without them read

@@ -9,8 +9,11 @@
 #include <stdexcept>
 
 #include "fem/FiniteStrainStress.h"
+#include "fem/InitialStress.h"
 #include "fem/StaticAnalysis.h"
+#include "planning/SkinTensionLines.h"
 #include "planning/Undermining.h"
+#include "segmentation/LandmarkPlacement.h"
 
 namespace caps::planning {
 namespace {
@@ -61,6 +64,8 @@ void checkOptions(const SimulationOptions& o)
     bad("the depth used where there is no bone must be positive");
   if (o.threads < 1)
     bad("at least one thread");
+  if (o.preTension)
+    o.preTension->validate();
   if (o.underminingWidth && (!(*o.underminingWidth >= 0.0) || !std::isfinite(*o.underminingWidth)))
     bad("the undermining width must be 0 (none) or a positive number of mm");
   if (o.cutLayers && (*o.cutLayers < 0 || *o.cutLayers > o.layerCount))
@@ -306,10 +311,17 @@ public:
     if (meshOnly)
       return std::move(out_);
     layerMaterials();
+    preStressTheSkin();
     if (options_.model == TissueModel::LargeDeformation)
+    {
+      gapeInLargeDeformation();
       solveInLargeDeformation();
+    }
     else
+    {
+      gapeLinear();
       solveLinear();
+    }
     checkTheDeformation();
     phase(0.9, "Closure forces");
     closureForces();
@@ -469,18 +481,161 @@ private:
     return out_.materials;
   }
 
+  /// 4'. The skin's pre-tension (SkinPreTension), if any: its stress in the
+  /// skin layer, the faces the cut opened in it, and the loads: on the
+  /// linear model the traction the cut released; on the large-deformation
+  /// one the load that holds the intact face in balance with the stress
+  /// everywhere but across the cut (fem/InitialStress.h).
+  void preStressTheSkin()
+  {
+    if (!options_.preTension)
+      return;
+    SkinPreTension tension = *options_.preTension;
+    std::optional<SkinTensionLines> lines;
+    std::string why;
+    if (tension.followsLines && !tension.lineDirection && tension.alongLines != tension.acrossLines)
+    {
+      try // the lines of this face, from its landmarks
+      {
+        const seg::LandmarkPlacement found = seg::placeLandmarks(skin_, bone_);
+        lines.emplace(skin_, FaceLayout::fromLandmarks(found.landmarks, skin_));
+        tension.lineDirection = [&lines](const SkinPoint& p) { return lines->directionAt(p.theta, p.z); };
+      }
+      catch (const std::exception& e)
+      {
+        why = e.what();
+      }
+    }
+    out_.preTension = tension.describe(why);
+    initialStress_ = skinPreStress(out_.continuum, out_.surface.mesh, chart_, tension);
+    const std::vector<fem::ElementFace> cut = woundFaces(out_.continuum, out_.surface.mesh);
+    const Eigen::VectorXd cutTraction = fem::cutFaceTraction(out_.continuum.mesh, initialStress_, cut);
+    releasedTraction_ = -cutTraction;
+    preStressBalance_ = fem::initialStressForces(out_.continuum.mesh, initialStress_, assemblyOptions()) - cutTraction;
+  }
+
+  fem::AssemblyOptions assemblyOptions() const
+  {
+    fem::AssemblyOptions assembly;
+    assembly.threads = options_.threads;
+    return assembly;
+  }
+
+  /// The nodal loads of a full load vector, for a fem::LoadCase.
+  static fem::LoadCase nodalLoad(const Eigen::VectorXd& f)
+  {
+    fem::LoadCase load;
+    for (Eigen::Index n = 0; n < f.size() / 3; ++n)
+      if (!f.segment<3>(3 * n).isZero(0.0))
+        load.nodalForces.emplace_back(int(n), f.segment<3>(3 * n));
+    return load;
+  }
+
   /// 5. The linear model (the preview): assembled, factored, solved once.
   void solveLinear()
   {
     phase(0.2, "Assembly and factorisation (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
-    fem::AssemblyOptions assembly;
-    assembly.threads = options_.threads;
-    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, out_.materials, out_.continuum.constraints(), assembly);
+    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, out_.materials, out_.continuum.constraints(),
+                                       assemblyOptions());
     factor(analysis);
     phase(0.8, "Solve");
     solve(analysis);
     out_.check.model = TissueModel::LinearElastic;
     out_.check.increments = out_.check.iterations = 1;
+  }
+
+  /// 4''. The wound as cut, under the pre-tension, before any suture: the
+  /// linear model's gape (the released traction on the open wound).
+  void gapeLinear()
+  {
+    if (!options_.preTension)
+      return;
+    phase(0.15, "The wound gaping under the skin's tension");
+    fem::LinearStaticAnalysis analysis(out_.continuum.mesh, out_.materials, out_.continuum.openWoundConstraints(),
+                                       assemblyOptions());
+    if (analysis.prepare() != fem::SolverStatus::Success)
+    {
+      recordTheGape(Eigen::VectorXd::Zero(out_.continuum.mesh.dofCount()),
+                    "the open wound cannot be solved: " + analysis.message());
+      return;
+    }
+    const Eigen::VectorXd u = analysis.solve(Eigen::MatrixXd(releasedTraction_)).col(0);
+    const fem::DeformationCheck body =
+      fem::checkDeformation(out_.continuum.mesh, u, fem::AssemblyOptions{}.gaussPointsPerDirection);
+    recordTheGape(u, body.minDetF > kAdmissibleDetF ? std::string()
+                                                    : "the linear gape turns elements inside out: see the "
+                                                      "large-deformation prediction");
+  }
+
+  /// 4''. The same in large deformation: the skin's stress ramped up with
+  /// its balance on the open wound.
+  void gapeInLargeDeformation()
+  {
+    if (!options_.preTension)
+      return;
+    phase(0.1, "The wound gaping under the skin's tension");
+    fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, hyperelasticMaterials(),
+                                          out_.continuum.openWoundConstraints(), assemblyOptions());
+    analysis.setInitialStress(initialStress_);
+    const fem::NonlinearResult result =
+      analysis.solve(nodalLoad(preStressBalance_), options_.increments, {}, progressMonitor(0.1, 0.1, "Gaping"));
+    if (result.status == fem::NonlinearStatus::Cancelled)
+      throw seg::Cancelled();
+    std::string problem;
+    if (result.status != fem::NonlinearStatus::Converged)
+      problem = result.message + ". The gape shown is not a prediction.";
+    recordTheGape(result.displacements, problem);
+  }
+
+  void recordTheGape(const Eigen::VectorXd& u, const std::string& problem)
+  {
+    WoundGape gape;
+    gape.displacements = u;
+    gape.problem = problem;
+    const fem::Mesh& mesh = out_.continuum.mesh;
+    auto at = [&](int node) -> Eigen::Vector3d { return mesh.nodes.col(node) + u.segment<3>(3 * Eigen::Index(node)); };
+    std::vector<char> skinNode(std::size_t(mesh.nodeCount()), 0);
+    for (const auto& column : out_.continuum.vertexColumns)
+      skinNode[std::size_t(column.front())] = 1;
+    for (const auto& column : out_.continuum.edgeColumns)
+      if (column.front() >= 0)
+        skinNode[std::size_t(column.front())] = 1;
+    double opening = 0.0;
+    int skinSutures = 0;
+    for (const fem::Suture& s : out_.continuum.sutures)
+    {
+      const double cut = (mesh.nodes.col(s.node) - mesh.nodes.col(s.target)).norm();
+      const double gaping = (at(s.node) - at(s.target)).norm();
+      gape.widestAsCut = std::max(gape.widestAsCut, cut);
+      gape.widestGaping = std::max(gape.widestGaping, gaping);
+      if (skinNode[std::size_t(s.node)])
+      {
+        opening += gaping - cut;
+        ++skinSutures;
+      }
+    }
+    gape.meanOpening = skinSutures ? opening / skinSutures : 0.0;
+    for (const auto& column : out_.continuum.vertexColumns)
+      gape.skin.push_back(at(column.front()));
+    out_.gape = std::move(gape);
+  }
+
+  const fem::HyperelasticTable& hyperelasticMaterials()
+  {
+    for (const auto& [layer, m] : out_.materials)
+      out_.hyperelasticMaterials[layer] = fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::NeoHookean, m);
+    return out_.hyperelasticMaterials;
+  }
+
+  /// Progress of a large-deformation solve between @a from and @a from + @a span.
+  fem::NewtonMonitor progressMonitor(double from, double span, const std::string& what) const
+  {
+    return [this, from, span, what](const fem::NewtonIteration& it) {
+      return !options_.progress ||
+             options_.progress(from + span * it.loadFraction,
+                               what + ": " + std::to_string(int(std::lround(100 * it.loadFraction))) +
+                                 " %, increment " + std::to_string(it.increment));
+    };
   }
 
   /// 5'. The large-deformation model (the final prediction): neo-Hookean
@@ -490,20 +645,17 @@ private:
   void solveInLargeDeformation()
   {
     phase(0.2, "Large-deformation closure (" + std::to_string(out_.continuum.mesh.dofCount()) + " DOF)");
-    for (const auto& [layer, m] : out_.materials)
-      out_.hyperelasticMaterials[layer] = fem::HyperelasticMaterial::fromLinear(fem::HyperelasticLaw::NeoHookean, m);
-    fem::AssemblyOptions assembly;
-    assembly.threads = options_.threads;
     const auto start = std::chrono::steady_clock::now();
-    fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, out_.hyperelasticMaterials, out_.continuum.constraints(),
-                                          assembly);
-    const fem::NewtonMonitor monitor = [this](const fem::NewtonIteration& it) {
-      return !options_.progress ||
-             options_.progress(0.2 + 0.65 * it.loadFraction,
-                               "Large-deformation closure: " + std::to_string(int(std::lround(100 * it.loadFraction))) +
-                                 " % of the closure, increment " + std::to_string(it.increment));
-    };
-    const fem::NonlinearResult result = analysis.solve(fem::LoadCase{}, options_.increments, {}, monitor);
+    fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, hyperelasticMaterials(), out_.continuum.constraints(),
+                                          assemblyOptions());
+    fem::LoadCase load;
+    if (options_.preTension)
+    {
+      analysis.setInitialStress(initialStress_);
+      load = nodalLoad(preStressBalance_);
+    }
+    const fem::NonlinearResult result =
+      analysis.solve(load, options_.increments, {}, progressMonitor(0.2, 0.65, "Large-deformation closure"));
     if (result.status == fem::NonlinearStatus::Cancelled)
       throw seg::Cancelled();
     out_.displacements = result.displacements;
@@ -512,7 +664,10 @@ private:
     out_.times.solve = std::max(0.0, secondsSince(start) - result.assembleSeconds - result.factorSeconds);
     out_.dofCount = out_.continuum.mesh.dofCount();
     out_.reducedDofCount = fem::resolveConstraints(out_.continuum.mesh, out_.continuum.constraints()).reducedCount();
+    // The reactions: what the sutures and supports add to the loads.
     out_.nodalForces = analysis.internalForces(out_.displacements);
+    if (options_.preTension)
+      out_.nodalForces -= preStressBalance_;
     recordTheSolve(result);
   }
 
@@ -566,7 +721,9 @@ private:
   /// The displacements and the nodal forces K U.
   void solve(fem::LinearStaticAnalysis& analysis)
   {
-    out_.displacements = analysis.solve(fem::LoadCase{});
+    out_.displacements = options_.preTension
+                           ? Eigen::VectorXd(analysis.solve(Eigen::MatrixXd(releasedTraction_)).col(0))
+                           : analysis.solve(fem::LoadCase{});
     out_.times.assemble = analysis.times().assemble + analysis.times().constrain;
     out_.times.factor = std::max(0.0, prepareWall_ - out_.times.assemble);
     out_.times.solve = analysis.times().solve;
@@ -574,7 +731,9 @@ private:
     out_.reducedDofCount = analysis.constraintMap().reducedCount();
     if (!out_.displacements.allFinite())
       throw std::runtime_error("the solve of the plan gave non-finite displacements");
-    out_.nodalForces = analysis.internalForces(out_.displacements);
+    out_.nodalForces = analysis.internalForces(out_.displacements); // K U less the loads: the reactions
+    if (options_.preTension)
+      out_.nodalForces -= releasedTraction_;
   }
 
   /// 7. Closure forces: no load acts on the model, so K U at a sutured node
@@ -725,6 +884,9 @@ private:
   const SkinChart chart_;
   RefinedHole refined_;
   double prepareWall_ = 0.0;
+  fem::InitialStress initialStress_; ///< the skin's pre-stress (preStressTheSkin())
+  Eigen::VectorXd releasedTraction_; ///< the traction the cut released (3N)
+  Eigen::VectorXd preStressBalance_; ///< what holds the intact face in balance (3N)
   PlanPrediction out_;
 };
 

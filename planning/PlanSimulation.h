@@ -22,6 +22,7 @@
 #include "planning/IncisionPlan.h"
 #include "planning/SkinChart.h"
 #include "planning/SkinMeasurements.h"
+#include "planning/SkinPreTension.h"
 #include "segmentation/Progress.h"
 #include "segmentation/RangeMap.h"
 
@@ -166,6 +167,10 @@ struct SimulationOptions : TissueDepthOptions
   /// well. Unset: the depth the plan's procedure states
   /// (IncisionPlan::cutDepth(); cutLayersFor()).
   std::optional<int> cutLayers;
+  /// The tension the living skin carries before the cut (SkinPreTension):
+  /// the wound gapes under it (PlanPrediction::gape) and the sutures close
+  /// it against it. Unset: the skin is slack, as in the thesis.
+  std::optional<SkinPreTension> preTension;
   /// Threads of the assembly.
   int threads = 1;
   /// Called by simulatePlan() between its phases (surface mesh, continuum
@@ -252,6 +257,27 @@ struct ClosureForces
   Eigen::Vector3d supportReaction = Eigen::Vector3d::Zero();
 };
 
+/// The wound as cut, before any suture, opened by the skin's pre-tension
+/// (issue 21 item 4): the middle step of intact, incised and gaping, closed.
+struct WoundGape
+{
+  /// 3N, with the same model as the prediction, held as
+  /// ContinuumMesh::openWoundConstraints() says.
+  Eigen::VectorXd displacements;
+  /// World position of each skin vertex (DisplacedSkin order) gaping.
+  std::vector<Eigen::Vector3d> skin;
+  /// The widest the wound is across (mm): the largest distance between the
+  /// two sides a suture will join, as cut and gaping.
+  double widestAsCut = 0.0;
+  double widestGaping = 0.0;
+  /// The same on the skin surface only, along the wound: the mean over the
+  /// sutured skin nodes of how far the sides move apart (mm).
+  double meanOpening = 0.0;
+  /// Empty when the gaping solve converged and is a body; otherwise why not
+  /// (the gape is then not shown as one).
+  std::string problem;
+};
+
 /// Everything simulatePlan() computed.
 struct PlanPrediction
 {
@@ -294,6 +320,11 @@ struct PlanPrediction
   /// The large-deformation materials (empty for the linear model).
   fem::HyperelasticTable hyperelasticMaterials;
   PredictionCheck check;
+  /// The pre-tension the model carries (SkinPreTension::describe()), or
+  /// empty: none (the thesis's slack skin).
+  std::string preTension;
+  /// How the wound gapes before it is sutured; set with a pre-tension.
+  std::optional<WoundGape> gape;
 
   /// Displaced world position of FE node i.
   Eigen::Vector3d displacedNode(int i) const;
