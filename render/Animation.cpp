@@ -184,6 +184,24 @@ void renderMorphFrames(vtkPolyData* from, vtkPolyData* to, const Figure& base, F
   renderSurfaces([&](int k) { return morphFrame(from, to, frames, k); }, total, base, sequence, step);
 }
 
+void renderStagedMorphFrames(const std::vector<vtkPolyData*>& stages, const Figure& base, FrameSequence& sequence,
+                             int frames, const std::function<void(const char*)>& step)
+{
+  if (stages.size() < 2 || frames < 2)
+    throw std::invalid_argument("a staged animation needs at least 2 stages and 2 frames");
+  for (vtkPolyData* stage : stages)
+    if (!stage || stage->GetNumberOfPoints() != stages.front()->GetNumberOfPoints())
+      throw std::invalid_argument("the stages of an animation must be surfaces with the same points");
+  const int transitions = int(stages.size()) - 1;
+  renderSurfaces(
+    [&](int k) {
+      const double t = double(k) / (frames - 1) * transitions; // 0 .. transitions
+      const int from = std::min(int(std::floor(t)), transitions - 1);
+      return blendSurfaces(stages[std::size_t(from)], stages[std::size_t(from) + 1], t - from);
+    },
+    frames, base, sequence, step);
+}
+
 void renderTurntableFrames(const Figure& figure, vtkPolyData* framed, const seg::CylindricalFrame& frame, int frames,
                            FrameSequence& sequence, const std::function<void(const char*)>& step)
 {

@@ -92,6 +92,14 @@ std::pair<int, int> animationFrameSize(const AnimationOptions& options);
 void renderMorphFrames(vtkPolyData* from, vtkPolyData* to, const Figure& base, FrameSequence& sequence, int frames,
                        bool andBack, const std::function<void(const char*)>& step);
 
+/// The same through several stages (intact → incised and gaping → closed):
+/// @a frames frames from the first of @a stages to the last, each stage
+/// reached at an even share of them, blended linearly in between. Throws
+/// std::invalid_argument for fewer than 2 stages or frames, or stages with
+/// other point counts than the first.
+void renderStagedMorphFrames(const std::vector<vtkPolyData*>& stages, const Figure& base, FrameSequence& sequence,
+                             int frames, const std::function<void(const char*)>& step);
+
 /// Renders @a figure (its surfaces and lines) @a frames times into
 /// @a sequence.folder, the camera going once round @a frame's axis from the
 /// front (θ = −π/2), at the same distance in every frame: it frames a

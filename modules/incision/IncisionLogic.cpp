@@ -173,6 +173,7 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
     gridOf(prediction.continuum.mesh, {{"displacement_mm", Eigen::MatrixXd(u)}});
   vtkSmartPointer<vtkPolyData> before = planning::planDisplayPolyData(display, 0.0);
   vtkSmartPointer<vtkPolyData> after = planning::planDisplayPolyData(display, 1.0);
+  vtkSmartPointer<vtkPolyData> gaping = planning::gapingSkinPolyData(display, prediction);
 
   PredictionNodes ids;
   auto* planNode = scene().add<PlanNode>();
@@ -205,6 +206,8 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
   };
   ids.skinBefore = surface(before, "before", false);
   ids.skinAfter = surface(after, "after", true);
+  if (gaping)
+    ids.skinGaping = surface(gaping, "gaping", false);
   return ids;
 }
 
@@ -215,6 +218,7 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
   if (!s.is_object() || s.empty())
   { // not predicted yet: the prediction is the large-deformation one
     options.model = planning::TissueModel::LargeDeformation;
+    options.preTension = planning::SkinPreTension{}; // living skin is tense
     return options;
   }
   auto number = [&s](const char* key, double& out, double lowest) {
@@ -240,6 +244,19 @@ planning::SimulationOptions IncisionLogic::simulationOptions(const PlanNode& nod
     options.cutLayers = cut;
   if (const auto model = s.find("model"); model != s.end() && model->is_string())
     options.model = planning::tissueModelFromId(model->get<std::string>()).value_or(options.model);
+  // A record without one was predicted on slack skin (before pre-tension).
+  if (const auto tension = s.find("preTension"); tension != s.end() && tension->is_object())
+  {
+    const auto along = tension->find("alongLines"), across = tension->find("acrossLines");
+    if (along != tension->end() && across != tension->end() && along->is_number() && across->is_number())
+    {
+      planning::SkinPreTension t;
+      t.alongLines = along->get<double>();
+      t.acrossLines = across->get<double>();
+      if (t.alongLines >= 0.0 && t.acrossLines >= 0.0 && t.alongLines <= 1.0 && t.acrossLines <= 1.0)
+        options.preTension = t;
+    }
+  }
   if (const auto materials = s.find("materials"); materials != s.end() && materials->is_array())
   {
     fem::MaterialTable table;
@@ -273,6 +290,9 @@ nlohmann::json IncisionLogic::simulationRecord(const planning::SimulationOptions
     j["underminingWidth"] = *options.underminingWidth;
   if (options.cutLayers)
     j["cutLayers"] = *options.cutLayers;
+  if (options.preTension)
+    j["preTension"] = {{"alongLines", options.preTension->alongLines},
+                       {"acrossLines", options.preTension->acrossLines}};
   const fem::MaterialTable materials =
     options.materials.empty() ? planning::defaultFacialTissueMaterials(options.layerCount) : options.materials;
   nlohmann::json list = nlohmann::json::array();

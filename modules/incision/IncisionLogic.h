@@ -83,11 +83,14 @@ public:
   struct PredictionNodes
   {
     NodeId plan, mesh, solution, skinBefore, skinAfter;
+    NodeId skinGaping; ///< empty without a gape (no pre-tension)
   };
   /// Puts a predicted plan into the scene: a Plan node
   /// (plan and recipe, drawn on @a skinMapId), its FeMesh node, the Solution
   /// node with the displacements, and the display surfaces before and after
-  /// the operation (Surface nodes, §4.7). @a name names them ("Z-plasty 1").
+  /// the operation (Surface nodes, §4.7), and between them the wound gaping
+  /// under the skin's pre-tension when the prediction has one ("<name> skin
+  /// gaping", hidden). @a name names them ("Z-plasty 1").
   PredictionNodes addPrediction(const std::string& name, const planning::IncisionPlan& plan,
                                 const planning::PlanRecipe& recipe, const planning::PlanPrediction& prediction,
                                 const planning::PlanDisplay& display, const NodeId& skinMapId);

@@ -69,7 +69,7 @@ Node* nodeNamed(const Scene& scene, const std::string& name, NodeType type)
 bool hasPrediction(const Scene& scene, const std::string& planName)
 {
   for (Node* n : scene.nodes())
-    for (const char* suffix : {" model", " closure", " skin before", " skin after"})
+    for (const char* suffix : {" model", " closure", " skin before", " skin after", " skin gaping"})
       if (n->name() == planName + suffix)
         return true;
   return false;

@@ -46,6 +46,10 @@ namespace caps {
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
+/// The skin's pre-tension of a new plan (N/mm along and across the tension
+/// lines): SkinPreTension's own, from the literature it cites.
+const std::array<double, 2> kDefaultPreTension{planning::SkinPreTension{}.alongLines,
+                                               planning::SkinPreTension{}.acrossLines};
 
 const char* kPlanUsage =
   "usage: caps plan CT --procedure ID --at THETA,Z --out DIR [--param NAME=VALUE ...]\n"
@@ -107,6 +111,13 @@ const char* kPlanUsage =
   "                       region 15, 25 and 35 mm wide, rim free and clamped, and writes\n"
   "                       convergence.csv: tension per cm, mean and peak wound stress,\n"
   "                       gain, largest displacement and the change from level to level\n"
+  "  --pre-tension ALONG,ACROSS|none\n"
+  "                       the tension the living skin carries before the cut, in N/m along\n"
+  "                       and across the relaxed skin tension lines (default 10,5: in-vivo\n"
+  "                       skin tension, Flynn et al. 2011; directions from the facial\n"
+  "                       landmarks, the mean in every direction without them), or none (the\n"
+  "                       thesis's slack skin); default the replayed plan's. The wound gapes\n"
+  "                       under it before it is sutured, and the sutures close it against it\n"
   "  --series N|UID       in a folder with several series, the one to use\n"
   "  --model linear|large-deformation\n"
   "                       the model of the tissue (default large-deformation, or the\n"
@@ -149,7 +160,28 @@ struct PlanArgs : cli::CtCommandArgs
   std::optional<double> underminingWidth;     ///< --undermining mm; default the procedure's, or the replayed plan's
   double stitchSpacing = planning::kDefaultStitchSpacing; ///< mm, --stitch-spacing
   bool convergenceStudy = false;                          ///< --study convergence
+  /// --pre-tension: N/mm along and across the lines, or none (nullopt inside);
+  /// unset: the default, or the replayed plan's.
+  std::optional<std::optional<std::array<double, 2>>> preTension;
 };
+
+/// "ALONG,ACROSS" in N/m (each 0 to 200) or "none"; to N/mm.
+bool parsePreTension(const std::string& text, std::optional<std::array<double, 2>>& tension)
+{
+  if (text == "none")
+  {
+    tension.reset();
+    return true;
+  }
+  const std::size_t comma = text.find(',');
+  double along = 0.0, across = 0.0;
+  if (comma == std::string::npos || !cli::parseNumber(text.substr(0, comma), along) ||
+      !cli::parseNumber(text.substr(comma + 1), across) || !(along >= 0.0 && along <= 200.0) ||
+      !(across >= 0.0 && across <= 200.0))
+    return false;
+  tension = std::array<double, 2>{along / 1000.0, across / 1000.0};
+  return true;
+}
 
 /// model.vtu's point data: the prediction's displacements and the stress of
 /// the model that made it at the nodes (averaged within each tissue layer):
@@ -272,6 +304,14 @@ std::optional<std::string> parseModelOption(const std::string& a, const std::vec
     if (!hasValue || !cli::parseNumber(args[++i], width) || width < 0.0 || width > 100.0)
       return "--undermining needs the band undermined along the sutured edges in mm, 0 (none) to 100";
     parsed.underminingWidth = width;
+  }
+  else if (a == "--pre-tension")
+  {
+    std::optional<std::array<double, 2>> tension;
+    if (!hasValue || !parsePreTension(args[++i], tension))
+      return "--pre-tension needs ALONG,ACROSS in N/m (0 to 200 each; e.g. 10,5) along and across the skin "
+             "tension lines, or none";
+    parsed.preTension = tension;
   }
   else if (a == "--study")
   {
@@ -415,6 +455,11 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "excised volume to the bone (range maps),hole,," << excisedVolumeToBone << ",mm3\n";
   out << "wound width before closure,sutures,," << p.maxSutureGapBefore << ",mm\n";
   out << "suture gap after closure,sutures,," << p.maxSutureGap << ",mm\n";
+  if (p.gape)
+  {
+    out << "wound width gaping before suturing,sutures,," << p.gape->widestGaping << ",mm\n";
+    out << "mean gape of the wound edges before suturing,skin,," << p.gape->meanOpening << ",mm\n";
+  }
   // How far to trust the numbers below (thesis §5.5): the model and its checks.
   const planning::PredictionCheck& c = p.check;
   out << "undermining band,along the sutured edges,," << p.underminingWidth << ",mm\n";
@@ -619,6 +664,9 @@ private:
     saved_.underminingWidth = args_.underminingWidth ? args_.underminingWidth
                               : replay_              ? replay_->underminingWidth
                                                      : std::nullopt;
+    saved_.preTension = args_.preTension ? *args_.preTension
+                        : replay_        ? replay_->preTension
+                                         : std::optional(kDefaultPreTension);
     planning::writeRecipe(saved_, args_.out / "plan.json");
     options_.underminingWidth = saved_.underminingWidth;
     options_.elementSize = elementSize;
@@ -633,6 +681,7 @@ private:
     const planning::IncisionPlan& plan = recorded_->plan();
     procedure_ = &planning::findProcedure(logic_.procedures(), plan.procedure());
     measured_ = planning::measurePlan(plan, maps_.skin);
+    tensionTheSkin();
     options_.progress = cli::consoleProgress(err_);
     prediction_ = planning::simulatePlan(maps_.skin, maps_.bone, plan, options_);
     options_.progress = {};
@@ -653,6 +702,19 @@ private:
                                                   "and run again"
                                                 : "")
            << "\n";
+  }
+
+  /// The skin's pre-tension of the plan (saved_.preTension); the
+  /// simulation places its directions (the tension lines of this face).
+  void tensionTheSkin()
+  {
+    options_.preTension.reset();
+    if (!saved_.preTension)
+      return;
+    planning::SkinPreTension tension;
+    tension.alongLines = (*saved_.preTension)[0];
+    tension.acrossLines = (*saved_.preTension)[1];
+    options_.preTension = tension;
   }
 
   /// "Undermined: 12.0 mm band along the sutured edges (the procedure's),
@@ -703,6 +765,7 @@ private:
          << " s\n";
     printTheUndermining();
     printTheChecks();
+    printTheGape();
     out_ << std::setprecision(2) << "Wound " << p.maxSutureGapBefore << " mm wide before, sutures within "
          << std::scientific << p.maxSutureGap << std::fixed << " mm after closure\n";
     out_ << std::setprecision(3) << "Closure force: " << p.closure.magnitudeSum
@@ -717,6 +780,25 @@ private:
       out_ << std::setprecision(1) << "Z-plasty gain in length: predicted " << 100.0 * p.zPlasty->predicted.fraction
            << " %, theoretical " << 100.0 * p.zPlasty->theoretical << " % (Fig. 2.2)\n";
     out_.unsetf(std::ios::floatfield);
+  }
+
+  /// The skin's pre-tension and how far the wound gapes under it.
+  void printTheGape()
+  {
+    const planning::PlanPrediction& p = prediction_;
+    if (p.preTension.empty())
+    {
+      out_ << "Skin pre-tension: none (slack skin, as the thesis): the wound does not gape\n";
+      return;
+    }
+    out_ << "Skin pre-tension: " << p.preTension << "\n";
+    if (!p.gape)
+      return;
+    out_ << std::setprecision(2) << "Wound gaping before it is sutured: " << p.gape->widestGaping
+         << " mm across at its widest (" << p.gape->widestAsCut << " mm as cut), the edges " << p.gape->meanOpening
+         << " mm further apart on average\n";
+    if (!p.gape->problem.empty())
+      out_ << "WARNING (gaping wound): " << p.gape->problem << "\n";
   }
 
   /// Per wound line, the tension across it per centimetre and per stitch.

@@ -80,6 +80,14 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
                                 std::to_string(before->GetNumberOfPoints()) + " points and the skin after " +
                                 std::to_string(after->GetNumberOfPoints()) +
                                 ", so one cannot be morphed into the other: predict the plan again (caps plan)");
+  // The wound gaping under the skin's pre-tension, when the prediction has it: the middle stage.
+  vtkPolyData* gaping = surfaceNamed(scene, result.planName + " skin gaping");
+  if (gaping && gaping->GetNumberOfPoints() != before->GetNumberOfPoints())
+    gaping = nullptr;
+  std::vector<vtkPolyData*> stages{before};
+  if (gaping)
+    stages.push_back(gaping);
+  stages.push_back(after);
   const seg::RangeMap skin = skinMapOf(scene, planNode);
   const seg::CylindricalFrame& frame = skin.frame();
   const planning::IncisionPlan plan = IncisionLogic::readPlan(planNode);
@@ -101,9 +109,8 @@ AnimationResult writePlanAnimation(Scene& scene, const std::string& planName, co
   result.prePost.width = width;
   result.prePost.height = height;
   result.prePost.camera =
-    fitCamera(std::vector<vtkPolyData*>{before, after}, frame.radialDirection(plan.centre().theta), frame.direction(),
-              base.sceneAspect(), 20.0, 1.05);
-  renderMorphFrames(before, after, base, result.prePost, options.prePostFrames, false, [&](const char* step) {
+    fitCamera(stages, frame.radialDirection(plan.centre().theta), frame.direction(), base.sceneAspect(), 20.0, 1.05);
+  renderStagedMorphFrames(stages, base, result.prePost, options.prePostFrames, [&](const char* step) {
     seg::reportProgress(progress, 0.95 * done / total, step);
     ++done;
   });

@@ -164,6 +164,10 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
   recipe.cutLayers = input.options.cutLayers;
   recipe.underminingWidth = input.options.underminingWidth;
   recipe.model = input.options.model;
+  recipe.preTension.reset();
+  if (input.options.preTension)
+    recipe.preTension =
+      std::array<double, 2>{input.options.preTension->alongLines, input.options.preTension->acrossLines};
   recipe.prediction = result.prediction.check;
   recipe.closure = planning::closureRecordOf(result.prediction, result.woundStress, result.tension);
 
@@ -184,7 +188,8 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
       old.push_back(n->id());
   }
   for (Node* n : scene.nodesOfType(NodeType::Surface))
-    if (n->name() == name + " skin before" || n->name() == name + " skin after" || n->name() == name + " mesh")
+    if (n->name() == name + " skin before" || n->name() == name + " skin after" || n->name() == name + " skin gaping" ||
+        n->name() == name + " mesh")
       old.push_back(n->id());
 
   PlanRunNodes nodes;
@@ -192,6 +197,8 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
   nodes.prediction = logic.addPrediction(name, input.plan, recipe, result.prediction, result.display, input.skinMapId);
   std::vector<NodeId> added = {nodes.prediction.plan, nodes.prediction.mesh, nodes.prediction.solution,
                                nodes.prediction.skinBefore, nodes.prediction.skinAfter};
+  if (!nodes.prediction.skinGaping.empty())
+    added.push_back(nodes.prediction.skinGaping);
   try
   {
     scene.nodeAs<PlanNode>(nodes.prediction.plan)->setSimulation(IncisionLogic::simulationRecord(input.options));

@@ -160,6 +160,25 @@ void SimulatePanel::addMeshOptions(QWidget* content, QVBoxLayout* layout)
                               "(\u00a73.2.4); it slides on the deep plane. Starts at the band the procedure "
                               "undermines by default."));
   form->addRow(tr("Undermining"), undermining_);
+  const planning::SkinPreTension tension;
+  tensionAlong_ = new QDoubleSpinBox(meshBox);
+  tensionAlong_->setObjectName("simulate.tensionAlong");
+  tensionAcross_ = new QDoubleSpinBox(meshBox);
+  tensionAcross_->setObjectName("simulate.tensionAcross");
+  for (QDoubleSpinBox* box : {tensionAlong_, tensionAcross_})
+  {
+    box->setRange(0.0, 200.0);
+    box->setDecimals(1);
+    box->setSuffix(" N/m");
+    box->setToolTip(tr("The tension living skin carries before the cut, along and across the relaxed skin "
+                       "tension lines (placed from the face's landmarks): the wound gapes under it and the "
+                       "sutures close it against it. Default %1 and %2 N/m: in-vivo skin tension (Flynn, "
+                       "Taberner and Nielsen 2011). Both 0: slack skin, as the thesis.")
+                      .arg(tension.alongLines * 1e3)
+                      .arg(tension.acrossLines * 1e3));
+  }
+  form->addRow(tr("Skin tension along lines"), tensionAlong_);
+  form->addRow(tr("Skin tension across lines"), tensionAcross_);
   estimate_ = new QLabel(meshBox);
   estimate_->setObjectName("simulate.estimate");
   estimate_->setWordWrap(true);
@@ -205,6 +224,8 @@ void SimulatePanel::setDefaults()
   regionRadius_->setValue(defaults.regionRadius);
   elementSize_->setValue(defaults.elementSize);
   undermining_->setValue(0.0); // until a plan is chosen: loadPlanOptions() shows its band
+  tensionAlong_->setValue(planning::SkinPreTension{}.alongLines * 1e3);
+  tensionAcross_->setValue(planning::SkinPreTension{}.acrossLines * 1e3);
   resizeMaterials(defaults.layerCount);
 }
 
@@ -226,7 +247,7 @@ void SimulatePanel::connectControls()
     resizeMaterials(layers);
     scheduleEstimate();
   });
-  for (QDoubleSpinBox* box : {regionRadius_, elementSize_, undermining_})
+  for (QDoubleSpinBox* box : {regionRadius_, elementSize_, undermining_, tensionAlong_, tensionAcross_})
     connect(box, qOverload<double>(&QDoubleSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
   connect(cutDepth_, qOverload<int>(&QSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
   connect(run_, &QPushButton::clicked, this, &SimulatePanel::run);
@@ -314,6 +335,8 @@ void SimulatePanel::loadPlanOptions()
   regionRadius_->setValue(o.regionRadius);
   elementSize_->setValue(o.elementSize);
   undermining_->setValue(o.underminingWidth.value_or(node->underminingBand()));
+  tensionAlong_->setValue(o.preTension ? o.preTension->alongLines * 1e3 : 0.0);
+  tensionAcross_->setValue(o.preTension ? o.preTension->acrossLines * 1e3 : 0.0);
   model_->setCurrentIndex(std::max(0, model_->findData(QString(planning::tissueModelId(o.model)))));
   loading_ = false;
   if (o.materials.empty())
@@ -403,6 +426,12 @@ planning::SimulationOptions SimulatePanel::options(std::string* problem) const
   o.regionRadius = regionRadius_->value();
   o.elementSize = elementSize_->value();
   o.underminingWidth = undermining_->value();
+  if (tensionAlong_->value() > 0.0 || tensionAcross_->value() > 0.0)
+  {
+    o.preTension = planning::SkinPreTension{};
+    o.preTension->alongLines = tensionAlong_->value() / 1e3;
+    o.preTension->acrossLines = tensionAcross_->value() / 1e3;
+  }
   o.model = planning::tissueModelFromId(model_->currentData().toString().toStdString()).value_or(o.model);
   o.threads = std::max(1, std::min(2, QThread::idealThreadCount()));
   for (int layer = 0; layer < materials_->rowCount(); ++layer)

@@ -82,7 +82,9 @@ private:
   QDoubleSpinBox* elementSize_ = nullptr;
   QSpinBox* cutDepth_ = nullptr;
   QDoubleSpinBox* undermining_ = nullptr;
-  QComboBox* model_ = nullptr; ///< the tissue model: linear preview or large deformation
+  QDoubleSpinBox* tensionAlong_ = nullptr;  ///< skin pre-tension along the lines, kPa
+  QDoubleSpinBox* tensionAcross_ = nullptr; ///< and across them
+  QComboBox* model_ = nullptr;              ///< the tissue model: linear preview or large deformation
   QLabel* estimate_ = nullptr;
   QPushButton* run_ = nullptr;
   QLabel* summary_ = nullptr;

@@ -168,6 +168,36 @@ TEST(PlanRecipe, AppliedTwiceGivesTheSamePlanAndPredictionBitForBit)
   EXPECT_GT(a.displacements.cwiseAbs().maxCoeff(), 1.0); // the flaps moved: not a trivial match
 }
 
+// The skin's pre-tension a prediction carried goes into plan.json and back
+// (N/mm, to the last bit); a file without it was made on slack skin; an
+// impossible one is refused naming the field.
+TEST(PlanRecipe, ThePreTensionIsKeptAndChecked)
+{
+  PlanRecipe recipe = zRecipe();
+  recipe.elementSize = 2.0;
+  recipe.preTension = std::array<double, 2>{0.0113, 0.0047};
+  const nlohmann::json written = recipeToJson(recipe);
+  ASSERT_TRUE(written["simulation"].contains("preTension"));
+  const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
+  ASSERT_TRUE(read.preTension);
+  EXPECT_EQ((*read.preTension)[0], 0.0113);
+  EXPECT_EQ((*read.preTension)[1], 0.0047);
+  nlohmann::json slack = written;
+  slack["simulation"].erase("preTension");
+  EXPECT_FALSE(recipeFromJson(slack).preTension);
+  nlohmann::json wrong = written;
+  wrong["simulation"]["preTension"]["acrossLines"] = -1.0;
+  try
+  {
+    (void)recipeFromJson(wrong);
+    ADD_FAILURE() << "a negative tension was read";
+  }
+  catch (const RecipeError& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("preTension"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PlanRecipe, SetParameterPlacesTheProcedureAgainAtTheSameCentre)
 {
   RecordedPlan recorded;

@@ -97,10 +97,15 @@ TEST(DemoOutput, TheDemoWritesItsFilesAndItsSceneLoadsBack)
                                     u->GetTuple3(i)[2] * u->GetTuple3(i)[2]));
     EXPECT_GT(largest, 2.0) << "the wound closes by millimetres";
   }
-  int skins = 0;
+  // Each plan's skin before and after, and its wound gaping under the skin's pre-tension.
+  int skins = 0, gaping = 0;
   for (caps::Node* n : scene.nodesOfType(caps::NodeType::Surface))
-    skins += n->name().find(" skin ") != std::string::npos;
+  {
+    skins += n->name().ends_with(" skin before") || n->name().ends_with(" skin after");
+    gaping += n->name().ends_with(" skin gaping");
+  }
   EXPECT_EQ(skins, 4);
+  EXPECT_EQ(gaping, 2);
   // The storyboard: the Z-plasty before and after, with their pictures.
   const auto snapshots = scene.nodesOfType(caps::NodeType::Snapshot);
   ASSERT_EQ(snapshots.size(), 2u);

@@ -297,6 +297,11 @@ TEST(ResultsPanel, ShowsThePredictedZPlasty)
     options.cutLayers = recipe->cutLayers;
     options.underminingWidth = recipe->underminingWidth;
     options.model = recipe->model; // the demo's plans are predicted in large deformation
+    ASSERT_TRUE(recipe->preTension.has_value()) << "the demo's skin carries its pre-tension";
+    planning::SkinPreTension tension;
+    tension.alongLines = (*recipe->preTension)[0];
+    tension.acrossLines = (*recipe->preTension)[1];
+    options.preTension = tension;
     EXPECT_EQ(options.model, planning::TissueModel::LargeDeformation);
     const planning::PlanPrediction prediction = planning::simulatePlan(skin, bone, replayed, options);
     const planning::WoundStress wound = planning::woundSkinStress(prediction, 10.0);

@@ -117,6 +117,7 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
                                                                                   {NodeType::Solution, " closure"},
                                                                                   {NodeType::Surface, " skin before"},
                                                                                   {NodeType::Surface, " skin after"},
+                                                                                  {NodeType::Surface, " skin gaping"},
                                                                                   {NodeType::Surface, " mesh"}})
     EXPECT_EQ(nodesNamed(scene, type, kPlan + suffix).size(), 1u) << kPlan << suffix;
   EXPECT_EQ(scene.size(), before + 1) << "only the mesh drawing is new";
@@ -134,6 +135,7 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   options.elementSize = 3.0;
   options.threads = 2;
   options.model = planning::TissueModel::LargeDeformation; // the panel's: the prediction, not the preview
+  options.preTension = planning::SkinPreTension::facial(); // the panel's default, lines placed from the face
   const planning::PlanPrediction direct =
     planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
 
