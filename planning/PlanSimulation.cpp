@@ -7,6 +7,7 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <Eigen/Geometry>
 
 #include "fem/FiniteStrainStress.h"
 #include "fem/InitialStress.h"
@@ -587,6 +588,31 @@ private:
     recordTheGape(result.displacements, problem);
   }
 
+  /// The area the hole loop's skin nodes enclose under @a u: half the
+  /// norm of the loop's vector area (the area projected on the plane it
+  /// is largest on), through each border edge's midpoint node.
+  double holeLoopArea(const Eigen::VectorXd& u) const
+  {
+    const fem::Mesh& mesh = out_.continuum.mesh;
+    std::vector<Eigen::Vector3d> loop;
+    const int n = out_.surface.mesh.holeVertexCount;
+    for (int i = 0; i < n; ++i)
+    {
+      const int vertex = out_.continuum.vertexColumns[std::size_t(i)].front();
+      loop.push_back(mesh.nodes.col(vertex) + u.segment<3>(3 * Eigen::Index(vertex)));
+      const int edge = out_.continuum.edgeIndex(i, (i + 1) % n);
+      if (edge >= 0 && out_.continuum.edgeColumns[std::size_t(edge)].front() >= 0)
+      {
+        const int middle = out_.continuum.edgeColumns[std::size_t(edge)].front();
+        loop.push_back(mesh.nodes.col(middle) + u.segment<3>(3 * Eigen::Index(middle)));
+      }
+    }
+    Eigen::Vector3d area = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < loop.size(); ++k)
+      area += loop[k].cross(loop[(k + 1) % loop.size()]);
+    return 0.5 * area.norm();
+  }
+
   void recordTheGape(const Eigen::VectorXd& u, const std::string& problem)
   {
     WoundGape gape;
@@ -615,6 +641,8 @@ private:
       }
     }
     gape.meanOpening = skinSutures ? opening / skinSutures : 0.0;
+    gape.openAreaAsCut = holeLoopArea(Eigen::VectorXd::Zero(u.size()));
+    gape.openAreaGaping = holeLoopArea(u);
     for (const auto& column : out_.continuum.vertexColumns)
       gape.skin.push_back(at(column.front()));
     out_.gape = std::move(gape);

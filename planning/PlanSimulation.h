@@ -273,6 +273,12 @@ struct WoundGape
   /// The same on the skin surface only, along the wound: the mean over the
   /// sutured skin nodes of how far the sides move apart (mm).
   double meanOpening = 0.0;
+  /// The wound's open area on the skin (mm²): the area the hole loop
+  /// encloses, through its vertices and edge midpoints, projected on its
+  /// own best plane; as cut and gaping. A Z-plasty's or a flap's limbs
+  /// enclose almost none as cut, so this is the gape of any incision.
+  double openAreaAsCut = 0.0;
+  double openAreaGaping = 0.0;
   /// Empty when the gaping solve converged and is a body; otherwise why not
   /// (the gape is then not shown as one).
   std::string problem;

@@ -459,6 +459,8 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   {
     out << "wound width gaping before suturing,sutures,," << p.gape->widestGaping << ",mm\n";
     out << "mean gape of the wound edges before suturing,skin,," << p.gape->meanOpening << ",mm\n";
+    out << "open area of the wound as cut,skin,," << p.gape->openAreaAsCut << ",mm2\n";
+    out << "open area of the wound gaping before suturing,skin,," << p.gape->openAreaGaping << ",mm2\n";
   }
   // How far to trust the numbers below (thesis §5.5): the model and its checks.
   const planning::PredictionCheck& c = p.check;
@@ -794,9 +796,10 @@ private:
     out_ << "Skin pre-tension: " << p.preTension << "\n";
     if (!p.gape)
       return;
-    out_ << std::setprecision(2) << "Wound gaping before it is sutured: " << p.gape->widestGaping
-         << " mm across at its widest (" << p.gape->widestAsCut << " mm as cut), the edges " << p.gape->meanOpening
-         << " mm further apart on average\n";
+    out_ << std::setprecision(1) << "Wound gaping before it is sutured: open " << p.gape->openAreaGaping << " mm² ("
+         << p.gape->openAreaAsCut << " mm² as cut); the sides to be sutured " << std::setprecision(2)
+         << p.gape->widestGaping << " mm apart at most (" << p.gape->widestAsCut << " mm as cut), "
+         << p.gape->meanOpening << " mm further apart on average\n";
     if (!p.gape->problem.empty())
       out_ << "WARNING (gaping wound): " << p.gape->problem << "\n";
   }

@@ -28,9 +28,9 @@ namespace caps::report {
 /// Writes the animations of the plan named @a planName (empty: the scene's
 /// first plan) into @a outDir: pre-post/frame-NNNN.png (the display surfaces
 /// "<plan> skin before" → "<plan> skin after" coloured by skin_shade, through
-/// "<plan> skin gaping" when the prediction has one: intact, incised and
-/// gaping under the skin's tension, closed; one camera framing them all), turntable/frame-NNNN.png (the "Skin" surface with the
-/// incision, the camera going once round the head axis from the front), and
+/// "<plan> skin gaping" when the prediction has one: as cut, gaping under the
+/// skin's tension, closed; one camera framing them all),
+/// turntable/frame-NNNN.png (the "Skin" surface with the incision, the camera going once round the head axis from the front), and
 /// pre-post.mp4 / turntable.mp4 when ffmpeg is found. Frames already in those
 /// folders are replaced.
 /// @throws std::invalid_argument naming what is missing (no such plan, no

@@ -12,6 +12,7 @@
 
 #include "AnalyticSkins.h"
 #include "planning/PlanSimulation.h"
+#include "planning/SkinMeasurements.h"
 #include "planning/SkinPreTension.h"
 
 namespace caps::planning {
@@ -121,6 +122,18 @@ TEST(SkinPreTension, AWoundGapesMoreAcrossTheTensionLinesThanAlongThem)
   EXPECT_GT(acrossWound.gape->meanOpening, 2.0 * alongWound.gape->meanOpening);
   EXPECT_GT(acrossWound.gape->widestGaping, alongWound.gape->widestGaping);
   EXPECT_GT(alongWound.gape->widestGaping, alongWound.gape->widestAsCut);
+  // The open area as cut is the skin's excised area (a second method: the
+  // chart integral of SkinMeasurements; a flat polygon through the loop's
+  // nodes on the curved skin, so within a few per cent), and it grows as
+  // the wound gapes, more with the lines across it.
+  const double excised = excisedArea(plan, phantom().skin);
+  std::printf("open area as cut %.1f mm² (excised skin %.1f mm²), gaping %.1f / %.1f mm²\n",
+              alongWound.gape->openAreaAsCut, excised, alongWound.gape->openAreaGaping,
+              acrossWound.gape->openAreaGaping);
+  EXPECT_NEAR(alongWound.gape->openAreaAsCut / excised, 1.0, 0.03);
+  EXPECT_GT(alongWound.gape->openAreaGaping, alongWound.gape->openAreaAsCut);
+  EXPECT_GT(acrossWound.gape->openAreaGaping - acrossWound.gape->openAreaAsCut,
+            2.0 * (alongWound.gape->openAreaGaping - alongWound.gape->openAreaAsCut));
   // The sutures still close it, and the closure pulls harder against the tension across it.
   EXPECT_LT(acrossWound.maxSutureGap, 1e-9);
   EXPECT_GT(acrossWound.closure.magnitudeSum, alongWound.closure.magnitudeSum);
