@@ -512,7 +512,9 @@ private:
     const std::vector<fem::ElementFace> cut = woundFaces(out_.continuum, out_.surface.mesh);
     const Eigen::VectorXd cutTraction = fem::cutFaceTraction(out_.continuum.mesh, initialStress_, cut);
     releasedTraction_ = -cutTraction;
-    preStressBalance_ = fem::initialStressForces(out_.continuum.mesh, initialStress_, assemblyOptions()) - cutTraction;
+    if (options_.model == TissueModel::LargeDeformation) // the linear model needs only the released traction
+      preStressBalance_ =
+        fem::initialStressForces(out_.continuum.mesh, initialStress_, assemblyOptions()) - cutTraction;
   }
 
   fem::AssemblyOptions assemblyOptions() const
