@@ -280,13 +280,15 @@ public:
       solver_.analyzePattern(kbar_);
   }
 
-  /// 3. The increments: grow after a fast convergence, cut back on failure.
+  /// 3. The increments: grow after a fast convergence, cut back on failure;
+  ///    through an instability with artificial viscosity, released at the end.
   NonlinearResult run(const IncrementControl& control)
   {
     Eigen::VectorXd ubar = Eigen::VectorXd::Zero(map_.reducedCount());
     double lambda = 0.0;
     double step = std::min(control.initial, 1.0);
     int accepted = 0;
+    int failuresInARow = 0;
     try
     {
       while (lambda < 1.0 - 1e-12)
@@ -299,12 +301,15 @@ public:
         step = std::min(step, 1.0 - lambda);
         const double target = (1.0 - lambda - step) < 1e-12 ? 1.0 : lambda + step;
         Eigen::VectorXd state = ubar;
-        const IncrementOutcome o = increment(accepted + 1, lambda, target, state);
+        const IncrementOutcome o = increment(accepted + 1, lambda, target, state, target - lambda);
         result_.increments.push_back(
-          {accepted + 1, lambda, target, o.iterations, o.residual, o.converged, o.rejection});
+          {accepted + 1, lambda, target, o.iterations, o.residual, o.converged, stabilizing_, o.rejection});
         if (o.converged)
         {
           ++accepted;
+          failuresInARow = 0;
+          recordDissipation(ubar, lambda, state, target);
+          lastStep_ = target - lambda;
           ubar = state;
           lambda = target;
           // Grow after a fast convergence: at most 5 tangents (full Newton: 5
@@ -319,10 +324,15 @@ public:
           lastWorst_ = o.worstElement;
         if (control.fixed)
           break;
+        if (++failuresInARow >= newton_.stabilization.afterFailures && newton_.stabilization.enabled &&
+            stabilize(ubar, lambda))
+          failuresInARow = 0;
         step *= o.worstElement >= 0 ? 0.25 : 0.5; // an inversion says the step was far too large
         if (step < control.minimum)
           break;
       }
+      if (lambda >= 1.0 - 1e-12 && stabilizing_)
+        settle(accepted, ubar);
     }
     catch (const Cancelled&)
     {
@@ -385,6 +395,9 @@ private:
       ~Tally() { total += secondsSince(start); }
     } tally{result_.assembleSeconds, t0};
     evaluate_(u, lambda, tangent, forces);
+    if (tangent && viscosity_.size()) // the viscous force's derivative, c D / dt
+      for (Eigen::Index j = 0; j < viscosity_.size(); ++j)
+        tangent->valuePtr()[diagonalIndex_[std::size_t(j)]] += viscosity_[j];
     ++result_.assemblies;
     (tangent ? reuse_.tangent : reuse_.forces).add(secondsSince(t0));
   }
@@ -447,10 +460,14 @@ private:
 
   /// 2. One increment from the converged state (@a state, @a lambda0) to
   ///    @a lambda1; @a state becomes the converged state when it converges.
-  IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state)
+  ///    @a dt: the increment's length in pseudo-time for the artificial
+  ///    viscosity while it is on (0: an increment without it).
+  IncrementOutcome increment(int number, double lambda0, double lambda1, Eigen::VectorXd& state, double dt)
   {
     IncrementOutcome out;
     shiftsThisIncrement_ = 0;
+    if (stabilizing_)
+      dampFrom(expand(state, lambda0), dt);
     if (map_.reducedCount() == 0)
     { // everything prescribed: nothing to solve
       out.converged = true;
@@ -482,7 +499,12 @@ private:
       reuse_.backSolve.add(secondsSince(solveStart));
       const double s0 = delta.dot(rbar);
       if (it == 1)
+      {
         firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
+        // What the increment is predicted to do, for the viscosity's scale.
+        predicted_ = {map_.expand(delta).col(0) + (lambda1 - lambda0) * map_.offset, std::abs(s0),
+                      std::max(dt, lambda1 - lambda0)};
+      }
 
       Step step = lineSearch(it, lambda1, trial, delta, s0, out);
       if (!step.accepted)
@@ -594,7 +616,7 @@ private:
       }
       if (withTangent)
         lin_.factored = false; // k no longer matches the factorization
-      step.rbar = map_.reduceVector(step.fint - lambda1 * fext_).col(0);
+      step.rbar = outOfBalance(step.fint, expand(step.next, lambda1), lambda1);
       step.tangentInK = withTangent;
       if (!newton_.lineSearch || it == 1 || ls >= newton_.maxLineSearchSteps)
       {
@@ -629,6 +651,125 @@ private:
     return step;
   }
 
+  /// The reduced out-of-balance force at full displacements @a u with
+  /// internal forces @a fint: the viscous force included while it is on.
+  Eigen::VectorXd outOfBalance(const Eigen::VectorXd& fint, const Eigen::VectorXd& u, double lambda) const
+  {
+    if (!viscosity_.size())
+      return map_.reduceVector(fint - lambda * fext_).col(0);
+    return map_.reduceVector(fint - lambda * fext_ + viscosity_.cwiseProduct(u - dampedStart_)).col(0);
+  }
+
+  /// Starts the artificial viscosity at the converged state (@a ubar,
+  /// @a lambda), or makes it ten times stronger if it is on already; false
+  /// when it cannot (nothing to scale it by, or at its strongest).
+  bool stabilize(const Eigen::VectorXd& ubar, double lambda)
+  {
+    const StabilizationOptions& o = newton_.stabilization;
+    if (stabilizing_)
+    {
+      if (10.0 * dissipationFraction_ > o.largestDissipatedFraction)
+        return false;
+      dissipationFraction_ *= 10.0;
+      viscosityFactor_ *= 10.0;
+      return true;
+    }
+    if (!predicted_.displacement.size())
+      return false;
+    // D: the diagonal of the reference tangent (the tissue's own stiffness
+    // scale at every DOF, positive), into k_'s pattern positions.
+    diagonalIndex_.assign(std::size_t(k_.cols()), 0);
+    for (Eigen::Index j = 0; j < k_.cols(); ++j)
+      for (Eigen::SparseMatrix<double>::InnerIterator e(k_, j); e; ++e)
+        if (e.row() == j)
+          diagonalIndex_[std::size_t(j)] = std::size_t(&e.value() - k_.valuePtr());
+    timedEvaluate(Eigen::VectorXd::Zero(k_.cols()), 0.0, &k_, nullptr);
+    lin_ = {};
+    dampingShape_.resize(k_.cols());
+    for (Eigen::Index j = 0; j < k_.cols(); ++j)
+      dampingShape_[j] = std::abs(k_.valuePtr()[diagonalIndex_[std::size_t(j)]]);
+    const double floor = 1e-3 * dampingShape_.mean();
+    dampingShape_ = dampingShape_.cwiseMax(floor);
+    // c: the predicted increment dissipates the stated fraction of the strain energy.
+    const Eigen::VectorXd& du = predicted_.displacement;
+    const double strain =
+      std::max(evaluate_(expand(ubar, lambda), lambda, nullptr, nullptr).strainEnergy, 0.5 * predicted_.work);
+    const double quadratic = du.dot(dampingShape_.cwiseProduct(du));
+    if (!(strain > 0.0) || !(quadratic > 0.0))
+      return false;
+    dissipationFraction_ = o.dissipatedEnergyFraction;
+    viscosityFactor_ = dissipationFraction_ * strain * predicted_.dt / quadratic;
+    stabilizing_ = true;
+    return true;
+  }
+
+  /// The viscosity of an increment of length @a dt from full displacements
+  /// @a start (dt = 0: none); the tangent in k_ no longer matches it.
+  void dampFrom(const Eigen::VectorXd& start, double dt)
+  {
+    lin_.tangentInK = false;
+    lin_.factored = false;
+    if (dt <= 0.0)
+    {
+      viscosity_.resize(0);
+      return;
+    }
+    viscosity_ = (viscosityFactor_ / dt) * dampingShape_;
+    dampedStart_ = start;
+  }
+
+  /// Counts a damped increment from (@a ubar0, @a lambda0) to (@a ubar1,
+  /// @a lambda1) and the energy its viscosity dissipated.
+  void recordDissipation(const Eigen::VectorXd& ubar0, double lambda0, const Eigen::VectorXd& ubar1, double lambda1)
+  {
+    if (!viscosity_.size())
+      return;
+    const Eigen::VectorXd du = expand(ubar1, lambda1) - expand(ubar0, lambda0);
+    result_.dissipatedEnergy += du.dot(viscosity_.cwiseProduct(du));
+    ++result_.stabilizedIncrements;
+  }
+
+  /// 3'. At full load after a damped path: Newton without the viscosity,
+  ///     and while it fails, damped increments at full load, each twice as
+  ///     long (the viscous force relaxes), before trying again.
+  void settle(int& accepted, Eigen::VectorXd& ubar)
+  {
+    double dt = lastStep_;
+    for (int round = 0;; ++round)
+    {
+      Eigen::VectorXd state = ubar;
+      IncrementOutcome o = increment(accepted + 1, 1.0, 1.0, state, 0.0);
+      result_.increments.push_back({accepted + 1, 1.0, 1.0, o.iterations, o.residual, o.converged, false, o.rejection});
+      if (o.converged)
+      {
+        ++accepted;
+        ubar = state;
+        viscosity_.resize(0);
+        return;
+      }
+      lin_ = {};
+      if (round >= newton_.stabilization.relaxations)
+      {
+        unsettled_ =
+          "without the artificial viscosity Newton does not reach equilibrium at full load (" + o.rejection + ")";
+        return;
+      }
+      dt *= 2.0;
+      state = ubar;
+      o = increment(accepted + 1, 1.0, 1.0, state, dt);
+      result_.increments.push_back({accepted + 1, 1.0, 1.0, o.iterations, o.residual, o.converged, true, o.rejection});
+      if (!o.converged)
+      {
+        unsettled_ = "a damped relaxation at full load failed (" + o.rejection + ")";
+        viscosity_.resize(0);
+        return;
+      }
+      ++accepted;
+      recordDissipation(ubar, 1.0, state, 1.0);
+      ubar = state;
+    }
+  }
+
   /// 4. The result: the last converged state, its checks, and when the
   ///    loads were not all applied the message saying how far it got, what
   ///    failed, and what to try.
@@ -640,6 +781,20 @@ private:
     result.check = evaluate_(result.displacements, lambda, nullptr, nullptr);
     if (result.status == NonlinearStatus::Cancelled)
       return std::move(result_);
+    if (result.check.strainEnergy > 0.0)
+      result.dissipatedFraction = result.dissipatedEnergy / result.check.strainEnergy;
+    if (lambda >= 1.0 - 1e-12 && !unsettled_.empty())
+    {
+      result.status = NonlinearStatus::NotConverged;
+      std::ostringstream m;
+      m << "the large-deformation solve reached full load only with artificial viscosity through an instability ("
+        << result.stabilizedIncrements << " damped increments, " << 100.0 * result.dissipatedFraction
+        << " % of the strain energy dissipated), and " << unsettled_
+        << ": the state shown is not an equilibrium of the tissue and not a prediction. Try undermining the tissue "
+           "around the wound, or a finer mesh there";
+      result.message = m.str();
+      return std::move(result_);
+    }
     if (lambda >= 1.0 - 1e-12)
     {
       result.status = NonlinearStatus::Converged;
@@ -683,6 +838,23 @@ private:
   std::string lastReason_;
   double lastShift_ = 0.0;      ///< the last shift that made K̄ + mu D positive definite
   int shiftsThisIncrement_ = 0; ///< shifted tangents in the current increment
+  double lastStep_ = 0.0;       ///< the size of the last accepted increment
+
+  /// The artificial viscosity (StabilizationOptions), off until needed.
+  struct Prediction
+  {
+    Eigen::VectorXd displacement; ///< the predictor's full increment
+    double work = 0.0;            ///< |dU . R| of the predictor
+    double dt = 0.0;              ///< the increment's length
+  } predicted_;                   ///< of the last increment tried
+  bool stabilizing_ = false;
+  double viscosityFactor_ = 0.0;           ///< c
+  double dissipationFraction_ = 0.0;       ///< the fraction c was set (or grown) for
+  Eigen::VectorXd dampingShape_;           ///< D (3N)
+  Eigen::VectorXd viscosity_;              ///< c D / dt of the current increment (3N; empty: off)
+  Eigen::VectorXd dampedStart_;            ///< u_n, the full displacements the increment starts from
+  std::vector<std::size_t> diagonalIndex_; ///< where each DOF's diagonal lies in k_'s values
+  std::string unsettled_;                  ///< why the undamped equilibrium at full load failed (empty: it did not)
 };
 
 } // namespace

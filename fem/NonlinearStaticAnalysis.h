@@ -32,6 +32,32 @@ enum class TangentUpdate
   WhenSlow
 };
 
+/**
+ * @brief Artificial viscosity through a local instability: a flap that
+ *        buckles or wrinkles as it is transposed has no stable quasi-static
+ *        path, and Newton fails there at every increment size. After
+ *        @a afterFailures increments fail in a row, each increment adds the
+ *        viscous force c D (u - u_n) / dt (u_n the increment's start, dt its
+ *        size in load fraction, D the diagonal of the reference tangent) and
+ *        c D / dt to the tangent; c is set when it starts so that the
+ *        predicted increment dissipates @a dissipatedEnergyFraction of the
+ *        strain energy (Abaqus's "automatic stabilization", with its default
+ *        fraction 2e-4; ANSYS STABILIZE, ENERGY), and grown tenfold when
+ *        stabilized increments keep failing. The viscous force is a path, not
+ *        a result: at full load the damping is released (relaxation
+ *        increments at full load, each twice as long, then Newton without
+ *        it), and the solve converges only when that undamped Newton does,
+ *        so a converged result is an equilibrium of the tissue alone.
+ */
+struct StabilizationOptions
+{
+  bool enabled = true;
+  int afterFailures = 2;                  ///< consecutive failed increments before it starts
+  double dissipatedEnergyFraction = 2e-4; ///< of the strain energy, per increment, when it starts
+  double largestDissipatedFraction = 0.2; ///< c grows at most until this fraction
+  int relaxations = 8;                    ///< damped increments at full load before giving up
+};
+
 /// Tolerances and safeguards of the Newton-Raphson iteration in one increment.
 struct NewtonOptions
 {
@@ -53,6 +79,7 @@ struct NewtonOptions
   /// diagonal until it is (Levenberg-Marquardt), rather than ending the
   /// increment; the increment is still cut back if Newton does not converge.
   bool shiftIndefiniteTangent = true;
+  StabilizationOptions stabilization;
 };
 
 /// The load increments: fractions of the load, the prescribed displacements
@@ -88,7 +115,8 @@ struct IncrementRecord
   int iterations = 0;
   double residual = 0.0; ///< the last relative residual
   bool accepted = false;
-  std::string rejection; ///< why it was cut back (empty when accepted)
+  bool stabilized = false; ///< with artificial viscosity (StabilizationOptions)
+  std::string rejection;   ///< why it was cut back (empty when accepted)
 };
 
 enum class NonlinearStatus
@@ -113,6 +141,12 @@ struct NonlinearResult
   /// (NewtonOptions::shiftIndefiniteTangent), and the largest relative shift.
   int shiftedFactorizations = 0;
   double largestShift = 0.0;
+  /// Accepted increments with artificial viscosity (StabilizationOptions),
+  /// the energy it dissipated over the whole solve and that as a fraction
+  /// of the final strain energy: 0 when the path needed none.
+  int stabilizedIncrements = 0;
+  double dissipatedEnergy = 0.0;
+  double dissipatedFraction = 0.0;
   int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
   double assembleSeconds = 0.0; ///< in those evaluations
   double factorSeconds = 0.0;   ///< reducing and factoring K-bar

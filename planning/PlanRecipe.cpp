@@ -420,6 +420,8 @@ json predictionCheckToJson(const PredictionCheck& c)
           {"closureFraction", c.closureFraction},
           {"increments", c.increments},
           {"iterations", c.iterations},
+          {"dampedIncrements", c.dampedIncrements},
+          {"dissipatedFraction", c.dissipatedFraction},
           {"minDetF", number(c.deformation.minDetF)},
           {"minDetFElement", c.deformation.minDetFElement},
           {"maxStretch", number(c.deformation.maxStretch)},
@@ -458,6 +460,8 @@ PredictionCheck predictionCheckFromJson(const json& j)
   c.closureFraction = number("closureFraction", 1.0);
   c.increments = int(number("increments", 0));
   c.iterations = int(number("iterations", 0));
+  c.dampedIncrements = int(number("dampedIncrements", 0));
+  c.dissipatedFraction = number("dissipatedFraction", 0.0);
   c.deformation.minDetF = number("minDetF", std::numeric_limits<double>::quiet_NaN());
   c.deformation.minDetFElement = int(number("minDetFElement", -1));
   c.deformation.maxStretch = number("maxStretch", std::numeric_limits<double>::quiet_NaN());

@@ -710,6 +710,8 @@ private:
     check.increments = int(std::count_if(result.increments.begin(), result.increments.end(),
                                          [](const fem::IncrementRecord& r) { return r.accepted; }));
     check.iterations = int(result.iterations.size());
+    check.dampedIncrements = result.stabilizedIncrements;
+    check.dissipatedFraction = result.dissipatedFraction;
     if (!check.converged) // the solver's message says where it stopped, why, and what to try
       check.problem = result.message + ". What is shown is not a prediction.";
   }
@@ -963,8 +965,13 @@ std::string checkSummary(const PredictionCheck& c)
   text << "smallest det F " << c.deformation.minDetF << ", largest stretch " << c.deformation.maxStretch << ", "
        << c.deformation.invertedElements << " inverted elements";
   if (c.model == TissueModel::LargeDeformation)
-    text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), "
-         << (c.converged ? "converged at full closure" : "NOT converged");
+  {
+    text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), ";
+    if (c.dampedIncrements > 0)
+      text << c.dampedIncrements << " of them damped through an instability (" << 100.0 * c.dissipatedFraction
+           << " % of the strain energy dissipated), ";
+    text << (c.converged ? "converged at full closure" : "NOT converged");
+  }
   return text.str();
 }
 

@@ -108,6 +108,14 @@ struct PredictionCheck
   double closureFraction = 1.0;
   int increments = 0; ///< accepted load increments (1 for the linear model)
   int iterations = 0; ///< Newton iterations in all, cut-back attempts included
+  /// Increments solved with artificial viscosity through an instability (a
+  /// flap that buckles as it is transposed; fem::StabilizationOptions), and
+  /// the energy it took up as a fraction of the final strain energy: 0 when
+  /// the path needed none. A converged result is an undamped equilibrium
+  /// either way; a damped path is one the tissue may reach by another way
+  /// (wrinkling, a snap) than the increments suggest.
+  int dampedIncrements = 0;
+  double dissipatedFraction = 0.0;
   /// det F and the principal stretches over every integration point of the
   /// displacements (for the linear model: of its displacement field taken as
   /// a deformation x + u).

@@ -471,6 +471,8 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "solve converged at full closure,increments,," << (c.converged ? 1 : 0) << ",\n";
   out << "closure reached,increments,," << 100.0 * c.closureFraction << ",%\n";
   out << "load increments,solve,," << c.increments << ",\n";
+  out << "increments damped through an instability,solve,," << c.dampedIncrements << ",\n";
+  out << "energy dissipated by the damping,of the strain energy,," << 100.0 * c.dissipatedFraction << ",%\n";
   out << "smallest det F,element " << c.deformation.minDetFElement << ",," << c.deformation.minDetF << ",\n";
   out << "largest principal stretch,all integration points,," << c.deformation.maxStretch << ",\n";
   out << "inverted elements,det F <= 0,," << c.deformation.invertedElements << ",\n";
