@@ -501,9 +501,10 @@ private:
       if (it == 1)
       {
         firstEnergy = s0 != 0.0 ? std::abs(s0) : 1.0;
-        // What the increment is predicted to do, for the viscosity's scale.
-        predicted_ = {map_.expand(delta).col(0) + (lambda1 - lambda0) * map_.offset, std::abs(s0),
-                      std::max(dt, lambda1 - lambda0)};
+        // What the increment is predicted to do, which scales the viscosity
+        // when it starts (expanded only then).
+        if (newton_.stabilization.enabled && !stabilizing_)
+          predicted_ = {delta, lambda1 - lambda0, std::abs(s0), std::max(dt, lambda1 - lambda0)};
       }
 
       Step step = lineSearch(it, lambda1, trial, delta, s0, out);
@@ -598,9 +599,10 @@ private:
     {
       step.next = trial + alpha * delta;
       const bool withTangent = fullNewton_ && ls == 0;
+      const Eigen::VectorXd u = expand(step.next, lambda1);
       try
       {
-        timedEvaluate(expand(step.next, lambda1), lambda1, withTangent ? &k_ : nullptr, &step.fint);
+        timedEvaluate(u, lambda1, withTangent ? &k_ : nullptr, &step.fint);
       }
       catch (const InvertedElementError& e)
       {
@@ -616,7 +618,7 @@ private:
       }
       if (withTangent)
         lin_.factored = false; // k no longer matches the factorization
-      step.rbar = outOfBalance(step.fint, expand(step.next, lambda1), lambda1);
+      step.rbar = outOfBalance(step.fint, u, lambda1);
       step.tangentInK = withTangent;
       if (!newton_.lineSearch || it == 1 || ls >= newton_.maxLineSearchSteps)
       {
@@ -674,7 +676,7 @@ private:
       viscosityFactor_ *= 10.0;
       return true;
     }
-    if (!predicted_.displacement.size())
+    if (!predicted_.reduced.size())
       return false;
     // D: the diagonal of the reference tangent (the tissue's own stiffness
     // scale at every DOF, positive), into k_'s pattern positions.
@@ -691,7 +693,7 @@ private:
     const double floor = 1e-3 * dampingShape_.mean();
     dampingShape_ = dampingShape_.cwiseMax(floor);
     // c: the predicted increment dissipates the stated fraction of the strain energy.
-    const Eigen::VectorXd& du = predicted_.displacement;
+    const Eigen::VectorXd du = map_.expand(predicted_.reduced).col(0) + predicted_.loadStep * map_.offset;
     const double strain =
       std::max(evaluate_(expand(ubar, lambda), lambda, nullptr, nullptr).strainEnergy, 0.5 * predicted_.work);
     const double quadratic = du.dot(dampingShape_.cwiseProduct(du));
@@ -843,10 +845,11 @@ private:
   /// The artificial viscosity (StabilizationOptions), off until needed.
   struct Prediction
   {
-    Eigen::VectorXd displacement; ///< the predictor's full increment
-    double work = 0.0;            ///< |dU . R| of the predictor
-    double dt = 0.0;              ///< the increment's length
-  } predicted_;                   ///< of the last increment tried
+    Eigen::VectorXd reduced; ///< the predictor's correction of the free DOFs
+    double loadStep = 0.0;   ///< with this increment of the prescribed values
+    double work = 0.0;       ///< |dU . R| of the predictor
+    double dt = 0.0;         ///< the increment's length
+  } predicted_;              ///< of the last increment tried
   bool stabilizing_ = false;
   double viscosityFactor_ = 0.0;           ///< c
   double dissipationFraction_ = 0.0;       ///< the fraction c was set (or grown) for
