@@ -706,11 +706,13 @@ private:
   }
 
   /// The viscosity of an increment of length @a dt from full displacements
-  /// @a start (dt = 0: none); the tangent in k_ no longer matches it.
+  /// @a start (dt = 0: none); the tangent in k_ no longer matches it. The
+  /// factorization is kept: modified Newton may start the increment on it,
+  /// as on any earlier state's, and the residual (which has the new
+  /// viscosity) decides whether that converges.
   void dampFrom(const Eigen::VectorXd& start, double dt)
   {
     lin_.tangentInK = false;
-    lin_.factored = false;
     if (dt <= 0.0)
     {
       viscosity_.resize(0);

@@ -215,6 +215,15 @@ SolverStatus LinearStaticAnalysis::prepareStages()
   return status_;
 }
 
+LoadCase nodalLoadCase(const Eigen::VectorXd& f)
+{
+  LoadCase load;
+  for (Eigen::Index n = 0; n < f.size() / 3; ++n)
+    if (!f.segment<3>(3 * n).isZero(0.0))
+      load.nodalForces.emplace_back(int(n), f.segment<3>(3 * n));
+  return load;
+}
+
 Eigen::VectorXd assembleLoadVector(const Mesh& mesh, const MaterialTable& materials, const LoadCase& load,
                                    const AssemblyOptions& options)
 {

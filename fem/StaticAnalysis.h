@@ -36,6 +36,11 @@ struct PhaseTimes
   double solve = 0.0;     ///< loads, reduction, substitution, expansion (last solve())
 };
 
+/// The nodal forces of a full force vector @a f (3N, N) as a load case:
+/// one entry per node with a force (a computed load such as a pre-stress's
+/// balance or a released traction, applied through either analysis).
+LoadCase nodalLoadCase(const Eigen::VectorXd& f);
+
 /// Full load vector R (3N) of @a load on @a mesh (eq. 4.35-4.42): nodal
 /// forces, gravity (each region's density from @a materials), face
 /// pressures on the undeformed faces, muscle forces. Throws

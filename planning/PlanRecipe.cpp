@@ -427,6 +427,16 @@ json predictionCheckToJson(const PredictionCheck& c)
           {"maxStretch", number(c.deformation.maxStretch)},
           {"minStretch", number(c.deformation.minStretch)},
           {"invertedElements", c.deformation.invertedElements},
+          {"skinTrianglesChecked", c.skinCrossings.triangles},
+          {"skinCrossings", c.skinCrossings.crossingPairs},
+          {"tissueCrossings", c.tissueCrossings.crossingPairs},
+          {"deepestTissueCrossing", c.tissueCrossings.deepest},
+          {"caveat", c.caveat},
+          {"meshElements", c.mesh.elements},
+          {"meshMinScaledJacobian", c.mesh.minScaledJacobian},
+          {"meshMaxEdgeRatio", c.mesh.maxEdgeRatio},
+          {"meshElementsBelowScaledJacobianLimit", c.mesh.poorJacobian},
+          {"meshElementsAboveEdgeRatioLimit", c.mesh.poorEdgeRatio},
           {"admissible", c.admissible()},
           {"problem", c.problem}};
 }
@@ -467,6 +477,17 @@ PredictionCheck predictionCheckFromJson(const json& j)
   c.deformation.maxStretch = number("maxStretch", std::numeric_limits<double>::quiet_NaN());
   c.deformation.minStretch = number("minStretch", std::numeric_limits<double>::quiet_NaN());
   c.deformation.invertedElements = int(number("invertedElements", 0));
+  c.skinCrossings.triangles = int(number("skinTrianglesChecked", 0));
+  c.skinCrossings.crossingPairs = int(number("skinCrossings", 0));
+  c.tissueCrossings.crossingPairs = int(number("tissueCrossings", 0));
+  c.tissueCrossings.deepest = number("deepestTissueCrossing", 0.0);
+  if (const auto caveat = j.find("caveat"); caveat != j.end() && caveat->is_string())
+    c.caveat = caveat->get<std::string>();
+  c.mesh.elements = int(number("meshElements", 0));
+  c.mesh.minScaledJacobian = number("meshMinScaledJacobian", 1.0);
+  c.mesh.maxEdgeRatio = number("meshMaxEdgeRatio", 1.0);
+  c.mesh.poorJacobian = int(number("meshElementsBelowScaledJacobianLimit", 0));
+  c.mesh.poorEdgeRatio = int(number("meshElementsAboveEdgeRatioLimit", 0));
   if (const auto problem = j.find("problem"); problem != j.end() && problem->is_string())
     c.problem = problem->get<std::string>();
   return c;

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <Eigen/Geometry>
 
+#include "fem/DisplaySurface.h"
 #include "fem/FiniteStrainStress.h"
 #include "fem/InitialStress.h"
 #include "fem/StaticAnalysis.h"
@@ -453,6 +454,7 @@ private:
     out_.excisedVolume = fem::meshVolume(out_.excisedTissue.mesh);
     out_.layerCount = options_.layerCount;
     out_.cutLayers = continuumOptions.cutLayers;
+    out_.check.mesh = fem::checkMeshQuality(out_.continuum.mesh);
   }
 
   /// The thesis's counts (§4.5.2), for a cut through every layer (a partial
@@ -524,16 +526,6 @@ private:
     return assembly;
   }
 
-  /// The nodal loads of a full load vector, for a fem::LoadCase.
-  static fem::LoadCase nodalLoad(const Eigen::VectorXd& f)
-  {
-    fem::LoadCase load;
-    for (Eigen::Index n = 0; n < f.size() / 3; ++n)
-      if (!f.segment<3>(3 * n).isZero(0.0))
-        load.nodalForces.emplace_back(int(n), f.segment<3>(3 * n));
-    return load;
-  }
-
   /// 5. The linear model (the preview): assembled, factored, solved once.
   void solveLinear()
   {
@@ -580,8 +572,8 @@ private:
     fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, hyperelasticMaterials(),
                                           out_.continuum.openWoundConstraints(), assemblyOptions());
     analysis.setInitialStress(initialStress_);
-    const fem::NonlinearResult result =
-      analysis.solve(nodalLoad(preStressBalance_), options_.increments, {}, progressMonitor(0.1, 0.1, "Gaping"));
+    const fem::NonlinearResult result = analysis.solve(fem::nodalLoadCase(preStressBalance_), options_.increments, {},
+                                                       progressMonitor(0.1, 0.1, "Gaping"));
     if (result.status == fem::NonlinearStatus::Cancelled)
       throw seg::Cancelled();
     std::string problem;
@@ -682,7 +674,7 @@ private:
     if (options_.preTension)
     {
       analysis.setInitialStress(initialStress_);
-      load = nodalLoad(preStressBalance_);
+      load = fem::nodalLoadCase(preStressBalance_);
     }
     const fem::NonlinearResult result =
       analysis.solve(load, options_.increments, {}, progressMonitor(0.2, 0.65, "Large-deformation closure"));
@@ -724,8 +716,13 @@ private:
     // At the points the solver integrates at, so both models are checked alike.
     check.deformation =
       fem::checkDeformation(out_.continuum.mesh, out_.displacements, fem::AssemblyOptions{}.gaussPointsPerDirection);
-    if (!check.problem.empty() || check.deformation.minDetF > kAdmissibleDetF)
+    if (!check.problem.empty())
       return;
+    if (check.deformation.minDetF > kAdmissibleDetF)
+    {
+      checkTheSurfaceCrossings();
+      return;
+    }
     const int e = check.deformation.minDetFElement;
     const int layer =
       e >= 0 && std::size_t(e) < out_.continuum.elementLayer.size() ? out_.continuum.elementLayer[e] : -1;
@@ -738,6 +735,63 @@ private:
                  "the one to trust. Undermining the flaps also helps"
                : ": try undermining the flaps and a margin around them, or a finer element size");
     check.problem = text.str();
+  }
+
+  /// 6''. Whether the body, each element of which is a body, passes through
+  ///      itself: the skin (a failure), then the whole boundary (a caveat),
+  ///      the sutured sides welded where they meet. Crossings shallower than
+  ///      a twentieth of the element size are surfaces lying on each other
+  ///      (the undermined plane, where the sampled faces' chords cross).
+  void checkTheSurfaceCrossings()
+  {
+    PredictionCheck& check = out_.check;
+    const fem::Mesh& mesh = out_.continuum.mesh;
+    const double tolerance = 0.05 * options_.elementSize;
+    const std::vector<fem::ElementFace> skin = fem::skinFaces(out_.continuum);
+    check.skinCrossings = fem::checkSurfaceCrossings(mesh, skin, out_.displacements, tolerance);
+    std::vector<int> all(std::size_t(mesh.nodeCount()));
+    std::iota(all.begin(), all.end(), 0);
+    const std::vector<fem::ElementFace> boundary = fem::boundaryFacesOnNodes(mesh, all);
+    check.tissueCrossings = fem::checkSurfaceCrossings(mesh, boundary, out_.displacements, tolerance);
+    if (check.skinCrossings.crossingPairs > 0)
+    {
+      check.problem = "the skin passes through itself (" + crossingText(check.skinCrossings, skin) + ")" +
+                      (check.model == TissueModel::LinearElastic
+                         ? ": the linear preview moves the tissue too far to be a body; the large-deformation "
+                           "prediction is the one to trust"
+                         : ": the model has no contact between parts of the skin, so a flap folded into its "
+                           "neighbour is not what the skin does; try undermining the flaps and a margin around "
+                           "them, a longer cut (less transposition), or a finer element size");
+      return;
+    }
+    if (check.tissueCrossings.crossingPairs > 0)
+      check.caveat = "the deep tissue passes through itself (" + crossingText(check.tissueCrossings, boundary) +
+                     "): the model has no contact between the wound's walls or between a flap and the tissue "
+                     "under it, so there the tissue is squeezed through itself where it would bunch up; the skin "
+                     "does not pass through itself and its shape is shown, but the stresses in the deep tissue "
+                     "near that point are not to be read";
+  }
+
+  /// "12 pairs of surface triangles cross, the deepest by 2.67 mm, in tissue
+  /// layer 2 from the skin and in tissue layer 2 from the skin at x, y, z mm".
+  std::string crossingText(const fem::SurfaceCrossingCheck& c, const std::vector<fem::ElementFace>& faces) const
+  {
+    std::ostringstream text;
+    text.precision(3);
+    text << c.crossingPairs << " pairs of surface triangles cross, the deepest by " << c.deepest << " mm, "
+         << whereOnTheBody(faces[std::size_t(c.faceA)]) << " and " << whereOnTheBody(faces[std::size_t(c.faceB)])
+         << " at " << c.where.x() << ", " << c.where.y() << ", " << c.where.z() << " mm";
+    return text.str();
+  }
+
+  /// "on the skin" or "in tissue layer 2 from the skin", for a boundary face.
+  std::string whereOnTheBody(const fem::ElementFace& face) const
+  {
+    const std::vector<int>& layers = out_.continuum.elementLayer;
+    const int layer = std::size_t(face.element) < layers.size() ? layers[std::size_t(face.element)] : -1;
+    if (layer == 0 && face.face == 2) // the top face of the skin layer (fem::skinFaces)
+      return "on the skin";
+    return layer >= 0 ? "in tissue layer " + std::to_string(layer + 1) + " from the skin" : "in the tissue";
   }
 
   /// The linear model with its constraints, assembled and factored.
@@ -963,7 +1017,19 @@ std::string checkSummary(const PredictionCheck& c)
   std::ostringstream text;
   text.precision(3);
   text << "smallest det F " << c.deformation.minDetF << ", largest stretch " << c.deformation.maxStretch << ", "
-       << c.deformation.invertedElements << " inverted elements";
+       << c.deformation.invertedElements << " inverted elements, ";
+  if (c.skinCrossings.triangles == 0)
+    text << "not checked for passing through itself";
+  else if (c.skinCrossings.crossingPairs > 0)
+    text << "the skin PASSES THROUGH ITSELF (" << c.skinCrossings.crossingPairs << " crossing triangle pairs)";
+  else
+  {
+    text << "the skin does not pass through itself";
+    if (c.tissueCrossings.crossingPairs > 0)
+      text << ", the deep tissue does (by up to " << c.tissueCrossings.deepest << " mm)";
+    else
+      text << ", nor does the deep tissue";
+  }
   if (c.model == TissueModel::LargeDeformation)
   {
     text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), ";
@@ -972,6 +1038,9 @@ std::string checkSummary(const PredictionCheck& c)
            << " % of the strain energy dissipated), ";
     text << (c.converged ? "converged at full closure" : "NOT converged");
   }
+  if (c.mesh.elements > 0)
+    text << "; mesh of " << c.mesh.elements << " elements: smallest scaled Jacobian " << c.mesh.minScaledJacobian
+         << ", largest edge ratio " << c.mesh.maxEdgeRatio;
   return text.str();
 }
 

@@ -14,10 +14,12 @@
 #include <Eigen/Core>
 
 #include "fem/ContinuumMesher.h"
+#include "fem/ElementQuality.h"
 #include "fem/HyperelasticMaterial.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/NonlinearStaticAnalysis.h"
 #include "fem/Mesh.h"
+#include "fem/SurfaceCrossing.h"
 #include "fem/SurfaceMesher.h"
 #include "planning/IncisionPlan.h"
 #include "planning/SkinChart.h"
@@ -120,10 +122,29 @@ struct PredictionCheck
   /// displacements (for the linear model: of its displacement field taken as
   /// a deformation x + u).
   fem::DeformationCheck deformation;
+  /// Whether the deformed skin passes through itself (a flap folded back
+  /// into the skin beside it), which det F > 0 does not rule out: the model
+  /// has no contact between parts of the tissue. A skin that does is not a
+  /// prediction.
+  fem::SurfaceCrossingCheck skinCrossings;
+  /// The same over the body's whole boundary (wound walls, the undermined
+  /// plane, the deep face): where deep tissue is squeezed through the tissue
+  /// beside it (wound walls bunching at a Z's corners). Stated as a caveat
+  /// (on the stresses there), not a failure, when the skin stays clear.
+  fem::SurfaceCrossingCheck tissueCrossings;
+  /// What holds only with a reservation (e.g. the deep tissue crossing
+  /// itself), for a person; empty when nothing.
+  std::string caveat;
+  /// The shape of the undeformed elements (scaled Jacobian at nodes and
+  /// integration points, edge ratio), against fem::ElementQualityLimits.
+  fem::MeshQualityCheck mesh;
   /// Empty when admissible; otherwise what failed, where, and what to try.
   std::string problem;
 
-  bool admissible() const { return converged && deformation.minDetF > kAdmissibleDetF; }
+  bool admissible() const
+  {
+    return converged && deformation.minDetF > kAdmissibleDetF && skinCrossings.crossingPairs == 0;
+  }
 };
 
 /// The check in one line for a person: "smallest det F 0.639, largest

@@ -476,6 +476,12 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "smallest det F,element " << c.deformation.minDetFElement << ",," << c.deformation.minDetF << ",\n";
   out << "largest principal stretch,all integration points,," << c.deformation.maxStretch << ",\n";
   out << "inverted elements,det F <= 0,," << c.deformation.invertedElements << ",\n";
+  out << "skin surface crossing itself,triangle pairs,," << c.skinCrossings.crossingPairs << ",\n";
+  out << "deep tissue crossing itself,triangle pairs,," << c.tissueCrossings.crossingPairs << ",\n";
+  out << "deepest crossing of the deep tissue,no contact in the model,," << c.tissueCrossings.deepest << ",mm\n";
+  out << "smallest scaled Jacobian,mesh element " << c.mesh.worstJacobianElement << ",," << c.mesh.minScaledJacobian
+      << ",\n";
+  out << "largest edge ratio,mesh element " << c.mesh.worstEdgeRatioElement << ",," << c.mesh.maxEdgeRatio << ",\n";
   double largestMove = 0.0;
   for (std::size_t v = 0; v < p.skin.original.size(); ++v)
     largestMove = std::max(largestMove, (p.skin.displaced[v] - p.skin.original[v]).norm());
@@ -823,6 +829,8 @@ private:
     out_ << "Checks: " << planning::checkSummary(prediction_.check) << "\n";
     if (const std::string warning = planning::checkWarning(prediction_.check); !warning.empty())
       out_ << warning << "\n";
+    if (!prediction_.check.caveat.empty())
+      out_ << "Caveat: " << prediction_.check.caveat << "\n";
   }
 
   /// measurements.csv, the display surfaces (§4.7: subdivided skin faces

@@ -681,6 +681,8 @@ void ResultsPanel::updateSummary()
               "</span><br>";
     text += "Model: " + html(planning::tissueModelDescription(check->model)) + "; " +
             html(planning::checkSummary(*check)) + "<br>";
+    if (!check->caveat.empty())
+      text += "<span style=\"color:#8a5a00\">Caveat: " + html(check->caveat) + "</span><br>";
   }
   if (shownFailed_)
   { // the numbers of a state short of the closure are not results

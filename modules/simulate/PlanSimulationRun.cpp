@@ -317,6 +317,8 @@ std::string summaryText(const PlanRunResult& r)
     out << warning << "\n";
   out << "Tissue model: " << planning::tissueModelDescription(p.check.model) << "\n";
   out << "Checks: " << planning::checkSummary(p.check) << "\n";
+  if (!p.check.caveat.empty())
+    out << "Caveat: " << p.check.caveat << "\n";
   out << "Model: " << p.continuum.mesh.nodeCount() << " nodes, " << p.continuum.mesh.elements.size() << " elements, "
       << p.dofCount << " DOF (" << p.reducedDofCount << " free)\n";
   out << std::fixed << std::setprecision(2) << "Times: skin shade " << r.shadeSeconds << " s, mesh " << p.times.mesh

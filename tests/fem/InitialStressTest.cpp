@@ -92,21 +92,12 @@ InitialStress uniformInitialStress(const Mesh& mesh, const Vector6d& s)
   return s0;
 }
 
-LoadCase nodalLoad(const Eigen::VectorXd& f)
-{
-  LoadCase load;
-  for (Eigen::Index i = 0; i < f.size() / 3; ++i)
-    if (!f.segment<3>(3 * i).isZero(0.0))
-      load.nodalForces.emplace_back(int(i), f.segment<3>(3 * i));
-  return load;
-}
-
 /// The linear preview: the released traction -cutFaceTraction() as a load.
 Eigen::VectorXd linearGape(const CrackedQuarterPlate& p, const LinearElasticMaterial& m, const InitialStress& s0)
 {
   LinearStaticAnalysis analysis(p.mesh, {{0, m}}, p.constraints);
   EXPECT_EQ(analysis.prepare(), SolverStatus::Success) << analysis.message();
-  return analysis.solve(nodalLoad(-cutFaceTraction(p.mesh, s0, p.crackFaces)));
+  return analysis.solve(nodalLoadCase(-cutFaceTraction(p.mesh, s0, p.crackFaces)));
 }
 
 /// The large-deformation solve: S0 in the stress, its balance as a dead load.
@@ -115,7 +106,7 @@ NonlinearResult largeDeformationGape(const CrackedQuarterPlate& p, const Hyperel
 {
   NonlinearStaticAnalysis analysis(p.mesh, {{0, m}}, p.constraints);
   analysis.setInitialStress(s0);
-  return analysis.solve(nodalLoad(initialStressBalance(p.mesh, s0, p.crackFaces)), {0.5, 1e-4, 1.0, false, 100});
+  return analysis.solve(nodalLoadCase(initialStressBalance(p.mesh, s0, p.crackFaces)), {0.5, 1e-4, 1.0, false, 100});
 }
 
 TEST(InitialStress, IntactPreStressedBodyIsInEquilibriumAtRest)

@@ -724,6 +724,10 @@ TEST(PlanRecipe, KeepsTheTissueModelAndThePredictionCheck)
   EXPECT_EQ(written["prediction"]["model"], "large-deformation");
   EXPECT_EQ(written["prediction"]["admissible"], p.check.admissible());
   EXPECT_EQ(written["prediction"]["minDetF"].get<double>(), p.check.deformation.minDetF);
+  EXPECT_GT(written["prediction"]["skinTrianglesChecked"].get<int>(), 0) << "the skin was checked for crossings";
+  EXPECT_EQ(written["prediction"]["skinCrossings"].get<int>(), p.check.skinCrossings.crossingPairs);
+  EXPECT_EQ(written["prediction"]["meshElements"].get<int>(), int(p.continuum.mesh.elements.size()));
+  EXPECT_EQ(written["prediction"]["meshMinScaledJacobian"].get<double>(), p.check.mesh.minScaledJacobian);
   const PlanRecipe read = recipeFromJson(nlohmann::json::parse(written.dump(2)));
   EXPECT_EQ(read.model, TissueModel::LargeDeformation);
   ASSERT_TRUE(read.prediction);

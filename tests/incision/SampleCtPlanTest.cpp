@@ -97,6 +97,41 @@ TEST_F(SampleCtPlan, ZPlastyGainOnTheCheekIsPositiveAndOrderedByAngle)
   }
 }
 
+// The Z-plasty's gain as the plan pipeline predicts it (large deformation,
+// the skin's pre-tension, the procedure's undermining) for 30, 45 and 60°,
+// next to Fig. 2.2's table. The clinical measurements the thesis cites with
+// the figure (its refs 283-284) spread "from 45 percent less to 25 percent
+// more than calculated geometrically": a prediction outside 0.55-1.25 of the
+// table would be outside what surgeons measure. Printed with the difference;
+// equality with the table is not expected (the table is the rigid
+// parallelogram's, the tissue is not).
+TEST_F(SampleCtPlan, ZPlastyGainInLargeDeformationLiesInTheClinicallyMeasuredRange)
+{
+  double previous = 0.0;
+  for (const double angle : {30.0, 45.0, 60.0})
+  {
+    SCOPED_TRACE(angle);
+    const IncisionPlan plan = place("z-plasty", -40.0, -47.0, {{"limb_angle", angle * kDegree}});
+    SimulationOptions o = options();
+    o.model = TissueModel::LargeDeformation;
+    o.preTension = SkinPreTension{};
+    const PlanPrediction p = simulatePlan(maps_->skin, maps_->bone, plan, o);
+    ASSERT_TRUE(p.check.converged) << p.check.problem;
+    EXPECT_TRUE(p.check.admissible()) << checkWarning(p.check);
+    ASSERT_TRUE(p.zPlasty.has_value());
+    const ZPlastyPrediction& z = *p.zPlasty;
+    const double ratio = z.predicted.fraction / z.theoretical;
+    std::printf("[sample cheek Z %.0f deg, large deformation, pre-tension] gain %.1f %% predicted, Fig. 2.2 %.0f %%, "
+                "difference %+.1f points, predicted / table %.2f; %s\n",
+                angle, 100 * z.predicted.fraction, 100 * z.theoretical, 100 * (z.predicted.fraction - z.theoretical),
+                ratio, checkSummary(p.check).c_str());
+    EXPECT_GT(z.predicted.fraction, previous);
+    EXPECT_GE(ratio, 0.55);
+    EXPECT_LE(ratio, 1.25);
+    previous = z.predicted.fraction;
+  }
+}
+
 // The whole model of a real plan (uneven depth, distorted wedges at the
 // wound, suture equations with offsets) solved by CalculiX gives the same
 // displacements. CalculiX integrates its 15-node wedge with 9 points and our

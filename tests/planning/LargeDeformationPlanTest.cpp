@@ -100,6 +100,16 @@ TEST(LargeDeformationPlan, AnExcisionClosesToABodyAndAgreesWithCalculix)
   EXPECT_GT(c.deformation.maxStretch, 1.0);
   EXPECT_LT(p.maxSutureGap, 1e-9);
   EXPECT_FALSE(p.hyperelasticMaterials.empty());
+  // The closed wound's sides meet point for point and are not a crossing.
+  EXPECT_GT(c.skinCrossings.triangles, 0);
+  EXPECT_EQ(c.skinCrossings.crossingPairs, 0);
+  std::printf("[ellipse 24 mm] deep tissue crossing itself: %d triangle pairs, deepest %.3f mm; mesh: scaled "
+              "Jacobian >= %.3f, edge ratio <= %.2f\n",
+              c.tissueCrossings.crossingPairs, c.tissueCrossings.deepest, c.mesh.minScaledJacobian,
+              c.mesh.maxEdgeRatio);
+  ASSERT_EQ(c.mesh.elements, int(p.continuum.mesh.elements.size()));
+  EXPECT_EQ(fem::elementQuality(p.continuum.mesh, c.mesh.worstJacobianElement).scaledJacobian,
+            c.mesh.minScaledJacobian);
   // The check recomputed by the solver's own evaluation of its materials.
   const fem::NonlinearStaticAnalysis solver(p.continuum.mesh, p.hyperelasticMaterials, p.continuum.constraints());
   EXPECT_NEAR(solver.deformationCheck(p.displacements).minDetF, c.deformation.minDetF, 1e-12);
