@@ -723,9 +723,7 @@ private:
       checkTheSurfaceCrossings();
       return;
     }
-    const int e = check.deformation.minDetFElement;
-    const int layer =
-      e >= 0 && std::size_t(e) < out_.continuum.elementLayer.size() ? out_.continuum.elementLayer[e] : -1;
+    const int layer = layerOf(check.deformation.minDetFElement);
     std::ostringstream text;
     text << check.deformation.invertedElements << " of " << out_.continuum.mesh.elements.size()
          << " elements are turned inside out or crushed (smallest det F " << check.deformation.minDetF
@@ -784,11 +782,17 @@ private:
     return text.str();
   }
 
+  /// The tissue layer (0 the skin) of element @a e, or -1.
+  int layerOf(int e) const
+  {
+    const std::vector<int>& layers = out_.continuum.elementLayer;
+    return e >= 0 && std::size_t(e) < layers.size() ? layers[std::size_t(e)] : -1;
+  }
+
   /// "on the skin" or "in tissue layer 2 from the skin", for a boundary face.
   std::string whereOnTheBody(const fem::ElementFace& face) const
   {
-    const std::vector<int>& layers = out_.continuum.elementLayer;
-    const int layer = std::size_t(face.element) < layers.size() ? layers[std::size_t(face.element)] : -1;
+    const int layer = layerOf(face.element);
     if (layer == 0 && face.face == 2) // the top face of the skin layer (fem::skinFaces)
       return "on the skin";
     return layer >= 0 ? "in tissue layer " + std::to_string(layer + 1) + " from the skin" : "in the tissue";
