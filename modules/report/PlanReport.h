@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "modules/core/Module.h"
+#include "planning/ConvergenceStudy.h"
 #include "planning/PlanRecipe.h"
 #include "planning/PlanSimulation.h"
 #include "planning/SkinMeasurements.h"
@@ -38,6 +39,11 @@ struct ReportOptions
   std::vector<std::string> plans;
   /// Print resolution of the figures (dots per inch at their printed size).
   double figureDpi = 220.0;
+  /// Solve each plan again with the mesh refined, with 2–4 tissue layers
+  /// and with the meshed region grown (rim free and clamped), and table how
+  /// the numbers move in an appendix (planning::studyConvergence(); thesis
+  /// §5.5). Twelve solves per plan: minutes, not seconds.
+  bool convergenceStudy = false;
 };
 
 /// Who and what was scanned, as the CT's DICOM fields say.
@@ -82,6 +88,9 @@ struct PlanFacts
     double tensionPerCentimetre = 0.0;
   };
   std::optional<Preview> preview;
+  /// How the numbers depend on the model's own choices; set when the report
+  /// asks for it (ReportOptions::convergenceStudy).
+  std::optional<planning::ConvergenceStudy> convergence;
   double woundStressTheta = 0.0, woundStressZ = 0.0; ///< where the peak is (radians, mm)
   double excisedVolumeToBone = 0.0;                  ///< by the range maps (mm³), the second method
   /// Soft-tissue thickness under the cut path (mm), sampled every 0.5 mm
@@ -94,7 +103,9 @@ struct PlanFacts
 /// The facts of @a plan in @a scene (its skin, bone and thickness maps).
 /// @throws std::invalid_argument naming what is missing (no range maps, a
 /// plan that does not fit its map), std::runtime_error from the solve.
-PlanFacts planFacts(Scene& scene, const PlanNode& plan, const TaskProgress& progress = {});
+/// With @a studyConvergence, PlanFacts::convergence too.
+PlanFacts planFacts(Scene& scene, const PlanNode& plan, const TaskProgress& progress = {},
+                    bool studyConvergence = false);
 
 /// The report of the scene's plans: header block, and per plan the
 /// procedure, the incision on the face, measurements, the predicted result

@@ -37,6 +37,7 @@ void loadScene(const fs::path& path, Scene& scene)
 
 const char* kReportUsage = "usage: caps report SCENE.caps --pdf OUT.pdf [--deidentify] [--paper a4|letter]\n"
                            "                   [--surgeon NAME] [--date YYYY-MM-DD] [--plan NAME ...]\n"
+                           "                   [--study convergence]\n"
                            "\n"
                            "Writes the plan report of a saved scene as a PDF (thesis §2.1, §3.3.3): the\n"
                            "patient and study, and for each plan the procedure and its parameters, the\n"
@@ -53,6 +54,11 @@ const char* kReportUsage = "usage: caps report SCENE.caps --pdf OUT.pdf [--deide
                            "  --surgeon NAME     the surgeon's name in the header (default: a line to sign)\n"
                            "  --date YYYY-MM-DD  the planning date (default today)\n"
                            "  --plan NAME        only this plan (repeatable); default every plan of the scene\n"
+                           "  --study convergence\n"
+                           "                     adds an appendix: each plan solved again with the mesh refined,\n"
+                           "                     2-4 tissue layers and the meshed region grown (rim free and\n"
+                           "                     clamped), with how far each number moves (12 solves a plan:\n"
+                           "                     minutes)\n"
                            "\n"
                            "Figures are rendered offscreen; without a display, CAPS starts its own X server\n"
                            "(Xvfb, Debian package xvfb).\n"
@@ -111,6 +117,13 @@ std::optional<std::string> parse(const std::vector<std::string>& args, ReportArg
       if (!hasValue)
         return "--plan needs the name of a plan of the scene";
       parsed.options.plans.push_back(args[++i]);
+    }
+    else if (a == "--study")
+    {
+      if (!hasValue || args[i + 1] != "convergence")
+        return "--study needs convergence (the only study the report prints)";
+      ++i;
+      parsed.options.convergenceStudy = true;
     }
     else if (!a.empty() && a[0] == '-')
       return "unknown option " + a;
