@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "fem/FiniteStrainIntegrator.h"
 #include "fem/FiniteStrainStress.h"
 #include "fem/NodalStress.h"
 
@@ -53,8 +54,23 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
   fem::NodalStressMatrix regionStress, nodeStress;
   if (prediction.check.model == TissueModel::LargeDeformation)
   {
-    fem::FiniteStrainNodalField field =
-      fem::recoverFiniteStrainNodalField(continuum.mesh, prediction.hyperelasticMaterials, prediction.displacements);
+    fem::FiniteStrainNodalField field = [&] {
+      try
+      {
+        return fem::recoverFiniteStrainNodalField(continuum.mesh, prediction.hyperelasticMaterials,
+                                                  prediction.displacements);
+      }
+      catch (const fem::InvertedElementError&)
+      {
+        // A solve stopped short of the closure can leave a point between the
+        // solve's own 3 x 3 x 3 points turned over; its stress (shown under
+        // its failed check) is read at the points the solve used.
+        if (prediction.check.admissible())
+          throw;
+        return fem::recoverFiniteStrainNodalField(continuum.mesh, prediction.hyperelasticMaterials,
+                                                  prediction.displacements, 3);
+      }
+    }();
     layout = std::move(field.layout);
     regionStress = std::move(field.regionCauchy);
     nodeStress = std::move(field.cauchy);
