@@ -289,6 +289,8 @@ public:
     makeElements();
     if (partial_)
       dropUnusedNodes();
+    if (options_.optimizeInteriorNodes)
+      optimizeTheInteriorNodes();
     sew();
     support();
     return std::move(out_);
@@ -628,6 +630,32 @@ private:
       for (int& node : *upper)
         if (node >= 0)
           node = renumbered[std::size_t(node)];
+  }
+
+  /// 3c. The nodes inside the tissue, and the bone's along the bone, moved
+  ///     so the elements stand upright (InteriorNodeOptimization.h), before
+  ///     anything is made from the positions.
+  void optimizeTheInteriorNodes()
+  {
+    DeepSurface bone;
+    bone.pointUnder = [this](const ChartPoint& c) {
+      const ColumnGeometry g = columnAt(c, "a point of the bone " + chartText(c));
+      return Eigen::Vector3d(g.skin + g.depth * g.inward);
+    };
+    bone.vertexCharts = surface_.vertices;
+    out_.nodeOptimization = optimizeInteriorNodes(out_, borderVertices(), &bone);
+  }
+
+  /// Vertices on the border of the surface (the rim, the wound's edges):
+  ///     their columns are the body's boundary and stay where they are.
+  std::vector<char> borderVertices() const
+  {
+    std::vector<char> border(std::size_t(vertexCount_), 0);
+    for (int e = 0; e < edgeCount_; ++e)
+      if (edgeUses_[std::size_t(e)].size() == 1)
+        for (int v : out_.edges[std::size_t(e)])
+          border[std::size_t(v)] = 1;
+    return border;
   }
 
   /// The index of edge (a, b) when it is a border edge of the hole loop, else -1.

@@ -5,6 +5,7 @@
 /// §4.4.5 and the bone supports of §4.5.
 
 #include "fem/Constraints.h"
+#include "fem/InteriorNodeOptimization.h"
 #include "fem/Mesh.h"
 #include "fem/SurfaceMesh.h"
 
@@ -99,6 +100,11 @@ struct ContinuumMeshOptions
   /// layers the cut goes through (not the nodes at its root, which the
   /// tissue below holds).
   int cutLayers = 0;
+  /// Move the corner nodes between the skin and the bone so the elements
+  /// stand upright where the bone is steep against the columns
+  /// (optimizeInteriorNodes(); the rim's and the wound's columns are held).
+  /// Off: every node on its column's ray, as in §4.5.2.
+  bool optimizeInteriorNodes = false;
 };
 
 /// A node of undermined tissue that slides on the deep plane beneath it:
@@ -180,6 +186,9 @@ struct ContinuumMesh
   /// polygon index surface.polygons.size() + their floor triangle.
   std::vector<int> elementPolygon;
   std::vector<int> elementLayer;
+  /// What ContinuumMeshOptions::optimizeInteriorNodes did (nothing movable
+  /// when off).
+  InteriorNodeOptimization nodeOptimization;
 
   /// The fixed nodes, the sutures and the sliding nodes (one equation
   /// u . n = 0 each, its dependent DOF the normal's largest component) as

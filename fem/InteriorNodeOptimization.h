@@ -4,6 +4,11 @@
 /// skin and the bone) so that the elements stand upright, leaving every node
 /// that carries the geometry or a condition where the mesher put it.
 
+#include "fem/SurfaceMesh.h"
+
+#include <Eigen/Core>
+
+#include <functional>
 #include <vector>
 
 namespace caps::fem {
@@ -25,11 +30,21 @@ struct InteriorNodeOptions
   double acceptableScaledJacobian = 0.3;
 };
 
+/// The deep surface (the bone) the deepest nodes may slide on, as the
+/// mesher sees it: the point under a chart point (may throw where there is
+/// none, e.g. beyond the scan), and the chart point of each vertex column.
+struct DeepSurface
+{
+  std::function<Eigen::Vector3d(const ChartPoint&)> pointUnder;
+  std::vector<ChartPoint> vertexCharts;
+};
+
 /// What optimizeInteriorNodes() did.
 struct InteriorNodeOptimization
 {
-  int movableNodes = 0; ///< layer-boundary corner nodes free to move
-  int movedNodes = 0;   ///< of those, moved by more than a micrometre
+  int movableNodes = 0;     ///< corner nodes free to move (inner layer boundaries and the deep surface)
+  int movableDeepNodes = 0; ///< of those, on the deep surface
+  int movedNodes = 0;       ///< of those, moved by more than a micrometre
   int sweeps = 0;
   double largestMove = 0.0; ///< mm, from where the mesher put the node
   /// The mesh as the mesher placed it (checkMeshQuality() with the default
@@ -63,7 +78,17 @@ struct InteriorNodeOptimization
  * (3 x 3 x 3 points) and any element that came out worse than it was has
  * its moved nodes put back.
  *
- * Not moved: the skin and bone layers and the columns of @a heldVertices
+ * With @a deep, the deepest corner nodes slide on the deep surface too
+ * (each within half its shortest chart edge of where it was, its mid-edge
+ * nodes on that surface under the chart middles of their edges): the
+ * radial rays meet a steep bone obliquely, which skews the elements' bone
+ * faces themselves, and no move of the nodes above can mend a skewed face.
+ * The body's shape is the same surface, sampled at other points.
+ *
+ * Only the nodes of elements below InteriorNodeOptions::acceptableScaledJacobian
+ * move: a good mesh is left as the mesher made it.
+ *
+ * Not moved: the skin layer and the columns of @a heldVertices
  * (one flag per vertex column; the mesher holds the region's rim and the
  * wound's walls, whose surfaces are the body's boundary). Nodes at one
  * place (the two sides of an undermined plane) move as one. The meshContinuum()
@@ -72,6 +97,7 @@ struct InteriorNodeOptimization
  * from their positions; on a finished ContinuumMesh those would be stale.
  */
 InteriorNodeOptimization optimizeInteriorNodes(ContinuumMesh& continuum, const std::vector<char>& heldVertices,
+                                               const DeepSurface* deep = nullptr,
                                                const InteriorNodeOptions& options = {});
 
 } // namespace caps::fem

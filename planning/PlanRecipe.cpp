@@ -437,6 +437,10 @@ json predictionCheckToJson(const PredictionCheck& c)
           {"meshMaxEdgeRatio", c.mesh.maxEdgeRatio},
           {"meshElementsBelowScaledJacobianLimit", c.mesh.poorJacobian},
           {"meshElementsAboveEdgeRatioLimit", c.mesh.poorEdgeRatio},
+          {"meshNodesMoved", c.nodeOptimization.movedNodes},
+          {"meshLargestNodeMove", c.nodeOptimization.largestMove},
+          {"meshMinScaledJacobianAsPlaced", c.nodeOptimization.minScaledJacobianBefore},
+          {"meshElementsBelowScaledJacobianLimitAsPlaced", c.nodeOptimization.poorElementsBefore},
           {"admissible", c.admissible()},
           {"problem", c.problem}};
 }
@@ -488,6 +492,11 @@ PredictionCheck predictionCheckFromJson(const json& j)
   c.mesh.maxEdgeRatio = number("meshMaxEdgeRatio", 1.0);
   c.mesh.poorJacobian = int(number("meshElementsBelowScaledJacobianLimit", 0));
   c.mesh.poorEdgeRatio = int(number("meshElementsAboveEdgeRatioLimit", 0));
+  c.nodeOptimization.movedNodes = int(number("meshNodesMoved", 0));
+  c.nodeOptimization.largestMove = number("meshLargestNodeMove", 0.0);
+  c.nodeOptimization.minScaledJacobianBefore = number("meshMinScaledJacobianAsPlaced", c.mesh.minScaledJacobian);
+  c.nodeOptimization.poorElementsBefore =
+    int(number("meshElementsBelowScaledJacobianLimitAsPlaced", double(c.mesh.poorJacobian)));
   if (const auto problem = j.find("problem"); problem != j.end() && problem->is_string())
     c.problem = problem->get<std::string>();
   return c;

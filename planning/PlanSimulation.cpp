@@ -449,7 +449,9 @@ private:
     out_.underminedVertices = fem::underminingBand(surface, out_.sutures, out_.underminingWidth);
     addUnderminedRegions(surface, plan_, chart_, out_.underminedVertices); // and the plan's regions (Undermining.h)
     continuumOptions.underminedVertices = out_.underminedVertices;
+    continuumOptions.optimizeInteriorNodes = options_.optimizeInteriorNodes;
     out_.continuum = fem::meshContinuum(surface, out_.sutures, geometry, continuumOptions);
+    out_.check.nodeOptimization = out_.continuum.nodeOptimization;
     out_.excisedTissue = fem::meshExcisedTissue(surface, geometry, continuumOptions);
     out_.excisedVolume = fem::meshVolume(out_.excisedTissue.mesh);
     out_.layerCount = options_.layerCount;
@@ -1043,8 +1045,13 @@ std::string checkSummary(const PredictionCheck& c)
     text << (c.converged ? "converged at full closure" : "NOT converged");
   }
   if (c.mesh.elements > 0)
+  {
     text << "; mesh of " << c.mesh.elements << " elements: smallest scaled Jacobian " << c.mesh.minScaledJacobian
-         << ", largest edge ratio " << c.mesh.maxEdgeRatio;
+         << ", largest edge ratio " << c.mesh.maxEdgeRatio << ", " << c.mesh.poorJacobian << " below 0.2";
+    if (c.nodeOptimization.movedNodes > 0)
+      text << " (" << c.nodeOptimization.poorElementsBefore << " before " << c.nodeOptimization.movedNodes
+           << " interior nodes were moved)";
+  }
   return text.str();
 }
 

@@ -16,6 +16,7 @@
 #include "fem/ContinuumMesher.h"
 #include "fem/ElementQuality.h"
 #include "fem/HyperelasticMaterial.h"
+#include "fem/InteriorNodeOptimization.h"
 #include "fem/LinearElasticMaterial.h"
 #include "fem/NonlinearStaticAnalysis.h"
 #include "fem/Mesh.h"
@@ -138,6 +139,9 @@ struct PredictionCheck
   /// The shape of the undeformed elements (scaled Jacobian at nodes and
   /// integration points, edge ratio), against fem::ElementQualityLimits.
   fem::MeshQualityCheck mesh;
+  /// What the interior nodes' optimisation did before that check (zero
+  /// movable nodes when it was switched off).
+  fem::InteriorNodeOptimization nodeOptimization;
   /// Empty when admissible; otherwise what failed, where, and what to try.
   std::string problem;
 
@@ -176,6 +180,11 @@ struct SimulationOptions : TissueDepthOptions
   /// Growth of the quad layers' thickness away from the wound (SurfaceMesherOptions).
   double layerGrowth = 1.25;
   fem::RimCondition rim = fem::RimCondition::Free;
+  /// Move the nodes between the skin and the bone so the elements stand
+  /// upright where the bone is steep against the columns
+  /// (fem::optimizeInteriorNodes()); the skin, the bone, the wound and the
+  /// rim stay where the mesher put them.
+  bool optimizeInteriorNodes = true;
   /// Undermining (thesis §3.2.2, §3.2.4 item 2, default form): the skin
   /// within this distance (mm, measured on the skin chart) of the sutured
   /// hole border edges is freed from what lies beneath, so the bone nodes

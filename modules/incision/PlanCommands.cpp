@@ -482,6 +482,11 @@ void writeMeasurements(const fs::path& file, const planning::PlanMeasurements& m
   out << "smallest scaled Jacobian,mesh element " << c.mesh.worstJacobianElement << ",," << c.mesh.minScaledJacobian
       << ",\n";
   out << "largest edge ratio,mesh element " << c.mesh.worstEdgeRatioElement << ",," << c.mesh.maxEdgeRatio << ",\n";
+  out << "elements below the scaled Jacobian limit,mesh,," << c.mesh.poorJacobian << ",\n";
+  out << "elements below the scaled Jacobian limit as placed,before the interior nodes moved,,"
+      << c.nodeOptimization.poorElementsBefore << ",\n";
+  out << "interior nodes moved,mesh,," << c.nodeOptimization.movedNodes << ",\n";
+  out << "largest interior node move,mesh,," << c.nodeOptimization.largestMove << ",mm\n";
   double largestMove = 0.0;
   for (std::size_t v = 0; v < p.skin.original.size(); ++v)
     largestMove = std::max(largestMove, (p.skin.displaced[v] - p.skin.original[v]).norm());
