@@ -30,28 +30,31 @@ double distanceToHoleBorder(const fem::HoleLoop& hole, const fem::ChartPoint& p)
   return best;
 }
 
-WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
-{
-  if (!std::isfinite(radius) || radius <= 0.0)
-    throw std::invalid_argument(
-      "the distance from the wound for the skin stress must be a positive number of mm (got " + std::to_string(radius) +
-      ")");
-  const DisplacedSkin& skin = prediction.skin;
-  const std::size_t vertexCount = skin.nodes.size();
-  if (vertexCount == 0 || skin.chart.size() != vertexCount || skin.original.size() != vertexCount ||
-      skin.displaced.size() != vertexCount)
-    throw std::invalid_argument("the prediction has no skin to measure the stress on");
-  if (prediction.hole.points.empty())
-    throw std::invalid_argument("the prediction has no hole loop: there is no wound to measure from");
+namespace {
 
+// The skin's stress at each skin node, in the solve's constitutive law.
+struct SkinNodeStress
+{
+  fem::RegionNodeLayout layout;
+  fem::NodalStressMatrix regionStress, nodeStress;
+  int skinRegion = -1;
+
+  fem::Vector6d at(int node) const
+  {
+    const int column = layout.column(skinRegion, node);
+    return column >= 0 ? fem::Vector6d(regionStress.col(column)) : fem::Vector6d(nodeStress.col(node));
+  }
+};
+
+SkinNodeStress recoverSkinNodeStress(const PlanPrediction& prediction)
+{
   // §4.7: σ at the Gauss points, extrapolated to the nodes, averaged within
   // each region; a skin node takes the skin's value (the top layer's region),
   // not the fat's below it, where the skin is one element thick.
   // The large-deformation prediction's stress is the Cauchy stress of its
   // hyperelastic layers (per deformed area); the linear one's, Hooke's law.
   const fem::ContinuumMesh& continuum = prediction.continuum;
-  fem::RegionNodeLayout layout;
-  fem::NodalStressMatrix regionStress, nodeStress;
+  SkinNodeStress out;
   if (prediction.check.model == TissueModel::LargeDeformation)
   {
     fem::FiniteStrainNodalField field = [&] {
@@ -71,32 +74,31 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
                                                   prediction.displacements, 3);
       }
     }();
-    layout = std::move(field.layout);
-    regionStress = std::move(field.regionCauchy);
-    nodeStress = std::move(field.cauchy);
+    out.layout = std::move(field.layout);
+    out.regionStress = std::move(field.regionCauchy);
+    out.nodeStress = std::move(field.cauchy);
   }
   else
   {
     fem::NodalStressField field =
       fem::recoverNodalStresses(continuum.mesh, prediction.materials, prediction.displacements);
-    layout = std::move(field.layout);
-    regionStress = std::move(field.regionStress);
-    nodeStress = std::move(field.stress);
+    out.layout = std::move(field.layout);
+    out.regionStress = std::move(field.regionStress);
+    out.nodeStress = std::move(field.stress);
   }
-  int skinRegion = -1;
   for (std::size_t e = 0; e < continuum.elementLayer.size() && e < continuum.mesh.elements.size(); ++e)
     if (continuum.elementLayer[e] == 0)
     {
-      skinRegion = continuum.mesh.elements[e].region;
+      out.skinRegion = continuum.mesh.elements[e].region;
       break;
     }
-  auto skinStress = [&](int node) -> fem::Vector6d {
-    const int column = layout.column(skinRegion, node);
-    return column >= 0 ? fem::Vector6d(regionStress.col(column)) : fem::Vector6d(nodeStress.col(node));
-  };
+  return out;
+}
 
-  // Each vertex's share of the chart area of its polygons, for the mean.
-  std::vector<double> area(vertexCount, 0.0);
+// Each vertex's share of the chart area of its polygons, for the mean.
+std::vector<double> chartAreaPerVertex(const DisplacedSkin& skin)
+{
+  std::vector<double> area(skin.chart.size(), 0.0);
   for (const auto& polygon : skin.polygons)
   {
     double twice = 0.0;
@@ -109,6 +111,27 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
     for (const int v : polygon)
       area[std::size_t(v)] += 0.5 * std::abs(twice) / double(polygon.size());
   }
+  return area;
+}
+
+} // namespace
+
+WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
+{
+  if (!std::isfinite(radius) || radius <= 0.0)
+    throw std::invalid_argument(
+      "the distance from the wound for the skin stress must be a positive number of mm (got " + std::to_string(radius) +
+      ")");
+  const DisplacedSkin& skin = prediction.skin;
+  const std::size_t vertexCount = skin.nodes.size();
+  if (vertexCount == 0 || skin.chart.size() != vertexCount || skin.original.size() != vertexCount ||
+      skin.displaced.size() != vertexCount)
+    throw std::invalid_argument("the prediction has no skin to measure the stress on");
+  if (prediction.hole.points.empty())
+    throw std::invalid_argument("the prediction has no hole loop: there is no wound to measure from");
+
+  const SkinNodeStress stress = recoverSkinNodeStress(prediction);
+  const std::vector<double> area = chartAreaPerVertex(skin);
 
   WoundStress out;
   out.radius = radius;
@@ -121,7 +144,7 @@ WoundStress woundSkinStress(const PlanPrediction& prediction, double radius)
     if (distance > radius)
       continue;
     const int node = skin.nodes[v];
-    const fem::Vector6d sigma = skinStress(node);
+    const fem::Vector6d sigma = stress.at(node);
     const double vonMises = fem::vonMisesStress(sigma);
     const double maxPrincipal = fem::principalStresses(sigma)[0];
     ++out.vertexCount;
