@@ -9,6 +9,10 @@
 // positions of the Z's first limb tip so every update remeshes and refactors.
 //
 // Usage: caps_bench_plan [--ccx] [--at THETA,Z] [--element-size MM] [--region MM] [--repeats N]
+//                        [--undermining MM] [--keep-nodes]
+// (--undermining overrides the procedure's own band, 0 for none; --keep-nodes
+// leaves the mesher's interior nodes where they are placed, to see what
+// optimizeInteriorNodes costs.)
 // Not a test: prints times and ratios only.
 
 #include <chrono>
@@ -19,6 +23,7 @@
 #include <fstream>
 #include <iostream>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -67,6 +72,8 @@ int main(int argc, char** argv)
   double thetaDeg = -40.0, zMm = -47.0, elementSize = 2.0;
   double regionRadius = planning::SimulationOptions{}.regionRadius;
   int repeats = 5;
+  std::optional<double> undermining;
+  bool optimizeNodes = true;
   for (int a = 1; a < argc; ++a)
   {
     const std::string arg = argv[a];
@@ -80,10 +87,15 @@ int main(int argc, char** argv)
       regionRadius = std::atof(argv[++a]);
     else if (arg == "--repeats" && a + 1 < argc)
       repeats = std::max(1, std::atoi(argv[++a]));
+    else if (arg == "--undermining" && a + 1 < argc)
+      undermining = std::atof(argv[++a]);
+    else if (arg == "--keep-nodes")
+      optimizeNodes = false;
     else
     {
       std::fprintf(stderr,
-                   "usage: caps_bench_plan [--ccx] [--at THETA,Z] [--element-size MM] [--region MM] [--repeats N]\n");
+                   "usage: caps_bench_plan [--ccx] [--at THETA,Z] [--element-size MM] [--region MM] [--repeats N]\n"
+                   "                       [--undermining MM] [--keep-nodes]\n");
       return 2;
     }
   }
@@ -104,6 +116,8 @@ int main(int argc, char** argv)
   options.elementSize = elementSize;
   options.regionRadius = regionRadius;
   options.threads = 2;
+  options.underminingWidth = undermining;
+  options.optimizeInteriorNodes = optimizeNodes;
   // Two positions of the first limb tip (loop vertex 0), 1 mm apart.
   const planning::IncisionPlan edits[2] = {moved(plan, maps.skin, 0, 0.5, 0.0), moved(plan, maps.skin, 0, -0.5, 0.0)};
   planning::simulatePlan(maps.skin, maps.bone, edits[1], options); // warm caches and threads

@@ -104,11 +104,17 @@ TEST(InteriorNodeOptimization, UprightElementsOverABoneCliffInTheSameBody)
     {
       const Eigen::Vector3d was = placed.mesh.nodes.col(column[i]), is = moved.mesh.nodes.col(column[i]);
       if (i == 0 || onTheRim(surface.vertices[v]))
+      {
         EXPECT_EQ(was, is) << "vertex " << v << " level " << i;
+      }
       else if (i + 1 == column.size())
+      {
         EXPECT_NEAR(is.z(), -cliffDepth(ChartPoint(is.x(), is.y())), 1e-9) << "bone node of vertex " << v;
+      }
       else if (i % 2 == 0)
+      {
         EXPECT_NEAR(is.z(), was.z(), 1e-9) << "vertex " << v << " level " << i;
+      }
     }
   }
   for (std::size_t e = 0; e < moved.edges.size(); ++e) // the bone's mid-edge nodes too
