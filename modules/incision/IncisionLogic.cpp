@@ -164,7 +164,7 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
                                                             const planning::PlanRecipe& recipe,
                                                             const planning::PlanPrediction& prediction,
                                                             const planning::PlanDisplay& display,
-                                                            const NodeId& skinMapId)
+                                                            const NodeId& skinMapId, const NodeId& keepPlan)
 {
   // Everything built first, so a failure leaves the scene as it was.
   const Eigen::Map<const Eigen::Matrix3Xd> u(prediction.displacements.data(), 3, prediction.displacements.size() / 3);
@@ -176,12 +176,24 @@ IncisionLogic::PredictionNodes IncisionLogic::addPrediction(const std::string& n
   vtkSmartPointer<vtkPolyData> gaping = planning::gapingSkinPolyData(display, prediction);
 
   PredictionNodes ids;
-  auto* planNode = scene().add<PlanNode>();
-  planNode->setName(name);
-  writePlan(plan, *planNode);
-  writeRecipe(recipe, *planNode);
-  planNode->setRangeMapId(skinMapId);
-  ids.plan = planNode->id();
+  if (!keepPlan.empty())
+  {
+    auto* kept = scene().nodeAs<PlanNode>(keepPlan);
+    if (!kept)
+      throw std::invalid_argument("the plan node " + keepPlan +
+                                  " the prediction was made for is no longer in the scene");
+    writeRecipe(recipe, *kept);
+    ids.plan = keepPlan;
+  }
+  else
+  {
+    auto* planNode = scene().add<PlanNode>();
+    planNode->setName(name);
+    writePlan(plan, *planNode);
+    writeRecipe(recipe, *planNode);
+    planNode->setRangeMapId(skinMapId);
+    ids.plan = planNode->id();
+  }
 
   auto* meshNode = scene().add<FeMeshNode>();
   meshNode->setName(name + " model");

@@ -91,9 +91,13 @@ public:
   /// the operation (Surface nodes, §4.7), and between them the wound gaping
   /// under the skin's pre-tension when the prediction has one ("<name> skin
   /// gaping", hidden). @a name names them ("Z-plasty 1").
+  /// With @a keepPlan (a Plan node of the scene that already holds @a plan)
+  /// no Plan node is added: that one takes the recipe and owns the
+  /// prediction, keeping its id and so its edits' undo history.
   PredictionNodes addPrediction(const std::string& name, const planning::IncisionPlan& plan,
                                 const planning::PlanRecipe& recipe, const planning::PlanPrediction& prediction,
-                                const planning::PlanDisplay& display, const NodeId& skinMapId);
+                                const planning::PlanDisplay& display, const NodeId& skinMapId,
+                                const NodeId& keepPlan = {});
   ///@}
 
   /// The plan a recipe makes on @a skin with this logic's procedures

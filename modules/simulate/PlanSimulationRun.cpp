@@ -157,7 +157,8 @@ PlanRunResult runPlan(const PlanRunInput& input, const TaskProgress& progress)
   return r;
 }
 
-PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunResult& result, bool showModel)
+PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunResult& result, bool showModel,
+                        bool keepPlanNode)
 {
   planning::PlanRecipe recipe = input.recipe;
   recipe.elementSize = input.options.elementSize;
@@ -175,7 +176,7 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
   std::vector<NodeId> old;
   const std::string& name = input.name;
   std::vector<NodeId> oldMeshes;
-  if (scene.nodeAs<PlanNode>(input.planId))
+  if (scene.nodeAs<PlanNode>(input.planId) && !keepPlanNode)
     old.push_back(input.planId);
   for (Node* n : scene.nodesOfType(NodeType::FeMesh))
     if (static_cast<FeMeshNode*>(n)->planId() == input.planId || n->name() == name + " model")
@@ -194,9 +195,12 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
 
   PlanRunNodes nodes;
   IncisionLogic logic(scene);
-  nodes.prediction = logic.addPrediction(name, input.plan, recipe, result.prediction, result.display, input.skinMapId);
-  std::vector<NodeId> added = {nodes.prediction.plan, nodes.prediction.mesh, nodes.prediction.solution,
-                               nodes.prediction.skinBefore, nodes.prediction.skinAfter};
+  nodes.prediction = logic.addPrediction(name, input.plan, recipe, result.prediction, result.display, input.skinMapId,
+                                         keepPlanNode ? input.planId : NodeId());
+  std::vector<NodeId> added = {nodes.prediction.mesh, nodes.prediction.solution, nodes.prediction.skinBefore,
+                               nodes.prediction.skinAfter};
+  if (!keepPlanNode)
+    added.push_back(nodes.prediction.plan);
   if (!nodes.prediction.skinGaping.empty())
     added.push_back(nodes.prediction.skinGaping);
   try
@@ -222,6 +226,22 @@ PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunRe
     if (scene.removeNode(id))
       nodes.replaced.push_back(id);
   return nodes;
+}
+
+bool planUnchangedSince(const Scene& scene, const PlanRunInput& input)
+{
+  const auto* node = scene.nodeAs<PlanNode>(input.planId);
+  if (!node)
+    return false;
+  // Writing the run's plan into a copy of the node changes nothing when
+  // the node still holds it.
+  PlanNode probe;
+  probe.fromJson(node->toJson());
+  IncisionLogic::writePlan(input.plan, probe);
+  nlohmann::json written = probe.toJson(), held = node->toJson();
+  written.erase("id");
+  held.erase("id");
+  return written == held;
 }
 
 vtkSmartPointer<vtkPolyData> modelDrawing(const planning::PlanPrediction& prediction, int steps, double lift)

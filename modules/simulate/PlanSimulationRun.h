@@ -117,7 +117,17 @@ struct PlanRunNodes
 /// FeMesh of the plan, its Solution, "<name> closure", "<name> skin
 /// before", "<name> skin after", "<name> mesh") removed, so a failure never
 /// loses the plan.
-PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunResult& result, bool showModel);
+/// With @a keepPlanNode the plan node input.planId stays (it takes the
+/// recipe and the simulation record) and only its prediction nodes are
+/// replaced: the live prediction's way, so the edits that led to it can
+/// still be undone.
+PlanRunNodes addPlanRun(Scene& scene, const PlanRunInput& input, const PlanRunResult& result, bool showModel,
+                        bool keepPlanNode = false);
+
+/// Whether plan node @a planId of @a scene still holds the plan of @a input
+/// (its cut, parameters, offsets, sutures and undermining as they were read
+/// for the run): false once it was edited since, or removed.
+bool planUnchangedSince(const Scene& scene, const PlanRunInput& input);
 
 /// @brief The finite element model drawn by the conventions of engineering
 /// drawings (thesis §3.3.1), before the operation: the element edges of the
