@@ -23,6 +23,7 @@
 #include <QTimer>
 #include <QVBoxLayout>
 
+#include "modules/simulate/LivePrediction.h"
 #include "modules/simulate/PlanSimulationRun.h"
 #include "modules/simulate/SimulateLogic.h"
 #include "scene/PlanNode.h"
@@ -194,6 +195,17 @@ void SimulatePanel::addRunAndResults(QWidget* content, QVBoxLayout* layout)
   run_->setShortcut(QKeySequence(Qt::Key_F5)); // a button's shortcut acts only while it is shown
   run_->setToolTip(tr("Predict the closure of the plan in the background (Cancel in the status bar)."));
   layout->addWidget(run_);
+  live_ = new QCheckBox(tr("Predict as the plan is edited"), content);
+  live_->setObjectName("simulate.live");
+  live_->setToolTip(tr("After each edit of the plan: the linear preview at once, then the large-deformation "
+                       "prediction in the background, which replaces it when it is done. The next edit "
+                       "stops what is still running."));
+  layout->addWidget(live_);
+  liveStatus_ = new QLabel(content);
+  liveStatus_->setObjectName("simulate.liveStatus");
+  liveStatus_->setWordWrap(true);
+  liveStatus_->hide();
+  layout->addWidget(liveStatus_);
   showMesh_ = new QCheckBox(tr("Show the model: element edges, fixed nodes (red), sutures (green)"), content);
   showMesh_->setObjectName("simulate.showMesh");
   showMesh_->setToolTip(tr("The finite element model before the closure, drawn as engineering drawings do "
@@ -218,6 +230,22 @@ void SimulatePanel::setDefaults()
   estimateTimer_->setSingleShot(true);
   estimateTimer_->setInterval(300);
   connect(estimateTimer_, &QTimer::timeout, this, &SimulatePanel::estimate);
+  liveTimer_ = new QTimer(this);
+  liveTimer_->setSingleShot(true);
+  liveTimer_->setInterval(150);
+  connect(liveTimer_, &QTimer::timeout, this, &SimulatePanel::predictLive);
+  livePrediction_ = new simulate::LivePrediction(
+    [this](simulate::LiveStage stage, const auto& input, const auto& result, double seconds) {
+      liveReady(stage, input, result, seconds);
+    },
+    [this](simulate::LiveStage stage, double fraction, const std::string& step) {
+      // Under what is shown, so the preview stays named while the prediction runs.
+      const QString what = stage == simulate::LiveStage::Preview ? tr("Linear preview") : tr("Prediction");
+      QString text = liveShown_.isEmpty() ? QString() : liveShown_ + "\n";
+      text += tr("%1: %2 % (%3)").arg(what).arg(int(std::lround(100 * fraction))).arg(QString::fromStdString(step));
+      liveStatus_->setText(text);
+    },
+    [this](simulate::LiveStage stage, const std::string& message) { liveFailed(stage, message); }, this);
 
   layers_->setValue(defaults.layerCount);
   cutDepth_->setRange(0, defaults.layerCount);
@@ -251,13 +279,25 @@ void SimulatePanel::connectControls()
     connect(box, qOverload<double>(&QDoubleSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
   connect(cutDepth_, qOverload<int>(&QSpinBox::valueChanged), this, &SimulatePanel::scheduleEstimate);
   connect(run_, &QPushButton::clicked, this, &SimulatePanel::run);
+  connect(live_, &QCheckBox::toggled, this, [this](bool on) {
+    liveStatus_->setVisible(on);
+    if (on)
+      predictLive();
+    else
+    {
+      livePrediction_->cancel();
+      liveTimer_->stop();
+    }
+  });
   connect(showMesh_, &QCheckBox::toggled, this, &SimulatePanel::applyShowMesh);
 }
 
 /// Plans come and go with the scene; the combo follows (once per burst of events).
 void SimulatePanel::observeTheScene()
 {
-  observer_ = logic_.scene().addObserver([this](SceneEvent, const Node& node) {
+  observer_ = logic_.scene().addObserver([this](SceneEvent event, const Node& node) {
+    if (event == SceneEvent::NodeModified && node.type() == NodeType::Plan)
+      planEdited(node);
     if (node.type() != NodeType::Plan && node.type() != NodeType::RangeMap && node.type() != NodeType::Surface)
       return;
     if (updatePending_)
@@ -273,6 +313,7 @@ void SimulatePanel::observeTheScene()
 SimulatePanel::~SimulatePanel()
 {
   logic_.scene().removeObserver(observer_);
+  delete livePrediction_; // cancels its run and waits for it, before the widgets it reports to go
   // The estimate's thread posts to this panel: let it end first (meshing only, short).
   if (estimateThread_)
   {
@@ -540,6 +581,7 @@ void SimulatePanel::run()
     host_.showError("Simulate", e.what());
     return;
   }
+  livePrediction_->cancel(); // the run replaces what it would show
   Scene& scene = logic_.scene();
   QPointer<SimulatePanel> panel(this);
   ModuleHost& host = host_;
@@ -549,7 +591,20 @@ void SimulatePanel::run()
     const double workSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return std::function<void()>([input, result, &scene, panel, &host, workSeconds]() {
       const bool show = panel && panel->showMesh_->isChecked();
-      simulate::addPlanRun(scene, *input, *result, show);
+      if (panel)
+        panel->applying_ = true;
+      try
+      {
+        simulate::addPlanRun(scene, *input, *result, show);
+      }
+      catch (...)
+      {
+        if (panel)
+          panel->applying_ = false;
+        throw;
+      }
+      if (panel)
+        panel->applying_ = false;
       if (panel)
       {
         // The predicted skin lies on the head's: the Results module shows it
@@ -563,6 +618,91 @@ void SimulatePanel::run()
       host.showStatus(status.str());
     });
   });
+}
+
+void SimulatePanel::planEdited(const Node& node)
+{
+  if (applying_ || !live_->isChecked() || node.name() != plan_->currentText().toStdString())
+    return;
+  // Whatever runs was made for the state before this edit: its results
+  // must not land on the edited plan.
+  livePrediction_->cancel();
+  liveShown_.clear();
+  liveStatus_->setText(tr("The plan changed: predicting it again..."));
+  liveTimer_->start();
+}
+
+void SimulatePanel::predictLive()
+{
+  if (!live_->isChecked() || plan_->count() == 0)
+    return;
+  std::string problem;
+  const planning::SimulationOptions o = options(&problem);
+  if (!problem.empty())
+  {
+    liveStatus_->setText(
+      tr("Not predicted: %1. Correct the value in the material table.").arg(QString::fromStdString(problem)));
+    return;
+  }
+  try
+  {
+    livePrediction_->request(simulate::preparePlanRun(logic_.scene(), currentPlan(), o));
+  }
+  catch (const std::exception& e)
+  {
+    liveStatus_->setText(tr("Not predicted: %1").arg(QString::fromStdString(e.what())));
+    return;
+  }
+  liveStatus_->setText(o.model == planning::TissueModel::LinearElastic
+                         ? tr("Predicting (linear)...")
+                         : tr("Linear preview, then the large-deformation prediction..."));
+}
+
+void SimulatePanel::liveReady(simulate::LiveStage stage, const std::shared_ptr<const simulate::PlanRunInput>& input,
+                              const std::shared_ptr<const simulate::PlanRunResult>& result, double seconds)
+{
+  // The plan may have been edited, renamed or removed since: then this is
+  // not its prediction (the edit has cancelled the run, and starts its own).
+  if (!simulate::planUnchangedSince(logic_.scene(), *input))
+    return;
+  applying_ = true;
+  try
+  {
+    simulate::addPlanRun(logic_.scene(), *input, *result, showMesh_->isChecked(), true);
+  }
+  catch (const std::exception& e)
+  {
+    applying_ = false;
+    livePrediction_->cancel();
+    liveStatus_->setText(
+      tr("The prediction could not be put into the scene: %1").arg(QString::fromStdString(e.what())));
+    return;
+  }
+  applying_ = false;
+  const bool preview = stage == simulate::LiveStage::Preview;
+  const planning::PredictionCheck& check = result->prediction.check;
+  QString text = preview ? tr("Linear preview shown (%1 s); the large-deformation prediction is running...")
+                 : check.model == planning::TissueModel::LargeDeformation
+                   ? tr("Large-deformation prediction shown (%1 s).")
+                   : tr("Linear prediction shown (%1 s).");
+  text = text.arg(seconds, 0, 'f', 1);
+  if (!preview && !check.admissible())
+    text += "\n" + QString::fromStdString(planning::checkWarning(check));
+  liveShown_ = preview ? tr("Linear preview shown (%1 s).").arg(seconds, 0, 'f', 1) : QString();
+  liveStatus_->setText(text);
+  summary_->setText(QString::fromStdString(input->name + "\n" + simulate::summaryText(*result)) +
+                    tr("\nSee the predicted face in the Results module."));
+}
+
+void SimulatePanel::liveFailed(simulate::LiveStage stage, const std::string& message)
+{
+  const QString why = QString::fromStdString(message);
+  liveStatus_->setText(
+    stage == simulate::LiveStage::Preview
+      ? tr("Cannot predict this plan: %1").arg(why)
+      : tr("The large-deformation prediction failed: %1\nThe linear preview shown is not the "
+           "prediction: change the plan (more undermining, a larger element size) and it is predicted again.")
+          .arg(why));
 }
 
 void SimulatePanel::applyShowMesh()

@@ -4,8 +4,14 @@
 /// turned into a prediction. Choose a plan, the tissue materials and the
 /// mesh; see the model's size before running; Run (F5) in the background
 /// with Cancel; read the closure force and the skin stress near the wound;
-/// show the model's mesh. The work is in PlanSimulationRun.h.
+/// show the model's mesh; or let the prediction follow the plan's edits
+/// (linear preview at once, large deformation in the background:
+/// LivePrediction.h). The work is in PlanSimulationRun.h.
 
+#include <memory>
+#include <string>
+
+#include <QString>
 #include <QWidget>
 
 #include "planning/PlanSimulation.h"
@@ -27,6 +33,14 @@ namespace caps {
 
 class ModuleHost;
 class SimulateLogic;
+class Node;
+
+namespace simulate {
+class LivePrediction;
+struct PlanRunInput;
+struct PlanRunResult;
+enum class LiveStage;
+} // namespace simulate
 
 class SimulatePanel : public QWidget
 {
@@ -63,6 +77,17 @@ private:
   void scheduleEstimate();
   void estimate();
   void run();
+  /// @name The prediction that follows the edits
+  ///@{
+  /// An edit of the chosen plan (not one of ours): what runs for the old
+  /// state stops at once; the new state runs after a short pause.
+  void planEdited(const Node& node);
+  /// The chosen plan as it is now, to LivePrediction.
+  void predictLive();
+  void liveReady(simulate::LiveStage stage, const std::shared_ptr<const simulate::PlanRunInput>& input,
+                 const std::shared_ptr<const simulate::PlanRunResult>& result, double seconds);
+  void liveFailed(simulate::LiveStage stage, const std::string& message);
+  ///@}
   /// The chosen plan's "<name> mesh" node shown or hidden as the check box says.
   void applyShowMesh();
   NodeId currentPlan() const;
@@ -89,6 +114,12 @@ private:
   QPushButton* run_ = nullptr;
   QLabel* summary_ = nullptr;
   QCheckBox* showMesh_ = nullptr;
+  QCheckBox* live_ = nullptr;    ///< the prediction follows the plan's edits
+  QLabel* liveStatus_ = nullptr; ///< what the live prediction shows and what runs
+  QString liveShown_;            ///< the line saying what is shown, while a later stage runs
+  QTimer* liveTimer_ = nullptr;  ///< the pause after an edit (edits come in bursts)
+  simulate::LivePrediction* livePrediction_ = nullptr;
+  bool applying_ = false; ///< our own nodes going into the scene: their events are not edits
 
   QTimer* estimateTimer_ = nullptr;
   QThread* estimateThread_ = nullptr;

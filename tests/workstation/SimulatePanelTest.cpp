@@ -28,6 +28,7 @@
 #include "report/DemoScene.h"
 #include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"
+#include "scene/ScopedEdit.h"
 #include "scene/SolutionNode.h"
 #include "scene/SurfaceNode.h"
 
@@ -217,6 +218,110 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   EXPECT_EQ(nodesNamed(scene, NodeType::Surface, std::string(kPlan) + " skin after").size(), 1u);
   EXPECT_EQ(nodesNamed(scene, NodeType::Plan, kPlan).size(), 1u);
   EXPECT_EQ(scene.size(), before + 1);
+}
+
+/// The first cut point of plan @a planId moved by @a du mm around the head,
+/// as the Incision panel records an edit (undoable); returns the new path.
+std::vector<Eigen::Vector2d> moveFirstCutPoint(Scene& scene, const NodeId& planId, double du)
+{
+  auto* node = scene.nodeAs<PlanNode>(planId);
+  const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(node->rangeMapId());
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);
+  planning::IncisionPlan plan = IncisionLogic::readPlan(*node);
+  const planning::SkinChart chart = plan.chart(skin);
+  const fem::ChartPoint p = chart.fromNormalized(plan.cutPath()[0]) + fem::ChartPoint(du, 0.0);
+  plan.moveCutPoint(0, chart.toNormalized(p));
+  ScopedEdit edit(scene, planId, "Move cut point 1");
+  IncisionLogic::writePlan(plan, *node);
+  return node->cutPath();
+}
+
+// Item 8 of issue 21: with "Predict as the plan is edited" each edit gets
+// the linear preview, then the large-deformation prediction replaces it;
+// an edit while that runs stops it, and what is finally shown is the
+// prediction of the plan as last edited (the same numbers as a direct
+// call), on the same plan node, so the edits can still be undone.
+TEST(SimulatePanel, LivePredictionFollowsTheEditsAndTheNextEditStopsTheOldOne)
+{
+  test::Workstation w;
+  openDemo(w, 3.0);
+  Scene& scene = w.scene();
+  auto* model = w.widget<QComboBox>("simulate.model");
+  model->setCurrentIndex(model->findData(QString(planning::tissueModelId(planning::TissueModel::LargeDeformation))));
+  auto* status = w.widget<QLabel>("simulate.liveStatus");
+  const NodeId planId = nodesNamed(scene, NodeType::Plan, kPlan).front()->id();
+  const std::vector<Eigen::Vector2d> asOpened = scene.nodeAs<PlanNode>(planId)->cutPath();
+  const auto shows = [&](const char* text) {
+    return w.waitUntil([&] { return status->text().startsWith(text); }, 300);
+  };
+
+  // 1. Ticked: the plan as it is, preview first.
+  const auto ticked = std::chrono::steady_clock::now();
+  w.widget<QCheckBox>("simulate.live")->setChecked(true);
+  ASSERT_TRUE(shows("Linear preview shown")) << status->text().toStdString();
+  std::cout << "live: linear preview in the scene "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - ticked).count()
+            << " s after the tick: " << status->text().toStdString() << "\n";
+  auto* node = scene.nodeAs<PlanNode>(planId);
+  ASSERT_NE(node, nullptr) << "the live prediction keeps the plan node";
+  EXPECT_EQ(node->simulation().value("model", ""), planning::tissueModelId(planning::TissueModel::LinearElastic));
+
+  // 2. An edit while the large-deformation prediction of the old state runs.
+  const std::vector<Eigen::Vector2d> edited = moveFirstCutPoint(scene, planId, 1.5);
+  ASSERT_NE(edited, asOpened);
+  ASSERT_TRUE(status->text().startsWith("The plan changed")) << status->text().toStdString();
+  const auto editedAt = std::chrono::steady_clock::now();
+  ASSERT_TRUE(shows("Linear preview shown")) << status->text().toStdString();
+  std::cout << "live: edit -> linear preview in the scene "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - editedAt).count() << " s\n";
+  ASSERT_TRUE(shows("Large-deformation prediction shown")) << status->text().toStdString();
+  std::cout << "live: edit -> large-deformation prediction in the scene "
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - editedAt).count()
+            << " s: " << status->text().toStdString() << "\n";
+  EXPECT_TRUE(w.window().reportedErrors().empty()) << w.errors();
+  node = scene.nodeAs<PlanNode>(planId);
+  ASSERT_NE(node, nullptr);
+  EXPECT_EQ(node->cutPath(), edited);
+  EXPECT_EQ(node->simulation().value("model", ""), planning::tissueModelId(planning::TissueModel::LargeDeformation));
+  for (const std::string suffix : {" closure", " skin after"})
+    EXPECT_EQ(nodesNamed(scene, suffix == " closure" ? NodeType::Solution : NodeType::Surface, kPlan + suffix).size(),
+              1u)
+      << suffix;
+
+  // What is shown is the large-deformation prediction of the edited plan.
+  const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(node->rangeMapId());
+  const RangeMapNode* boneNode = mapOfRole(scene, "bone");
+  ASSERT_NE(boneNode, nullptr);
+  planning::SimulationOptions options;
+  options.elementSize = 3.0;
+  options.threads = 2;
+  options.model = planning::TissueModel::LargeDeformation;
+  options.preTension = planning::SkinPreTension::facial();
+  const planning::PlanPrediction direct =
+    planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode),
+                           IncisionLogic::readPlan(*node), options);
+  auto* solution =
+    static_cast<SolutionNode*>(nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure").front());
+  vtkDataArray* u = solution->result()->GetPointData()->GetArray("displacement_mm");
+  ASSERT_NE(u, nullptr);
+  ASSERT_EQ(3 * u->GetNumberOfTuples(), direct.displacements.size());
+  double largest = 0.0, difference = 0.0;
+  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      largest = std::max(largest, std::abs(direct.displacements[3 * i + k]));
+      difference = std::max(difference, std::abs(u->GetComponent(i, k) - direct.displacements[3 * i + k]));
+    }
+  EXPECT_GT(largest, 0.1);
+  EXPECT_LE(difference, 1e-9 * largest);
+
+  // 3. Undo reaches the edit through the live predictions, and is predicted in turn.
+  ASSERT_TRUE(scene.undoStack().undo());
+  EXPECT_EQ(scene.nodeAs<PlanNode>(planId)->cutPath(), asOpened);
+  ASSERT_TRUE(status->text().startsWith("The plan changed")) << status->text().toStdString();
+  ASSERT_TRUE(shows("Linear preview shown")) << status->text().toStdString();
+  w.widget<QCheckBox>("simulate.live")->setChecked(false); // stops the large-deformation run
+  EXPECT_TRUE(w.window().reportedErrors().empty()) << w.errors();
 }
 
 TEST(SimulatePanel, SimulatePlanReportsItsPhasesAndStopsWhenAsked)
