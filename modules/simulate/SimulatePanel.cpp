@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include <QCheckBox>
@@ -16,6 +17,7 @@
 #include <QLabel>
 #include <QPointer>
 #include <QPushButton>
+#include <QScopedValueRollback>
 #include <QScrollArea>
 #include <QSpinBox>
 #include <QTableWidget>
@@ -591,20 +593,12 @@ void SimulatePanel::run()
     const double workSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return std::function<void()>([input, result, &scene, panel, &host, workSeconds]() {
       const bool show = panel && panel->showMesh_->isChecked();
-      if (panel)
-        panel->applying_ = true;
-      try
       {
+        std::optional<QScopedValueRollback<bool>> ours; // our own scene writes are not edits
+        if (panel)
+          ours.emplace(panel->applying_, true);
         simulate::addPlanRun(scene, *input, *result, show);
       }
-      catch (...)
-      {
-        if (panel)
-          panel->applying_ = false;
-        throw;
-      }
-      if (panel)
-        panel->applying_ = false;
       if (panel)
       {
         // The predicted skin lies on the head's: the Results module shows it
@@ -665,20 +659,18 @@ void SimulatePanel::liveReady(simulate::LiveStage stage, const std::shared_ptr<c
   // not its prediction (the edit has cancelled the run, and starts its own).
   if (!simulate::planUnchangedSince(logic_.scene(), *input))
     return;
-  applying_ = true;
   try
   {
+    const QScopedValueRollback<bool> ours(applying_, true); // our own scene writes are not edits
     simulate::addPlanRun(logic_.scene(), *input, *result, showMesh_->isChecked(), true);
   }
   catch (const std::exception& e)
   {
-    applying_ = false;
     livePrediction_->cancel();
     liveStatus_->setText(
       tr("The prediction could not be put into the scene: %1").arg(QString::fromStdString(e.what())));
     return;
   }
-  applying_ = false;
   const bool preview = stage == simulate::LiveStage::Preview;
   const planning::PredictionCheck& check = result->prediction.check;
   QString text = preview ? tr("Linear preview shown (%1 s); the large-deformation prediction is running...")

@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <regex>
 #include <sstream>
+#include <stdexcept>
 
 #include <QCheckBox>
 #include <QDoubleSpinBox>
@@ -93,6 +94,46 @@ long estimatedDofs(test::Workstation& w)
   return ready ? std::stol(m[1].str()) : -1;
 }
 
+/// The plan of @a planNode solved directly from what the scene holds, as
+/// the panel solves it in these tests: 3 mm, large deformation (the
+/// prediction, not the preview), the default pre-tension with its lines
+/// placed from the face.
+planning::PlanPrediction directPrediction(Scene& scene, const PlanNode& planNode)
+{
+  const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(planNode.rangeMapId());
+  const RangeMapNode* boneNode = mapOfRole(scene, "bone");
+  if (!skinNode || !boneNode)
+    throw std::runtime_error("the scene has no skin or bone map for " + planNode.name());
+  planning::SimulationOptions options;
+  options.elementSize = 3.0;
+  options.threads = 2;
+  options.model = planning::TissueModel::LargeDeformation;
+  options.preTension = planning::SkinPreTension::facial();
+  return planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode),
+                                IncisionLogic::readPlan(planNode), options);
+}
+
+/// The displacements the scene shows for the plan ("<plan> closure") are
+/// @a direct's, to 1e-9 of the largest, and move the skin by millimetres.
+void expectShownDisplacements(Scene& scene, const planning::PlanPrediction& direct)
+{
+  const std::vector<Node*> closure = nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure");
+  ASSERT_EQ(closure.size(), 1u);
+  vtkDataArray* u = static_cast<SolutionNode*>(closure.front())->result()->GetPointData()->GetArray("displacement_mm");
+  ASSERT_NE(u, nullptr);
+  ASSERT_EQ(3 * u->GetNumberOfTuples(), direct.displacements.size());
+  double largest = 0.0, difference = 0.0;
+  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      const double expected = direct.displacements[3 * i + k];
+      largest = std::max(largest, std::abs(expected));
+      difference = std::max(difference, std::abs(u->GetComponent(i, k) - expected));
+    }
+  EXPECT_GT(largest, 0.1) << "the sutures move the skin by millimetres";
+  EXPECT_LE(difference, 1e-9 * largest);
+}
+
 TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
 {
   test::Workstation w;
@@ -127,36 +168,13 @@ TEST(SimulatePanel, RunMatchesADirectSimulationAndReplacesThePrediction)
   EXPECT_DOUBLE_EQ(planNode->simulation().value("elementSize", 0.0), 3.0);
 
   // The same plan simulated directly, from what the scene holds.
-  const planning::IncisionPlan plan = IncisionLogic::readPlan(*planNode); // still reads
+  const planning::PlanPrediction direct = directPrediction(scene, *planNode); // the plan still reads
   const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(planNode->rangeMapId());
   ASSERT_NE(skinNode, nullptr);
-  const RangeMapNode* boneNode = mapOfRole(scene, "bone");
-  ASSERT_NE(boneNode, nullptr);
-  planning::SimulationOptions options;
-  options.elementSize = 3.0;
-  options.threads = 2;
-  options.model = planning::TissueModel::LargeDeformation; // the panel's: the prediction, not the preview
-  options.preTension = planning::SkinPreTension::facial(); // the panel's default, lines placed from the face
-  const planning::PlanPrediction direct =
-    planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode), plan, options);
 
   EXPECT_EQ(dofs, long(direct.dofCount)) << "the estimate before the run is the solved model's size";
 
-  auto* solution =
-    static_cast<SolutionNode*>(nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure").front());
-  vtkDataArray* u = solution->result()->GetPointData()->GetArray("displacement_mm");
-  ASSERT_NE(u, nullptr);
-  ASSERT_EQ(3 * u->GetNumberOfTuples(), direct.displacements.size());
-  double largest = 0.0, difference = 0.0;
-  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      const double expected = direct.displacements[3 * i + k];
-      largest = std::max(largest, std::abs(expected));
-      difference = std::max(difference, std::abs(u->GetComponent(i, k) - expected));
-    }
-  EXPECT_GT(largest, 0.1) << "the sutures move the skin by millimetres";
-  EXPECT_LE(difference, 1e-9 * largest);
+  expectShownDisplacements(scene, direct);
 
   // The summary: the closure force of the direct call at the printed precision.
   const std::string summary = w.widget<QLabel>("simulate.summary")->text().toStdString();
@@ -289,31 +307,7 @@ TEST(SimulatePanel, LivePredictionFollowsTheEditsAndTheNextEditStopsTheOldOne)
       << suffix;
 
   // What is shown is the large-deformation prediction of the edited plan.
-  const RangeMapNode* skinNode = scene.nodeAs<RangeMapNode>(node->rangeMapId());
-  const RangeMapNode* boneNode = mapOfRole(scene, "bone");
-  ASSERT_NE(boneNode, nullptr);
-  planning::SimulationOptions options;
-  options.elementSize = 3.0;
-  options.threads = 2;
-  options.model = planning::TissueModel::LargeDeformation;
-  options.preTension = planning::SkinPreTension::facial();
-  const planning::PlanPrediction direct =
-    planning::simulatePlan(RangeMapLogic::toRangeMap(*skinNode), RangeMapLogic::toRangeMap(*boneNode),
-                           IncisionLogic::readPlan(*node), options);
-  auto* solution =
-    static_cast<SolutionNode*>(nodesNamed(scene, NodeType::Solution, std::string(kPlan) + " closure").front());
-  vtkDataArray* u = solution->result()->GetPointData()->GetArray("displacement_mm");
-  ASSERT_NE(u, nullptr);
-  ASSERT_EQ(3 * u->GetNumberOfTuples(), direct.displacements.size());
-  double largest = 0.0, difference = 0.0;
-  for (vtkIdType i = 0; i < u->GetNumberOfTuples(); ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      largest = std::max(largest, std::abs(direct.displacements[3 * i + k]));
-      difference = std::max(difference, std::abs(u->GetComponent(i, k) - direct.displacements[3 * i + k]));
-    }
-  EXPECT_GT(largest, 0.1);
-  EXPECT_LE(difference, 1e-9 * largest);
+  expectShownDisplacements(scene, directPrediction(scene, *node));
 
   // 3. Undo reaches the edit through the live predictions, and is predicted in turn.
   ASSERT_TRUE(scene.undoStack().undo());
