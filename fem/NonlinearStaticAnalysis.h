@@ -67,6 +67,19 @@ struct NewtonOptions
   /// ... and the energy of the last correction |dU . R| <= energyTolerance
   /// times that of the increment's first.
   double energyTolerance = 1e-14;
+  /// The increments before the last (those that end below full load)
+  /// converge on this looser residual, and on the energy tolerance loosened
+  /// by the square of the same factor (a correction's energy goes as the
+  /// residual squared); 0: residualTolerance. Hyperelastic tissue under
+  /// dead loads and linear constraints has no memory of its path, so the
+  /// states on the way only have to be near enough to equilibrium for
+  /// Newton to start the next increment from them (each increment's
+  /// residual carries what the last one left over); the state at full load,
+  /// the prediction, converges on residualTolerance as always. Not while the
+  /// artificial viscosity is on (a damped path depends on its states), and
+  /// a solve that fails on the loose path is solved again on the strict one
+  /// before it is reported as failed (NonlinearResult::loosePathStoppedAt).
+  double pathResidualTolerance = 0.0;
   int maxIterations = 20;
   TangentUpdate tangentUpdate = TangentUpdate::WhenSlow;
   /// Line search along each correction (FEBio's): when the energy along it
@@ -147,6 +160,10 @@ struct NonlinearResult
   int stabilizedIncrements = 0;
   double dissipatedEnergy = 0.0;
   double dissipatedFraction = 0.0;
+  /// When a solve on a loose path (NewtonOptions::pathResidualTolerance)
+  /// did not converge and this result is the strict path's: where the loose
+  /// one stopped (its work is in the counts and times below). -1: no retry.
+  double loosePathStoppedAt = -1.0;
   int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
   double assembleSeconds = 0.0; ///< in those evaluations
   double factorSeconds = 0.0;   ///< reducing and factoring K-bar

@@ -574,8 +574,8 @@ private:
     fem::NonlinearStaticAnalysis analysis(out_.continuum.mesh, hyperelasticMaterials(),
                                           out_.continuum.openWoundConstraints(), assemblyOptions());
     analysis.setInitialStress(initialStress_);
-    const fem::NonlinearResult result = analysis.solve(fem::nodalLoadCase(preStressBalance_), options_.increments, {},
-                                                       progressMonitor(0.1, 0.1, "Gaping"));
+    const fem::NonlinearResult result = analysis.solve(fem::nodalLoadCase(preStressBalance_), options_.increments,
+                                                       options_.newton, progressMonitor(0.1, 0.1, "Gaping"));
     if (result.status == fem::NonlinearStatus::Cancelled)
       throw seg::Cancelled();
     std::string problem;
@@ -678,8 +678,8 @@ private:
       analysis.setInitialStress(initialStress_);
       load = fem::nodalLoadCase(preStressBalance_);
     }
-    const fem::NonlinearResult result =
-      analysis.solve(load, options_.increments, {}, progressMonitor(0.2, 0.65, "Large-deformation closure"));
+    const fem::NonlinearResult result = analysis.solve(load, options_.increments, options_.newton,
+                                                       progressMonitor(0.2, 0.65, "Large-deformation closure"));
     if (result.status == fem::NonlinearStatus::Cancelled)
       throw seg::Cancelled();
     out_.displacements = result.displacements;

@@ -171,6 +171,15 @@ struct SimulationOptions : TissueDepthOptions
   /// 1e-4 of the closure) when it does not or an element would turn inside
   /// out.
   fem::IncrementControl increments = {0.25, 1e-4, 0.5, false, 200};
+  /// Newton's tolerances of the large-deformation solve: the prediction at
+  /// full closure converges on the solver's residual (1e-8 of the forces);
+  /// the states on the way, which only lead there, on a looser one
+  /// (fem::NewtonOptions::pathResidualTolerance).
+  fem::NewtonOptions newton = [] {
+    fem::NewtonOptions n;
+    n.pathResidualTolerance = 1e-3;
+    return n;
+  }();
   /// Element size at the wound: cut-path segments are split so every hole
   /// border edge is at most this long (sutured edges into equal numbers of
   /// pieces on both sides), and it is the first quad layer's thickness.

@@ -141,6 +141,19 @@ TEST(Stabilization, AnArchPushedPastItsLimitLoadSnapsThroughToTheEquilibriumDisp
               (same.result.displacements - snapped.displacements).norm() / snapped.displacements.norm());
   EXPECT_NEAR(same.force, load, 1e-6 * load);
   EXPECT_LT((same.result.displacements - snapped.displacements).norm(), 1e-6 * snapped.displacements.norm());
+
+  // 4. With the states before the snap converged to 1e-3 of the forces only
+  //    (NewtonOptions::pathResidualTolerance), the arch snaps to the same state.
+  NewtonOptions loosePath;
+  loosePath.pathResidualTolerance = 1e-3;
+  const NonlinearResult loose = analysis.solve(push, control, loosePath);
+  ASSERT_EQ(loose.status, NonlinearStatus::Converged) << loose.message;
+  std::printf("[arch] loose path: %zu iterations (strict %zu), field difference %.3g, loose path stopped at %.3g\n",
+              loose.iterations.size(), snapped.iterations.size(),
+              (loose.displacements - snapped.displacements).norm() / snapped.displacements.norm(),
+              loose.loosePathStoppedAt);
+  EXPECT_GT(loose.stabilizedIncrements, 0);
+  EXPECT_LT((loose.displacements - snapped.displacements).norm(), 1e-6 * snapped.displacements.norm());
 }
 
 TEST(Stabilization, ASolveThatConvergesWithoutItIsUntouched)
