@@ -120,6 +120,7 @@ Comparison compare(const Model& m)
   const double pathDifference =
     (p.displacements - r.displacements).cwiseAbs().maxCoeff() / r.displacements.cwiseAbs().maxCoeff();
   EXPECT_LT(pathDifference, 1e-7) << m.name << ": a loose path changed the end state";
+  EXPECT_LT(test::relativeDifference(out.ccx, p.displacements), kAgreement) << m.name << ": the loose path against ccx";
   EXPECT_LE(p.iterations.size(), r.iterations.size()) << m.name;
   std::cout << m.name << ": modified Newton " << r.iterations.size() << " iterations, " << r.factorizations
             << " factorizations; full Newton " << f.iterations.size() << " iterations; difference " << newtonDifference
