@@ -151,6 +151,7 @@ MeshQualityCheck checkMeshQuality(const Mesh& mesh, const ElementQualityLimits& 
     }
     check.poorJacobian += q.scaledJacobian < limits.minScaledJacobian ? 1 : 0;
     check.poorEdgeRatio += q.edgeRatio > limits.maxEdgeRatio ? 1 : 0;
+    check.poorElements += q.scaledJacobian < limits.minScaledJacobian || q.edgeRatio > limits.maxEdgeRatio ? 1 : 0;
   }
   return check;
 }

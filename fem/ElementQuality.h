@@ -65,6 +65,7 @@ struct MeshQualityCheck
   /// maxEdgeRatio.
   int poorJacobian = 0;
   int poorEdgeRatio = 0;
+  int poorElements = 0; ///< outside either limit
 
   bool withinLimits() const { return poorJacobian == 0 && poorEdgeRatio == 0; }
 };

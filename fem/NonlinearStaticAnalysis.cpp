@@ -893,16 +893,16 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
   const Eigen::VectorXd initialStressForce =
     initialStress_.empty() ? Eigen::VectorXd() : initialStressForces(mesh_, initialStress_, options_);
-  auto run = [&](const NewtonOptions& options) {
+  auto run = [&](const NewtonOptions& options, const NewtonMonitor& watch) {
     NewtonSolve newtonSolve(
       mesh_, materials_, constraints_, [&] { return loadVector(load); },
       [this](const Eigen::VectorXd& u, double lambda, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
         return evaluate(u, lambda, k, fint);
       },
-      initialStressForce, options, monitor);
+      initialStressForce, options, watch);
     return newtonSolve.run(control);
   };
-  NonlinearResult result = run(newton);
+  NonlinearResult result = run(newton, monitor);
   if (result.status != NonlinearStatus::NotConverged || !(newton.pathResidualTolerance > newton.residualTolerance))
     return result;
   // 2. Near an instability the path decides which way the tissue goes, and
@@ -910,7 +910,16 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
   //    when the strict path fails too. Its cost is counted.
   NewtonOptions strict = newton;
   strict.pathResidualTolerance = 0.0;
-  NonlinearResult again = run(strict);
+  NewtonMonitor retryMonitor;
+  if (monitor)
+    retryMonitor = [&monitor](const NewtonIteration& iteration) {
+      NewtonIteration marked = iteration;
+      marked.strictRetry = true;
+      return monitor(marked);
+    };
+  NonlinearResult again = run(strict, retryMonitor);
+  for (NewtonIteration& iteration : again.iterations)
+    iteration.strictRetry = true;
   again.loosePathStoppedAt = result.loadFraction;
   again.factorizations += result.factorizations;
   again.shiftedFactorizations += result.shiftedFactorizations;

@@ -118,6 +118,9 @@ struct NewtonIteration
   double energy = 0.0;         ///< |dU . R| of the correction / the increment's first
   double lineSearchStep = 1.0; ///< the fraction of the correction taken
   bool newTangent = true;      ///< the correction came from a tangent formed and factored for it
+  /// The solve is the strict path's, after the loose one failed
+  /// (NewtonOptions::pathResidualTolerance): loadFraction starts again from 0.
+  bool strictRetry = false;
 };
 
 /// One attempted increment, accepted or cut back.
@@ -162,7 +165,8 @@ struct NonlinearResult
   double dissipatedFraction = 0.0;
   /// When a solve on a loose path (NewtonOptions::pathResidualTolerance)
   /// did not converge and this result is the strict path's: where the loose
-  /// one stopped (its work is in the counts and times below). -1: no retry.
+  /// one stopped (its work is in the counts and times below, its increments
+  /// and iterations are not in the lists above). -1: no retry.
   double loosePathStoppedAt = -1.0;
   int assemblies = 0;           ///< evaluations of the forces (with the tangent or, in line searches, without)
   double assembleSeconds = 0.0; ///< in those evaluations

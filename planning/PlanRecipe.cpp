@@ -415,6 +415,7 @@ json predictionCheckToJson(const PredictionCheck& c)
 {
   // JSON has no NaN: a stretch left out (every point inverted) is null.
   const auto number = [](double x) { return std::isfinite(x) ? json(x) : json(nullptr); };
+  const auto xyz = [](const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); };
   return {{"model", tissueModelId(c.model)},
           {"converged", c.converged},
           {"closureFraction", c.closureFraction},
@@ -422,6 +423,7 @@ json predictionCheckToJson(const PredictionCheck& c)
           {"iterations", c.iterations},
           {"dampedIncrements", c.dampedIncrements},
           {"dissipatedFraction", c.dissipatedFraction},
+          {"loosePathStoppedAt", c.loosePathStoppedAt},
           {"minDetF", number(c.deformation.minDetF)},
           {"minDetFElement", c.deformation.minDetFElement},
           {"maxStretch", number(c.deformation.maxStretch)},
@@ -437,6 +439,9 @@ json predictionCheckToJson(const PredictionCheck& c)
           {"meshMaxEdgeRatio", c.mesh.maxEdgeRatio},
           {"meshElementsBelowScaledJacobianLimit", c.mesh.poorJacobian},
           {"meshElementsAboveEdgeRatioLimit", c.mesh.poorEdgeRatio},
+          {"meshElementsOutsideLimits", c.mesh.poorElements},
+          {"meshWorstScaledJacobianAt", xyz(c.mesh.worstJacobianAt)},
+          {"meshWorstEdgeRatioAt", xyz(c.mesh.worstEdgeRatioAt)},
           {"meshNodesMoved", c.nodeOptimization.movedNodes},
           {"meshLargestNodeMove", c.nodeOptimization.largestMove},
           {"meshMinScaledJacobianAsPlaced", c.nodeOptimization.minScaledJacobianBefore},
@@ -465,6 +470,15 @@ PredictionCheck predictionCheckFromJson(const json& j)
       bad(std::string("\"") + key + "\" must be a number, not " + it->dump());
     return it->get<double>();
   };
+  const auto point = [&](const char* key) {
+    const auto it = j.find(key);
+    if (it == j.end() || it->is_null())
+      return Eigen::Vector3d(Eigen::Vector3d::Zero());
+    if (!it->is_array() || it->size() != 3 ||
+        !std::all_of(it->begin(), it->end(), [](const json& x) { return x.is_number(); }))
+      bad(std::string("\"") + key + "\" must be [x, y, z] in mm, not " + it->dump());
+    return Eigen::Vector3d((*it)[0].get<double>(), (*it)[1].get<double>(), (*it)[2].get<double>());
+  };
   if (const auto converged = j.find("converged"); converged != j.end())
   {
     if (!converged->is_boolean())
@@ -476,6 +490,7 @@ PredictionCheck predictionCheckFromJson(const json& j)
   c.iterations = int(number("iterations", 0));
   c.dampedIncrements = int(number("dampedIncrements", 0));
   c.dissipatedFraction = number("dissipatedFraction", 0.0);
+  c.loosePathStoppedAt = number("loosePathStoppedAt", -1.0);
   c.deformation.minDetF = number("minDetF", std::numeric_limits<double>::quiet_NaN());
   c.deformation.minDetFElement = int(number("minDetFElement", -1));
   c.deformation.maxStretch = number("maxStretch", std::numeric_limits<double>::quiet_NaN());
@@ -492,6 +507,10 @@ PredictionCheck predictionCheckFromJson(const json& j)
   c.mesh.maxEdgeRatio = number("meshMaxEdgeRatio", 1.0);
   c.mesh.poorJacobian = int(number("meshElementsBelowScaledJacobianLimit", 0));
   c.mesh.poorEdgeRatio = int(number("meshElementsAboveEdgeRatioLimit", 0));
+  c.mesh.poorElements =
+    int(number("meshElementsOutsideLimits", double(std::max(c.mesh.poorJacobian, c.mesh.poorEdgeRatio))));
+  c.mesh.worstJacobianAt = point("meshWorstScaledJacobianAt");
+  c.mesh.worstEdgeRatioAt = point("meshWorstEdgeRatioAt");
   c.nodeOptimization.movedNodes = int(number("meshNodesMoved", 0));
   c.nodeOptimization.largestMove = number("meshLargestNodeMove", 0.0);
   c.nodeOptimization.minScaledJacobianBefore = number("meshMinScaledJacobianAsPlaced", c.mesh.minScaledJacobian);

@@ -325,6 +325,7 @@ public:
       solveLinear();
     }
     checkTheDeformation();
+    stateTheMeshQuality();
     phase(0.9, "Closure forces");
     closureForces();
     skinForTheDisplay();
@@ -657,8 +658,9 @@ private:
     return [this, from, span, what](const fem::NewtonIteration& it) {
       return !options_.progress ||
              options_.progress(from + span * it.loadFraction,
-                               what + ": " + std::to_string(int(std::lround(100 * it.loadFraction))) +
-                                 " %, increment " + std::to_string(it.increment));
+                               what + (it.strictRetry ? " (second try, every increment converged fully)" : "") + ": " +
+                                 std::to_string(int(std::lround(100 * it.loadFraction))) + " %, increment " +
+                                 std::to_string(it.increment));
     };
   }
 
@@ -706,6 +708,7 @@ private:
     check.iterations = int(result.iterations.size());
     check.dampedIncrements = result.stabilizedIncrements;
     check.dissipatedFraction = result.dissipatedFraction;
+    check.loosePathStoppedAt = result.loosePathStoppedAt;
     if (!check.converged) // the solver's message says where it stopped, why, and what to try
       check.problem = result.message + ". What is shown is not a prediction.";
   }
@@ -765,11 +768,66 @@ private:
       return;
     }
     if (check.tissueCrossings.crossingPairs > 0)
-      check.caveat = "the deep tissue passes through itself (" + crossingText(check.tissueCrossings, boundary) +
-                     "): the model has no contact between the wound's walls or between a flap and the tissue "
-                     "under it, so there the tissue is squeezed through itself where it would bunch up; the skin "
-                     "does not pass through itself and its shape is shown, but the stresses in the deep tissue "
-                     "near that point are not to be read";
+      addCaveat("the deep tissue passes through itself (" + crossingText(check.tissueCrossings, boundary) +
+                "): the model has no contact between the wound's walls or between a flap and the tissue "
+                "under it, so there the tissue is squeezed through itself where it would bunch up; the skin "
+                "does not pass through itself and its shape is shown, but the stresses in the deep tissue "
+                "near that point are not to be read");
+  }
+
+  /// 6'''. Elements the mesher could not shape within the limits
+  ///       (fem::ElementQualityLimits) even after moving the interior nodes,
+  ///       as a caveat that says where the worst are: their strains and
+  ///       stresses are less accurate than the rest's. (An element inverted
+  ///       at an integration point is refused by the solver itself.)
+  void stateTheMeshQuality()
+  {
+    const fem::MeshQualityCheck& q = out_.check.mesh;
+    if (q.elements == 0 || q.withinLimits())
+      return;
+    const fem::ElementQualityLimits limits;
+    std::ostringstream text;
+    text.precision(3);
+    text << q.poorElements << " of " << q.elements << " elements are shaped outside the limits a large-motion mesh "
+         << "should keep (";
+    if (q.poorJacobian > 0)
+      text << q.poorJacobian << " with a scaled Jacobian under " << limits.minScaledJacobian << ", the worst "
+           << q.minScaledJacobian << (q.minScaledJacobian <= 0.0 ? " (inside out at a node)" : "") << " "
+           << whereInTheTissue(q.worstJacobianElement, q.worstJacobianAt);
+    if (q.poorJacobian > 0 && q.poorEdgeRatio > 0)
+      text << "; ";
+    if (q.poorEdgeRatio > 0)
+      text << q.poorEdgeRatio << " longer than " << limits.maxEdgeRatio << " times their shortest edge, the worst "
+           << q.maxEdgeRatio << " times " << whereInTheTissue(q.worstEdgeRatioElement, q.worstEdgeRatioAt);
+    text << ")";
+    if (out_.check.nodeOptimization.movedNodes > 0)
+      text << " after " << out_.check.nodeOptimization.movedNodes << " interior nodes were moved to improve them";
+    text << ": the strains and stresses in those elements are less accurate than elsewhere (the tissue between skin "
+            "and bone is thin or steep there for the element size)";
+    addCaveat(text.str());
+  }
+
+  /// "in tissue layer 3 from the skin at x, y, z mm, 23 mm from the wound".
+  std::string whereInTheTissue(int element, const Eigen::Vector3d& at) const
+  {
+    std::ostringstream text;
+    text.precision(3);
+    const int layer = layerOf(element);
+    text << (layer >= 0 ? "in tissue layer " + std::to_string(layer + 1) + " from the skin" : "in the tissue") << " at "
+         << at.x() << ", " << at.y() << ", " << at.z() << " mm";
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const fem::Suture& s : out_.continuum.sutures)
+      nearest = std::min(nearest, (out_.continuum.mesh.nodes.col(s.node) - at).norm());
+    if (std::isfinite(nearest))
+      text << ", " << std::lround(nearest) << " mm from the wound";
+    return text.str();
+  }
+
+  /// Caveats add up: "...; and ...".
+  void addCaveat(const std::string& caveat)
+  {
+    std::string& all = out_.check.caveat;
+    all += (all.empty() ? "" : "; and ") + caveat;
   }
 
   /// "12 pairs of surface triangles cross, the deepest by 2.67 mm, in tissue
@@ -1039,6 +1097,9 @@ std::string checkSummary(const PredictionCheck& c)
   if (c.model == TissueModel::LargeDeformation)
   {
     text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), ";
+    if (c.loosePathStoppedAt >= 0.0)
+      text << "solved a second time with every increment converged fully after the faster path stopped at "
+           << std::lround(100.0 * c.loosePathStoppedAt) << " % of the closure, ";
     if (c.dampedIncrements > 0)
       text << c.dampedIncrements << " of them damped through an instability (" << 100.0 * c.dissipatedFraction
            << " % of the strain energy dissipated), ";

@@ -119,6 +119,11 @@ struct PredictionCheck
   /// (wrinkling, a snap) than the increments suggest.
   int dampedIncrements = 0;
   double dissipatedFraction = 0.0;
+  /// The solve with the states on the way converged loosely (the faster
+  /// path, fem::NewtonOptions::pathResidualTolerance) stopped at this
+  /// fraction of the closure, and the prediction is that of a second solve
+  /// with every increment converged fully; -1 when there was no second solve.
+  double loosePathStoppedAt = -1.0;
   /// det F and the principal stretches over every integration point of the
   /// displacements (for the linear model: of its displacement field taken as
   /// a deformation x + u).

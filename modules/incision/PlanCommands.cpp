@@ -21,6 +21,7 @@
 #include <vtkSmartPointer.h>
 
 #include "fem/ElementGeometry.h"
+#include "fem/ElementQuality.h"
 #include "fem/FiniteStrainStress.h"
 #include "fem/NodalStress.h"
 #include "fem/VtuWriter.h"
@@ -204,13 +205,23 @@ std::vector<fem::VtuArray> modelArrays(const planning::PlanPrediction& p)
   return arrays;
 }
 
-/// The tissue layer (1 = the skin) of each element, as cell data.
-Eigen::MatrixXd layerOfEachElement(const planning::PlanPrediction& p)
+/// model.vtu's cell data: the tissue layer (1 = the skin) of each element
+/// and its shape quality in the reference state (fem::elementQuality: the
+/// smallest scaled Jacobian and the edge ratio), so the elements the check
+/// counts as poor can be found with any VTK reader.
+std::vector<fem::VtuArray> elementArrays(const planning::PlanPrediction& p)
 {
-  Eigen::MatrixXd layer(1, Eigen::Index(p.continuum.elementLayer.size()));
-  for (std::size_t e = 0; e < p.continuum.elementLayer.size(); ++e)
-    layer(0, Eigen::Index(e)) = p.continuum.elementLayer[e] + 1;
-  return layer;
+  const fem::Mesh& mesh = p.continuum.mesh;
+  const Eigen::Index n = Eigen::Index(mesh.elements.size());
+  Eigen::MatrixXd layer(1, n), jacobian(1, n), edgeRatio(1, n);
+  for (Eigen::Index e = 0; e < n; ++e)
+  {
+    layer(0, e) = std::size_t(e) < p.continuum.elementLayer.size() ? p.continuum.elementLayer[std::size_t(e)] + 1 : 0;
+    const fem::ElementQuality q = fem::elementQuality(mesh, int(e));
+    jacobian(0, e) = q.scaledJacobian;
+    edgeRatio(0, e) = q.edgeRatio;
+  }
+  return {{"tissue_layer", layer}, {"scaled_jacobian", jacobian}, {"edge_ratio", edgeRatio}};
 }
 
 /// "W,W,..." of undermining widths in mm, each in [0, 100].
@@ -854,7 +865,7 @@ private:
       procedure_->title() + " " + std::to_string(logic_.scene().nodesOfType(NodeType::Plan).size() + 1);
     logic_.addPrediction(name, plan, saved_, prediction_, display, skinMapId_);
     fem::writeVtu((args_.out / "model.vtu").string(), prediction_.continuum.mesh, modelArrays(prediction_),
-                  {{"tissue_layer", layerOfEachElement(prediction_)}});
+                  elementArrays(prediction_));
     for (const char* file : {"plan.json", "measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
       out_ << "wrote " << (args_.out / file).string() << "\n";
   }

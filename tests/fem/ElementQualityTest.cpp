@@ -194,6 +194,7 @@ TEST(ElementQuality, AMeshNamesItsWorstElementsAndCountsThoseOutsideTheLimits)
   EXPECT_NEAR(check.worstEdgeRatioAt.x(), 25.0, 1e-12);
   EXPECT_EQ(check.poorJacobian, 1);
   EXPECT_EQ(check.poorEdgeRatio, 2) << "the long brick and the sheared one (its slanted edges are 20.1 mm)";
+  EXPECT_EQ(check.poorElements, 2) << "the sheared one is outside both limits and counts once";
   EXPECT_FALSE(check.withinLimits());
   EXPECT_THROW(elementQuality(mesh, 3), std::out_of_range);
 }

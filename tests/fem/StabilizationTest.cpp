@@ -11,6 +11,7 @@
 
 #include "FemTestMeshes.h"
 
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -105,6 +106,25 @@ TEST(Stabilization, AnArchPushedPastItsLimitLoadSnapsThroughToTheEquilibriumDisp
   // It stops near the limit point (found on a 0.25 mm grid of deflections).
   std::printf("[arch] undamped, the solve stops at %.1f %% of the load\n", 100 * stuck.loadFraction);
   EXPECT_EQ(stuck.stabilizedIncrements, 0);
+  EXPECT_EQ(stuck.loosePathStoppedAt, -1.0) << "a strict path is not tried twice";
+  // On a loose path (NewtonOptions::pathResidualTolerance) the failed solve
+  // is tried again on the strict one, which stops where the plain one did;
+  // the monitor is told the second try started over.
+  NewtonOptions undampedLoose = undamped;
+  undampedLoose.pathResidualTolerance = 1e-3;
+  int firstTry = 0, secondTry = 0;
+  const NonlinearResult stuckTwice = analysis.solve(push, control, undampedLoose, [&](const NewtonIteration& it) {
+    ++(it.strictRetry ? secondTry : firstTry);
+    return true;
+  });
+  EXPECT_EQ(stuckTwice.status, NonlinearStatus::NotConverged);
+  EXPECT_GE(stuckTwice.loosePathStoppedAt, 0.0);
+  EXPECT_EQ(stuckTwice.loadFraction, stuck.loadFraction);
+  EXPECT_GT(firstTry, 0);
+  EXPECT_EQ(std::size_t(secondTry), stuck.iterations.size()) << "the second try is the strict path's";
+  EXPECT_GT(stuckTwice.factorizations, stuck.factorizations) << "the first try's work is counted";
+  EXPECT_TRUE(std::all_of(stuckTwice.iterations.begin(), stuckTwice.iterations.end(),
+                          [](const NewtonIteration& it) { return it.strictRetry; }));
 
   // ... and with the viscosity the arch snaps through.
   const NonlinearResult snapped = analysis.solve(push, control);

@@ -734,8 +734,21 @@ TEST(PlanRecipe, KeepsTheTissueModelAndThePredictionCheck)
   EXPECT_EQ(read.prediction->increments, p.check.increments);
   EXPECT_EQ(read.prediction->converged, p.check.converged);
   EXPECT_EQ(recipeToJson(read), written);
+  EXPECT_EQ(read.prediction->loosePathStoppedAt, p.check.loosePathStoppedAt);
+  EXPECT_EQ(read.prediction->mesh.worstJacobianAt, p.check.mesh.worstJacobianAt);
 
   nlohmann::json bad = written;
+  bad["prediction"]["meshWorstScaledJacobianAt"] = {1.0, 2.0};
+  try
+  {
+    recipeFromJson(bad);
+    ADD_FAILURE() << "a point with two coordinates was accepted";
+  }
+  catch (const RecipeError& e)
+  {
+    EXPECT_TRUE(contains(e.what(), "[x, y, z]")) << e.what();
+  }
+  bad = written;
   bad["simulation"]["model"] = "nonlinear";
   try
   {

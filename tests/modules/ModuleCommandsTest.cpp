@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
@@ -222,6 +223,28 @@ TEST(ModuleCommands, RangeMapWithTheUsersAxisAndLandmarks)
   EXPECT_EQ(bad.output.find("Range maps of"), std::string::npos) << bad.output;
 }
 
+namespace {
+
+// Every component of a point-data (or, with @a cells, cell-data) array of a
+// VTU file, read back with VTK.
+std::vector<double> vtuArray(const fs::path& file, const char* name, bool cells = false)
+{
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName(file.c_str());
+  reader->Update();
+  vtkDataArray* array =
+    cells ? reader->GetOutput()->GetCellData()->GetArray(name) : reader->GetOutput()->GetPointData()->GetArray(name);
+  std::vector<double> values;
+  if (!array)
+    return values;
+  for (vtkIdType t = 0; t < array->GetNumberOfTuples(); ++t)
+    for (int c = 0; c < array->GetNumberOfComponents(); ++c)
+      values.push_back(array->GetComponent(t, c));
+  return values;
+}
+
+} // namespace
+
 // `caps plan` end to end on the phantom head: an elliptical excision on the
 // front closes (its sutures meet) and the files are written; usage errors.
 TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
@@ -240,6 +263,21 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   EXPECT_LT(std::stod(m[2]), 1e-9) << r.output; // and closed after
   for (const char* file : {"measurements.csv", "skin-before.vtp", "skin-after.vtp", "model.vtu"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
+  // model.vtu holds each element's layer and shape, as plan.json counts them.
+  const nlohmann::json check = nlohmann::json::parse(fileText(out / "plan.json"))["prediction"];
+  const std::vector<double> layer = vtuArray(out / "model.vtu", "tissue_layer", true);
+  const std::vector<double> jacobian = vtuArray(out / "model.vtu", "scaled_jacobian", true);
+  const std::vector<double> edgeRatio = vtuArray(out / "model.vtu", "edge_ratio", true);
+  ASSERT_EQ(jacobian.size(), std::size_t(check["meshElements"].get<int>()));
+  ASSERT_EQ(edgeRatio.size(), jacobian.size());
+  ASSERT_EQ(layer.size(), jacobian.size());
+  EXPECT_EQ(*std::min_element(layer.begin(), layer.end()), 1.0);
+  EXPECT_EQ(*std::max_element(layer.begin(), layer.end()), 3.0);
+  EXPECT_EQ(std::count_if(jacobian.begin(), jacobian.end(), [](double q) { return q < 0.2; }),
+            check["meshElementsBelowScaledJacobianLimit"].get<long>());
+  EXPECT_EQ(std::count_if(edgeRatio.begin(), edgeRatio.end(), [](double q) { return q > 10.0; }),
+            check["meshElementsAboveEdgeRatioLimit"].get<long>());
+  EXPECT_DOUBLE_EQ(*std::min_element(jacobian.begin(), jacobian.end()), check["meshMinScaledJacobian"].get<double>());
   std::ifstream csv(out / "measurements.csv");
   const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("excised area,hole,,"), std::string::npos) << text;
@@ -437,26 +475,6 @@ TEST(ModuleCommands, BadInputAndUsage)
   EXPECT_EQ(r.exitCode, 1) << r.output;
 }
 
-namespace {
-
-// Every component of a point-data array of a VTU file, read back with VTK.
-std::vector<double> vtuPointArray(const fs::path& file, const char* name)
-{
-  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
-  reader->SetFileName(file.c_str());
-  reader->Update();
-  vtkDataArray* array = reader->GetOutput()->GetPointData()->GetArray(name);
-  std::vector<double> values;
-  if (!array)
-    return values;
-  for (vtkIdType t = 0; t < array->GetNumberOfTuples(); ++t)
-    for (int c = 0; c < array->GetNumberOfComponents(); ++c)
-      values.push_back(array->GetComponent(t, c));
-  return values;
-}
-
-} // namespace
-
 // A plan saved as the operations that made it, replayed on
 // the same CT, predicts the same displacements bit for bit; on a CT that
 // differs by one voxel it is refused.
@@ -485,8 +503,8 @@ TEST(ModuleCommands, PlanReplaysToTheSamePredictionBitForBit)
   EXPECT_EQ(r.output.find("warning"), std::string::npos) << "same CT, same CAPS\n" << r.output;
   EXPECT_EQ(fileText(again / "measurements.csv"), fileText(first / "measurements.csv"));
   EXPECT_EQ(fileText(again / "plan.json"), fileText(first / "plan.json"));
-  const auto u = vtuPointArray(first / "model.vtu", "displacement_mm");
-  const auto v = vtuPointArray(again / "model.vtu", "displacement_mm");
+  const auto u = vtuArray(first / "model.vtu", "displacement_mm");
+  const auto v = vtuArray(again / "model.vtu", "displacement_mm");
   ASSERT_FALSE(u.empty());
   ASSERT_EQ(u.size(), v.size());
   EXPECT_EQ(std::memcmp(u.data(), v.data(), u.size() * sizeof(double)), 0);

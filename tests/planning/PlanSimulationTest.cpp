@@ -555,6 +555,46 @@ TEST(PlanSimulation, ACutOfPartialDepthTransposesLess)
   EXPECT_THROW(simulatePlan(phantom().skin, phantom().bone, plan, o), std::invalid_argument);
 }
 
+TEST(PlanSimulation, AMeshOutsideTheQualityLimitsSaysWhere)
+{
+  // 10 mm of tissue cut into a 0.1 mm skin layer on 2 mm elements: every
+  // skin element is at least 20 times as wide as it is thick, and only
+  // those (the fat and muscle layers are 4.95 mm thick).
+  const IncisionPlan plan =
+    test::shippedProcedure("elliptical-excision").place(phantom().skin, {0.0, 0.0}, {{"length", 20.0}});
+  SimulationOptions o = testOptions();
+  o.model = TissueModel::LinearElastic;
+  o.layerFractions = {0.01, 0.495, 0.495};
+  const PlanPrediction thin = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  const fem::MeshQualityCheck& q = thin.check.mesh;
+  const long skinElements = long(std::count(thin.continuum.elementLayer.begin(), thin.continuum.elementLayer.end(), 0));
+  EXPECT_EQ(q.poorEdgeRatio, skinElements);
+  EXPECT_EQ(q.poorElements, skinElements);
+  EXPECT_GE(q.maxEdgeRatio, 20.0);
+  // The worst is a skin element: its centre 0.05 mm under the skin.
+  EXPECT_EQ(thin.continuum.elementLayer[std::size_t(q.worstEdgeRatioElement)], 0);
+  EXPECT_NEAR(std::hypot(q.worstEdgeRatioAt.x(), q.worstEdgeRatioAt.y()), 79.95, 0.05);
+  // The caveat says how many, how bad, where, and how far from the wound
+  // (the nearest sutured node).
+  double nearest = 1e9;
+  for (const fem::Suture& s : thin.continuum.sutures)
+    nearest = std::min(nearest, (thin.continuum.mesh.nodes.col(s.node) - q.worstEdgeRatioAt).norm());
+  const std::string& caveat = thin.check.caveat;
+  std::printf("[quality] %s\n", caveat.c_str());
+  for (const std::string& said :
+       {std::to_string(skinElements) + " of " + std::to_string(q.elements) + " elements are shaped outside",
+        std::string("in tissue layer 1 from the skin at "),
+        std::to_string(std::lround(nearest)) + " mm from the wound"})
+    EXPECT_NE(caveat.find(said), std::string::npos) << "not said: " << said;
+  EXPECT_TRUE(thin.check.admissible()) << "a caveat, not a refusal";
+
+  // The same plan on the stated layers keeps the limits and says nothing.
+  o.layerFractions = {0.2, 0.4, 0.4};
+  const PlanPrediction fair = simulatePlan(phantom().skin, phantom().bone, plan, o);
+  EXPECT_TRUE(fair.check.mesh.withinLimits()) << fair.check.caveat;
+  EXPECT_EQ(fair.check.caveat.find("shaped outside"), std::string::npos) << fair.check.caveat;
+}
+
 TEST(PlanSimulation, RefusesPlansOffTheSkinAndHolesUnderTheRegion)
 {
   const Phantom& ph = phantom();
