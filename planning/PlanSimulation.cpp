@@ -1097,12 +1097,12 @@ std::string checkSummary(const PredictionCheck& c)
   if (c.model == TissueModel::LargeDeformation)
   {
     text << ", " << c.increments << " increments (" << c.iterations << " Newton iterations), ";
-    if (c.loosePathStoppedAt >= 0.0)
-      text << "solved a second time with every increment converged fully after the faster path stopped at "
-           << std::lround(100.0 * c.loosePathStoppedAt) << " % of the closure, ";
     if (c.dampedIncrements > 0)
       text << c.dampedIncrements << " of them damped through an instability (" << 100.0 * c.dissipatedFraction
            << " % of the strain energy dissipated), ";
+    if (c.loosePathStoppedAt >= 0.0)
+      text << "solved a second time with every increment converged fully after the faster path stopped at "
+           << std::lround(100.0 * c.loosePathStoppedAt) << " % of the closure, ";
     text << (c.converged ? "converged at full closure" : "NOT converged");
   }
   if (c.mesh.elements > 0)
