@@ -557,12 +557,7 @@ private:
                     "the open wound cannot be solved: " + analysis.message());
       return;
     }
-    const Eigen::VectorXd u = analysis.solve(Eigen::MatrixXd(releasedTraction_)).col(0);
-    const fem::DeformationCheck body =
-      fem::checkDeformation(out_.continuum.mesh, u, fem::AssemblyOptions{}.gaussPointsPerDirection);
-    recordTheGape(u, body.minDetF > kAdmissibleDetF ? std::string()
-                                                    : "the linear gape turns elements inside out: see the "
-                                                      "large-deformation prediction");
+    recordTheGape(analysis.solve(Eigen::MatrixXd(releasedTraction_)).col(0), {});
   }
 
   /// 4''. The same in large deformation: the skin's stress ramped up with
@@ -610,11 +605,30 @@ private:
     return 0.5 * area.norm();
   }
 
+  /// Whether the gaping wound is a body and its skin clear of itself, as
+  /// the prediction is checked (6', 6''): empty when it is.
+  std::string gapeProblem(const Eigen::VectorXd& u) const
+  {
+    const fem::Mesh& mesh = out_.continuum.mesh;
+    const fem::DeformationCheck body = fem::checkDeformation(mesh, u, fem::AssemblyOptions{}.gaussPointsPerDirection);
+    const bool linear = options_.model == TissueModel::LinearElastic;
+    if (!(body.minDetF > kAdmissibleDetF))
+      return linear ? "the linear gape turns elements inside out: see the large-deformation prediction"
+                    : "the gaping turns " + std::to_string(body.invertedElements) +
+                        " elements inside out or crushes them (smallest det F " + std::to_string(body.minDetF) + ")";
+    const std::vector<fem::ElementFace> skin = fem::skinFaces(out_.continuum);
+    const fem::SurfaceCrossingCheck crossings = fem::checkSurfaceCrossings(mesh, skin, u, 0.05 * options_.elementSize);
+    if (crossings.crossingPairs > 0)
+      return "the gaping skin passes through itself (" + crossingText(crossings, skin) + ")" +
+             (linear ? ": see the large-deformation prediction" : "");
+    return {};
+  }
+
   void recordTheGape(const Eigen::VectorXd& u, const std::string& problem)
   {
     WoundGape gape;
     gape.displacements = u;
-    gape.problem = problem;
+    gape.problem = problem.empty() ? gapeProblem(u) : problem;
     const fem::Mesh& mesh = out_.continuum.mesh;
     auto at = [&](int node) -> Eigen::Vector3d { return mesh.nodes.col(node) + u.segment<3>(3 * Eigen::Index(node)); };
     std::vector<char> skinNode(std::size_t(mesh.nodeCount()), 0);

@@ -331,8 +331,9 @@ struct WoundGape
   /// enclose almost none as cut, so this is the gape of any incision.
   double openAreaAsCut = 0.0;
   double openAreaGaping = 0.0;
-  /// Empty when the gaping solve converged and is a body; otherwise why not
-  /// (the gape is then not shown as one).
+  /// Empty when the gaping solve converged, is a body (det F above
+  /// kAdmissibleDetF) and its skin does not pass through itself; otherwise
+  /// why not (the gape is then not shown as one).
   std::string problem;
 };
 

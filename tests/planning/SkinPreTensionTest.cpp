@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "AnalyticSkins.h"
+#include "fem/FiniteStrainStress.h"
 #include "planning/PlanSimulation.h"
 #include "planning/SkinMeasurements.h"
 #include "planning/SkinPreTension.h"
@@ -157,6 +158,27 @@ TEST(SkinPreTension, TheLinearAndTheLargeDeformationGapesAgreeWhenTheTensionIsSm
   EXPECT_GT(scale, 1e-4);
   EXPECT_LT(difference, 0.02 * scale);
   EXPECT_NE(linear.preTension.find("every direction"), std::string::npos) << linear.preTension;
+}
+
+// The gaping wound is checked as the prediction is (det F, the skin passing
+// through itself). Under a tension far past the living skin's (200 N/m, the
+// most `caps plan` takes) the phantom's ellipse opens to three times its
+// width and is still a body whose skin stays clear of itself: the check
+// finds nothing to flag in a wide open wound.
+TEST(SkinPreTension, AWideOpenGapeIsCheckedAndStillABody)
+{
+  SkinPreTension extreme;
+  extreme.alongLines = extreme.acrossLines = 0.2;
+  extreme.followsLines = false;
+  const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, ellipse(), withTension(extreme));
+  ASSERT_TRUE(p.gape);
+  const fem::DeformationCheck body =
+    fem::checkDeformation(p.continuum.mesh, p.gape->displacements, fem::AssemblyOptions{}.gaussPointsPerDirection);
+  std::printf("gape at 200 N/m: widest %.1f mm (%.1f as cut), smallest det F %.3g\n", p.gape->widestGaping,
+              p.gape->widestAsCut, body.minDetF);
+  EXPECT_GT(p.gape->widestGaping, 2.0 * p.gape->widestAsCut);
+  EXPECT_GT(body.minDetF, kAdmissibleDetF);
+  EXPECT_TRUE(p.gape->problem.empty()) << p.gape->problem;
 }
 
 TEST(SkinPreTension, ImpossibleTensionsAreRefused)
