@@ -613,9 +613,14 @@ private:
     const fem::DeformationCheck body = fem::checkDeformation(mesh, u, fem::AssemblyOptions{}.gaussPointsPerDirection);
     const bool linear = options_.model == TissueModel::LinearElastic;
     if (!(body.minDetF > kAdmissibleDetF))
-      return linear ? "the linear gape turns elements inside out: see the large-deformation prediction"
-                    : "the gaping turns " + std::to_string(body.invertedElements) +
-                        " elements inside out or crushes them (smallest det F " + std::to_string(body.minDetF) + ")";
+    {
+      std::ostringstream text;
+      text.precision(3);
+      text << (linear ? "the linear gape" : "the gaping") << " turns " << body.invertedElements
+           << " elements inside out or crushes them (smallest det F " << body.minDetF << ")"
+           << (linear ? ": see the large-deformation prediction" : "");
+      return text.str();
+    }
     const std::vector<fem::ElementFace> skin = fem::skinFaces(out_.continuum);
     const fem::SurfaceCrossingCheck crossings = fem::checkSurfaceCrossings(mesh, skin, u, 0.05 * options_.elementSize);
     if (crossings.crossingPairs > 0)
