@@ -280,6 +280,9 @@ public:
       solver_.analyzePattern(kbar_);
   }
 
+  /// This solve is the strict path's second try (NewtonIteration::strictRetry).
+  bool strictRetry = false;
+
   /// 3. The increments: grow after a fast convergence, cut back on failure;
   ///    through an instability with artificial viscosity, released at the end.
   NonlinearResult run(const IncrementControl& control)
@@ -540,7 +543,7 @@ private:
       if (it > 1)
         reuse_.record(out.residual, residual, refresh);
       out.residual = residual;
-      const NewtonIteration report{number, lambda1, it, residual, relEnergy, step.alpha, refresh};
+      const NewtonIteration report{number, lambda1, it, residual, relEnergy, step.alpha, refresh, strictRetry};
       result_.iterations.push_back(report);
       if (monitor_ && !monitor_(report))
         throw Cancelled{};
@@ -893,16 +896,17 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
     throw std::invalid_argument("the load increments need 0 < minimum <= initial <= maximum and initial <= 1");
   const Eigen::VectorXd initialStressForce =
     initialStress_.empty() ? Eigen::VectorXd() : initialStressForces(mesh_, initialStress_, options_);
-  auto run = [&](const NewtonOptions& options, const NewtonMonitor& watch) {
+  auto run = [&](const NewtonOptions& options, bool strictRetry) {
     NewtonSolve newtonSolve(
       mesh_, materials_, constraints_, [&] { return loadVector(load); },
       [this](const Eigen::VectorXd& u, double lambda, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* fint) {
         return evaluate(u, lambda, k, fint);
       },
-      initialStressForce, options, watch);
+      initialStressForce, options, monitor);
+    newtonSolve.strictRetry = strictRetry;
     return newtonSolve.run(control);
   };
-  NonlinearResult result = run(newton, monitor);
+  NonlinearResult result = run(newton, false);
   if (result.status != NonlinearStatus::NotConverged || !(newton.pathResidualTolerance > newton.residualTolerance))
     return result;
   // 2. Near an instability the path decides which way the tissue goes, and
@@ -910,16 +914,7 @@ NonlinearResult NonlinearStaticAnalysis::solve(const LoadCase& load, const Incre
   //    when the strict path fails too. Its cost is counted.
   NewtonOptions strict = newton;
   strict.pathResidualTolerance = 0.0;
-  NewtonMonitor retryMonitor;
-  if (monitor)
-    retryMonitor = [&monitor](const NewtonIteration& iteration) {
-      NewtonIteration marked = iteration;
-      marked.strictRetry = true;
-      return monitor(marked);
-    };
-  NonlinearResult again = run(strict, retryMonitor);
-  for (NewtonIteration& iteration : again.iterations)
-    iteration.strictRetry = true;
+  NonlinearResult again = run(strict, true);
   again.loosePathStoppedAt = result.loadFraction;
   again.factorizations += result.factorizations;
   again.shiftedFactorizations += result.shiftedFactorizations;

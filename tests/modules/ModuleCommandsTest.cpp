@@ -15,7 +15,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <vtkCellData.h>
+#include <vtkCellType.h>
 #include <vtkDataArray.h>
+#include <vtkMath.h>
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
 #include <vtkUnstructuredGrid.h>
@@ -278,6 +280,36 @@ TEST(ModuleCommands, PlanClosesAnExcisionOnThePhantom)
   EXPECT_EQ(std::count_if(edgeRatio.begin(), edgeRatio.end(), [](double q) { return q > 10.0; }),
             check["meshElementsAboveEdgeRatioLimit"].get<long>());
   EXPECT_DOUBLE_EQ(*std::min_element(jacobian.begin(), jacobian.end()), check["meshMinScaledJacobian"].get<double>());
+  // The edge ratio again from the file's own points: longest over shortest
+  // corner edge (12 of a brick, 9 of a wedge; a collapsed one left out).
+  auto reader = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+  reader->SetFileName((out / "model.vtu").c_str());
+  reader->Update();
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  ASSERT_EQ(std::size_t(grid->GetNumberOfCells()), edgeRatio.size());
+  const int brickEdges[12][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {4, 5}, {5, 6},
+                                 {6, 7}, {7, 4}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+  const int wedgeEdges[9][2] = {{0, 1}, {1, 2}, {2, 0}, {3, 4}, {4, 5}, {5, 3}, {0, 3}, {1, 4}, {2, 5}};
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c)
+  {
+    const bool brick = grid->GetCellType(c) == VTK_QUADRATIC_HEXAHEDRON;
+    ASSERT_TRUE(brick || grid->GetCellType(c) == VTK_QUADRATIC_WEDGE) << "cell " << c;
+    vtkIdType count = 0;
+    const vtkIdType* ids = nullptr;
+    grid->GetCellPoints(c, count, ids);
+    double shortest = 1e300, longest = 0.0;
+    for (int e = 0; e < (brick ? 12 : 9); ++e)
+    {
+      const int* edge = brick ? brickEdges[e] : wedgeEdges[e];
+      double a[3], b[3];
+      grid->GetPoint(ids[edge[0]], a);
+      grid->GetPoint(ids[edge[1]], b);
+      const double length = std::sqrt(vtkMath::Distance2BetweenPoints(a, b));
+      if (length > 0.0)
+        shortest = std::min(shortest, length), longest = std::max(longest, length);
+    }
+    EXPECT_NEAR(edgeRatio[std::size_t(c)], longest / shortest, 1e-9 * longest / shortest) << "cell " << c;
+  }
   std::ifstream csv(out / "measurements.csv");
   const std::string text((std::istreambuf_iterator<char>(csv)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("excised area,hole,,"), std::string::npos) << text;
