@@ -11,7 +11,9 @@
 #include <gtest/gtest.h>
 
 #include "AnalyticSkins.h"
+#include "fem/DisplaySurface.h"
 #include "fem/FiniteStrainStress.h"
+#include "fem/SurfaceCrossing.h"
 #include "planning/PlanSimulation.h"
 #include "planning/SkinMeasurements.h"
 #include "planning/SkinPreTension.h"
@@ -179,6 +181,33 @@ TEST(SkinPreTension, AWideOpenGapeIsCheckedAndStillABody)
   EXPECT_GT(p.gape->widestGaping, 2.0 * p.gape->widestAsCut);
   EXPECT_GT(body.minDetF, kAdmissibleDetF);
   EXPECT_TRUE(p.gape->problem.empty()) << p.gape->problem;
+}
+
+// ... and a gape that is not a body is flagged, not shown as one: the
+// linear model under the most tension a plan takes (1000 N/m) opens the
+// ellipse far past what small strains describe; its flag says what failed,
+// and an independent pass over the same field finds the same failure.
+TEST(SkinPreTension, AGapeThatIsNotABodyIsFlaggedWithWhatFailed)
+{
+  SkinPreTension most;
+  most.alongLines = most.acrossLines = 1.0;
+  most.followsLines = false;
+  const PlanPrediction p = simulatePlan(phantom().skin, phantom().bone, ellipse(), withTension(most));
+  ASSERT_TRUE(p.gape);
+  const fem::Mesh& mesh = p.continuum.mesh;
+  const fem::DeformationCheck body =
+    fem::checkDeformation(mesh, p.gape->displacements, fem::AssemblyOptions{}.gaussPointsPerDirection);
+  const std::vector<fem::ElementFace> skin = fem::skinFaces(p.continuum);
+  const fem::SurfaceCrossingCheck crossings =
+    fem::checkSurfaceCrossings(mesh, skin, p.gape->displacements, 0.05 * test::phantomSimulationOptions().elementSize);
+  std::printf("linear gape at 1000 N/m: widest %.1f mm (%.1f as cut), smallest det F %.3g, %d crossing pairs\n",
+              p.gape->widestGaping, p.gape->widestAsCut, body.minDetF, crossings.crossingPairs);
+  const bool inverted = !(body.minDetF > kAdmissibleDetF);
+  ASSERT_TRUE(inverted || crossings.crossingPairs > 0) << "the gape is a body: this test no longer tests the flag";
+  ASSERT_FALSE(p.gape->problem.empty());
+  EXPECT_NE(p.gape->problem.find(inverted ? "inside out" : "passes through itself"), std::string::npos)
+    << p.gape->problem;
+  EXPECT_NE(p.gape->problem.find("large-deformation"), std::string::npos) << p.gape->problem;
 }
 
 TEST(SkinPreTension, ImpossibleTensionsAreRefused)
