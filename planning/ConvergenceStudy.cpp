@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "planning/WoundStress.h"
 #include "planning/WoundTension.h"
@@ -66,6 +68,17 @@ ConvergenceRow solveOnce(const seg::RangeMap& skin, const seg::RangeMap& bone, c
     row.problem = e.what();
   }
   return row;
+}
+
+/// A level as the surgeon reads it: "element size 2 mm", "tissue layers 3".
+std::string levelText(const std::string& series, double value)
+{
+  char text[32];
+  if (series == "tissue layers")
+    std::snprintf(text, sizeof text, "%d", int(std::lround(value)));
+  else
+    std::snprintf(text, sizeof text, "%.3g mm", value);
+  return series + " " + text;
 }
 
 double relativeChange(double before, double now)
@@ -131,10 +144,18 @@ ConvergenceStudy studyConvergence(const seg::RangeMap& skin, const seg::RangeMap
       solves.back().options.rim = rim;
     }
   ConvergenceStudy study;
+  const double count = double(solves.size());
   for (std::size_t k = 0; k < solves.size(); ++k)
   {
-    seg::reportProgress(progress, double(k) / double(solves.size()),
-                        "Convergence study: " + solves[k].series + " " + std::to_string(solves[k].value));
+    const std::string label = "Convergence study, " + levelText(solves[k].series, solves[k].value) + " (" +
+                              std::to_string(k + 1) + " of " + std::to_string(solves.size()) + ")";
+    seg::reportProgress(progress, double(k) / count, label);
+    // Each solve reports within its share, so a cancel stops it mid-solve
+    // rather than after a large-deformation solve that may take minutes.
+    if (progress)
+      solves[k].options.progress = [&progress, &label, k, count](double fraction, const std::string& step) {
+        return progress((double(k) + std::clamp(fraction, 0.0, 1.0)) / count, label + ": " + step);
+      };
     ConvergenceRow row = solveOnce(skin, bone, plan, solves[k].options, woundStressRadius);
     row.series = solves[k].series;
     row.value = solves[k].value;

@@ -11,6 +11,7 @@
 
 #include "AnalyticSkins.h"
 #include "planning/ConvergenceStudy.h"
+#include "segmentation/Progress.h"
 
 namespace caps::planning {
 namespace {
@@ -25,11 +26,22 @@ TEST(ConvergenceStudy, TheEllipsesTensionSettlesAndTheRimMattersLessFartherOut)
   ConvergenceLevels levels;
   levels.elementSizes = {3.0, 2.0, 1.4};
   levels.regionRadii = {12.0, 30.0};
-  int calls = 0;
-  const ConvergenceStudy study = studyConvergence(phantom.skin, phantom.bone, plan, options, levels, 10.0,
-                                                  [&](double, const std::string&) { return ++calls > 0; });
+  // Progress: each solve announced once ("... (3 of 10)"), its own steps
+  // within its share, the fraction never going back.
+  int announced = 0, within = 0;
+  double last = 0.0;
+  bool forward = true;
+  const ConvergenceStudy study =
+    studyConvergence(phantom.skin, phantom.bone, plan, options, levels, 10.0, [&](double f, const std::string& step) {
+      forward = forward && f >= last - 1e-12 && f <= 1.0;
+      last = f;
+      (step.find(" of 10): ") != std::string::npos ? within : announced) += 1;
+      return true;
+    });
   ASSERT_EQ(study.rows.size(), 3u + 3u + 4u);
-  EXPECT_EQ(calls, 10);
+  EXPECT_EQ(announced, 10);
+  EXPECT_GT(within, 10);
+  EXPECT_TRUE(forward);
   const char* series[] = {"element size",
                           "element size",
                           "element size",
@@ -75,6 +87,24 @@ TEST(ConvergenceStudy, TheEllipsesTensionSettlesAndTheRimMattersLessFartherOut)
   };
   EXPECT_LT(rimEffect(7, 9), rimEffect(6, 8));
   EXPECT_GE(study.rows[8].tensionPerCentimetre, study.rows[6].tensionPerCentimetre);
+}
+
+// A cancel stops the study inside a solve, not after it.
+TEST(ConvergenceStudy, ACancelStopsTheSolveThatRuns)
+{
+  const auto& phantom = test::cylinderPhantom();
+  const IncisionPlan plan = test::shippedProcedure("elliptical-excision").place(phantom.skin, {0.0, 0.0});
+  std::string stoppedAt;
+  EXPECT_THROW(studyConvergence(phantom.skin, phantom.bone, plan, test::phantomSimulationOptions(), {}, 10.0,
+                                [&](double, const std::string& step) {
+                                  if (step.find("): ") == std::string::npos)
+                                    return true;
+                                  stoppedAt = step;
+                                  return false;
+                                }),
+               seg::Cancelled);
+  EXPECT_EQ(stoppedAt.rfind("Convergence study, element size ", 0), 0u) << stoppedAt;
+  EXPECT_NE(stoppedAt.find("(1 of "), std::string::npos) << stoppedAt;
 }
 
 TEST(ConvergenceStudy, EmptyOrNonPositiveLevelsAreRefused)
