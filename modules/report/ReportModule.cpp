@@ -31,14 +31,15 @@ public:
 /// renders share the display with the views) under a modal progress dialog:
 /// the user sees which plan is being predicted and rendered and may cancel
 /// between steps (seg::Cancelled), and cannot change the scene meanwhile.
-report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool deidentify)
+report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, const report::ReportOptions& options)
 {
-  host.showStatus("Writing the plan report...");
-  ModalProgress dialog(host.window(), "Writing the plan report...", "Plan report", "report.progress");
+  const std::string what = options.convergenceStudy
+                             ? "Writing the plan report with its convergence study (each plan solved twelve more times)..."
+                             : "Writing the plan report...";
+  host.showStatus(what);
+  ModalProgress dialog(host.window(), QString::fromStdString(what), "Plan report", "report.progress");
   try
   {
-    report::ReportOptions options;
-    options.deidentify = deidentify;
     report::ReportDocument doc = report::buildPlanReport(logic.scene(), options, dialog.progress());
     dialog.finish();
     return doc;
@@ -50,17 +51,29 @@ report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, bool 
   }
 }
 
-void exportPdf(ModuleLogic& logic, ModuleHost& host, bool deidentify)
+/// The kinds of PDF the File menu exports.
+enum class PdfKind
 {
-  const QString file =
-    QFileDialog::getSaveFileName(host.window(), "Export the plan report",
-                                 deidentify ? "plan-report-deidentified.pdf" : "plan-report.pdf", "PDF (*.pdf)");
+  Plain,
+  Deidentified,
+  WithConvergenceStudy
+};
+
+void exportPdf(ModuleLogic& logic, ModuleHost& host, PdfKind kind)
+{
+  const char* name = kind == PdfKind::Deidentified           ? "plan-report-deidentified.pdf"
+                     : kind == PdfKind::WithConvergenceStudy ? "plan-report-convergence.pdf"
+                                                             : "plan-report.pdf";
+  const QString file = QFileDialog::getSaveFileName(host.window(), "Export the plan report", name, "PDF (*.pdf)");
   if (file.isEmpty())
     return;
+  report::ReportOptions options;
+  options.deidentify = kind == PdfKind::Deidentified;
+  options.convergenceStudy = kind == PdfKind::WithConvergenceStudy;
   report::ReportDocument doc("");
   try
   {
-    doc = reportOfScene(logic, host, deidentify);
+    doc = reportOfScene(logic, host, options);
   }
   catch (const seg::Cancelled&)
   {
@@ -82,7 +95,7 @@ void printReport(ModuleLogic& logic, ModuleHost& host)
   report::ReportDocument doc("");
   try
   {
-    doc = reportOfScene(logic, host, false);
+    doc = reportOfScene(logic, host, report::ReportOptions{});
   }
   catch (const seg::Cancelled&)
   {
@@ -108,9 +121,11 @@ public:
   std::vector<ModuleAction> actions() const override
   {
     return {{"File", "Export plan report as &PDF...", "Ctrl+E",
-             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, false); }},
+             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, PdfKind::Plain); }},
             {"File", "Export &de-identified plan report as PDF...", "",
-             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, true); }},
+             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, PdfKind::Deidentified); }},
+            {"File", "Export plan report with &convergence study as PDF...", "",
+             [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, PdfKind::WithConvergenceStudy); }},
             {"File", "&Print plan report...", "Ctrl+P",
              [](ModuleLogic& logic, ModuleHost& host) { printReport(logic, host); }}};
   }

@@ -35,7 +35,8 @@ TEST(ModuleManager, LoadsTheVolumesPluginFromItsFile)
   EXPECT_TRUE(manager.failures().empty()) << manager.report();
 }
 
-// The Report module adds File > Export and File > Print to the workstation.
+// The Report module adds File > Export (plain, de-identified, with the
+// convergence study) and File > Print to the workstation.
 TEST(ModuleManager, TheReportModuleAddsExportAndPrintToTheFileMenu)
 {
   caps::ModuleManager manager;
@@ -49,9 +50,10 @@ TEST(ModuleManager, TheReportModuleAddsExportAndPrintToTheFileMenu)
     EXPECT_TRUE(bool(action.run)) << action.title;
     titles.push_back(action.title);
   }
-  ASSERT_EQ(titles.size(), 3u);
+  ASSERT_EQ(titles.size(), 4u);
   EXPECT_EQ(titles[0], "Export plan report as &PDF...");
-  EXPECT_EQ(titles[2], "&Print plan report...");
+  EXPECT_EQ(titles[2], "Export plan report with &convergence study as PDF...");
+  EXPECT_EQ(titles[3], "&Print plan report...");
   EXPECT_NE(manager.findCommand("report").second, nullptr);
 }
 

@@ -1,7 +1,8 @@
 // File > Export plan report as PDF driven as a user drives it (issue 7 item
 // 2): the save dialog answered, the report written while a progress dialog
 // names each step, the status bar saying where; and Cancel in that progress
-// dialog stops the report and writes nothing.
+// dialog stops the report and writes nothing; the same with the
+// convergence study, cancelled inside one of its solves.
 
 #include <filesystem>
 #include <functional>
@@ -122,6 +123,39 @@ TEST(ReportExport, ThePdfIsWrittenWithProgressAndCancelWritesNothing)
   EXPECT_NE(info.output.find("CAPS surgical plan report"), std::string::npos) << info.output;
   const std::string status = workstation.window().statusBar()->currentMessage().toStdString();
   EXPECT_NE(status.find(written.string()), std::string::npos) << status;
+}
+
+// File > Export plan report with convergence study: the same report with
+// the study run for every plan; its progress names the study's solve, and
+// Cancel there stops the solve that runs and writes nothing.
+TEST(ReportExport, TheConvergenceStudyRunsFromTheMenuAndCancelsMidSolve)
+{
+  test::Workstation workstation;
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(120)) << workstation.errors();
+  QAction* exportStudy = actionNamed(workstation.window(), "Export plan report with &convergence study as PDF...");
+  ASSERT_NE(exportStudy, nullptr);
+  const fs::path file = test::scratchFolder() / "study.pdf";
+  const std::size_t errorsBefore = workstation.window().reportedErrors().size();
+  answerSaveDialog(file);
+  auto stoppedAt = std::make_shared<QString>();
+  whenReady([stoppedAt] {
+    for (QWidget* w : QApplication::topLevelWidgets())
+      if (auto* progress = w->findChild<QProgressDialog*>("report.progress"))
+        if (progress->labelText().startsWith("Convergence study") && progress->labelText().contains("): "))
+        {
+          *stoppedAt = progress->labelText();
+          progress->cancel();
+          return true;
+        }
+    return false;
+  });
+  exportStudy->trigger();
+  EXPECT_TRUE(stoppedAt->contains("element size")) << stoppedAt->toStdString();
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_EQ(workstation.window().reportedErrors().size(), errorsBefore) << workstation.errors();
+  EXPECT_NE(workstation.window().statusBar()->currentMessage().indexOf("cancelled"), -1)
+    << workstation.window().statusBar()->currentMessage().toStdString();
 }
 
 } // namespace
