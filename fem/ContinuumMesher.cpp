@@ -113,30 +113,39 @@ struct NodeGroups
   }
 };
 
-} // namespace
-
-double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options, const char* where)
+/// effectiveTissueDepth(), with the place it is asked for named only when
+/// that is needed for a message (@a where() gives the name): the mesher's
+/// node optimisation asks for tens of thousands of points of the bone.
+template <class Where>
+double depthOrFail(double rawDepth, const ContinuumMeshOptions& options, const Where& where)
 {
   double depth = 0.0;
   if (std::isnan(rawDepth))
   {
     if (!options.noBoneDepth)
-      fail(std::string("no bone under ") + where +
+      fail("no bone under " + where() +
            " and no default depth for missing bone is set (ContinuumMeshOptions::noBoneDepth)");
     depth = *options.noBoneDepth;
   }
   else if (!std::isfinite(rawDepth))
   {
-    fail(std::string("the tissue depth at ") + where + " is infinite");
+    fail("the tissue depth at " + where() + " is infinite");
   }
   else
   {
     depth = std::clamp(rawDepth, options.minDepth, options.maxDepth);
   }
   if (depth <= 0.0)
-    fail(std::string("the tissue depth at ") + where + " is " + std::to_string(depth) +
+    fail("the tissue depth at " + where() + " is " + std::to_string(depth) +
          " mm; the bone must lie below the skin (set a positive minimum depth to clamp it)");
   return depth;
+}
+
+} // namespace
+
+double effectiveTissueDepth(double rawDepth, const ContinuumMeshOptions& options, const char* where)
+{
+  return depthOrFail(rawDepth, options, [where] { return std::string(where); });
 }
 
 std::vector<char> underminingBand(const SurfaceMesh& surface, const std::vector<SutureEdgePair>& sutures, double width)
@@ -405,18 +414,20 @@ private:
   }
 
   /// The skin point, the unit inward direction and the tissue depth at @a c.
-  ColumnGeometry columnAt(const ChartPoint& c, const std::string& where) const
+  /// The column at chart point @a c; @a where() names it for a message.
+  template <class Where>
+  ColumnGeometry columnAt(const ChartPoint& c, const Where& where) const
   {
     ColumnGeometry g;
     g.skin = geometry_.skinPoint(c);
     if (!g.skin.allFinite())
-      fail("the skin point at " + where + " is not finite");
+      fail("the skin point at " + where() + " is not finite");
     const Eigen::Vector3d n = geometry_.inwardDirection(c);
     const double len = n.norm();
     if (!std::isfinite(len) || len < 1e-12)
-      fail("the inward direction at " + where + " is zero or not finite");
+      fail("the inward direction at " + where() + " is zero or not finite");
     g.inward = n / len;
-    g.depth = effectiveTissueDepth(geometry_.tissueDepth(c), options_, where.c_str());
+    g.depth = depthOrFail(geometry_.tissueDepth(c), options_, where);
     return g;
   }
 
@@ -432,7 +443,7 @@ private:
     for (int v = 0; v < vertexCount_; ++v)
     {
       const ChartPoint& c = surface_.vertices[std::size_t(v)];
-      vertexGeometry[std::size_t(v)] = columnAt(c, "vertex " + std::to_string(v) + " " + chartText(c));
+      vertexGeometry[std::size_t(v)] = columnAt(c, [&] { return "vertex " + std::to_string(v) + " " + chartText(c); });
       out_.vertexDepths[std::size_t(v)] = vertexGeometry[std::size_t(v)].depth;
     }
     std::vector<ColumnGeometry> edgeGeometry(static_cast<std::size_t>(edgeCount_));
@@ -442,7 +453,9 @@ private:
       const auto& [a, b] = out_.edges[std::size_t(e)];
       const ChartPoint c = 0.5 * (surface_.vertices[std::size_t(a)] + surface_.vertices[std::size_t(b)]);
       edgeGeometry[std::size_t(e)] =
-        columnAt(c, "the midpoint of edge (" + std::to_string(a) + ", " + std::to_string(b) + ") " + chartText(c));
+        columnAt(c, [&] {
+          return "the midpoint of edge (" + std::to_string(a) + ", " + std::to_string(b) + ") " + chartText(c);
+        });
       out_.edgeDepths[std::size_t(e)] = edgeGeometry[std::size_t(e)].depth;
     }
 
@@ -639,7 +652,7 @@ private:
   {
     DeepSurface bone;
     bone.pointUnder = [this](const ChartPoint& c) {
-      const ColumnGeometry g = columnAt(c, "a point of the bone " + chartText(c));
+      const ColumnGeometry g = columnAt(c, [&] { return "a point of the bone " + chartText(c); });
       return Eigen::Vector3d(g.skin + g.depth * g.inward);
     };
     bone.vertexCharts = surface_.vertices;
