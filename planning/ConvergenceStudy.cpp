@@ -153,7 +153,7 @@ ConvergenceStudy studyConvergence(const seg::RangeMap& skin, const seg::RangeMap
     // Each solve reports within its share, so a cancel stops it mid-solve
     // rather than after a large-deformation solve that may take minutes.
     if (progress)
-      solves[k].options.progress = [&progress, &label, k, count](double fraction, const std::string& step) {
+      solves[k].options.progress = [&progress, label, k, count](double fraction, const std::string& step) {
         return progress((double(k) + std::clamp(fraction, 0.0, 1.0)) / count, label + ": " + step);
       };
     ConvergenceRow row = solveOnce(skin, bone, plan, solves[k].options, woundStressRadius);
