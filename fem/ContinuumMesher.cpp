@@ -116,8 +116,7 @@ struct NodeGroups
 /// effectiveTissueDepth(), with the place it is asked for named only when
 /// that is needed for a message (@a where() gives the name): the mesher's
 /// node optimisation asks for tens of thousands of points of the bone.
-template <class Where>
-double depthOrFail(double rawDepth, const ContinuumMeshOptions& options, const Where& where)
+template <class Where> double depthOrFail(double rawDepth, const ContinuumMeshOptions& options, const Where& where)
 {
   double depth = 0.0;
   if (std::isnan(rawDepth))
@@ -415,8 +414,7 @@ private:
 
   /// The skin point, the unit inward direction and the tissue depth at @a c.
   /// The column at chart point @a c; @a where() names it for a message.
-  template <class Where>
-  ColumnGeometry columnAt(const ChartPoint& c, const Where& where) const
+  template <class Where> ColumnGeometry columnAt(const ChartPoint& c, const Where& where) const
   {
     ColumnGeometry g;
     g.skin = geometry_.skinPoint(c);
@@ -452,10 +450,9 @@ private:
     {
       const auto& [a, b] = out_.edges[std::size_t(e)];
       const ChartPoint c = 0.5 * (surface_.vertices[std::size_t(a)] + surface_.vertices[std::size_t(b)]);
-      edgeGeometry[std::size_t(e)] =
-        columnAt(c, [&] {
-          return "the midpoint of edge (" + std::to_string(a) + ", " + std::to_string(b) + ") " + chartText(c);
-        });
+      edgeGeometry[std::size_t(e)] = columnAt(c, [&] {
+        return "the midpoint of edge (" + std::to_string(a) + ", " + std::to_string(b) + ") " + chartText(c);
+      });
       out_.edgeDepths[std::size_t(e)] = edgeGeometry[std::size_t(e)].depth;
     }
 

@@ -33,9 +33,10 @@ public:
 /// between steps (seg::Cancelled), and cannot change the scene meanwhile.
 report::ReportDocument reportOfScene(ModuleLogic& logic, ModuleHost& host, const report::ReportOptions& options)
 {
-  const std::string what = options.convergenceStudy
-                             ? "Writing the plan report with its convergence study (each plan solved twelve more times)..."
-                             : "Writing the plan report...";
+  const std::string what =
+    options.convergenceStudy
+      ? "Writing the plan report with its convergence study (each plan solved twelve more times)..."
+      : "Writing the plan report...";
   host.showStatus(what);
   ModalProgress dialog(host.window(), QString::fromStdString(what), "Plan report", "report.progress");
   try
