@@ -26,9 +26,11 @@ enum class TangentUpdate
   /// Modified Newton: the last factorization is kept, across iterations and
   /// into the next increment, while keeping it is predicted to reach the
   /// tolerance sooner than a new one (from the measured contraction of the
-  /// residual and the measured costs of a tangent, a factorization, a force
-  /// evaluation and a solve); otherwise the iteration forms the tangent at
-  /// its state and factors it (the "reformation" of FEBio's quasi-Newton).
+  /// residual and the costs of a tangent, a factorization, a force
+  /// evaluation and a solve, estimated from the model's counts so that the
+  /// same model takes the same path on every run); otherwise the iteration
+  /// forms the tangent at its state and factors it (the "reformation" of
+  /// FEBio's quasi-Newton).
   WhenSlow
 };
 

@@ -109,8 +109,8 @@ TEST(Stabilization, AnArchPushedPastItsLimitLoadSnapsThroughToTheEquilibriumDisp
   EXPECT_EQ(stuck.loosePathStoppedAt, -1.0) << "a strict path is not tried twice";
   // On a loose path (NewtonOptions::pathResidualTolerance) the failed solve
   // is tried again on the strict one, which stops where the plain one does;
-  // the monitor is told the second try started over. Full Newton on both:
-  // modified Newton's choices depend on measured times.
+  // the monitor is told the second try started over. Full Newton on both,
+  // so the two solves differ in the path's tolerance only.
   NewtonOptions undampedFull = undamped;
   undampedFull.tangentUpdate = TangentUpdate::EveryIteration;
   const NonlinearResult stuckFull = analysis.solve(push, control, undampedFull);
@@ -187,7 +187,7 @@ TEST(Stabilization, ASolveThatConvergesWithoutItIsUntouched)
   LoadCase push;
   push.nodalForces = {{arch.apex, Eigen::Vector3d(0, 0, -0.5 * pushApex(arch, 1.0).force)}};
   NonlinearStaticAnalysis analysis(arch.mesh, rubber(), arch.clamped);
-  // Full Newton: modified Newton's choices depend on measured times.
+  // Full Newton on both, so the two solves differ in the damping only.
   NewtonOptions undamped, damped;
   undamped.tangentUpdate = damped.tangentUpdate = TangentUpdate::EveryIteration;
   undamped.stabilization.enabled = false;
