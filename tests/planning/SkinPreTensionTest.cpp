@@ -163,8 +163,8 @@ TEST(SkinPreTension, TheLinearAndTheLargeDeformationGapesAgreeWhenTheTensionIsSm
 }
 
 // The gaping wound is checked as the prediction is (det F, the skin passing
-// through itself). Under a tension far past the living skin's (200 N/m, the
-// most `caps plan` takes) the phantom's ellipse opens to three times its
+// through itself). Under a tension far past the living skin's (200 N/m,
+// twenty times the demo's 10 N/m) the phantom's ellipse opens to three times its
 // width and is still a body whose skin stays clear of itself: the check
 // finds nothing to flag in a wide open wound.
 TEST(SkinPreTension, AWideOpenGapeIsCheckedAndStillABody)
