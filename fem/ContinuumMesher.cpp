@@ -412,8 +412,8 @@ private:
     }
   }
 
-  /// The skin point, the unit inward direction and the tissue depth at @a c.
-  /// The column at chart point @a c; @a where() names it for a message.
+  /// The skin point, the unit inward direction and the tissue depth at @a c;
+  /// @a where() names the point, called only for a message.
   template <class Where> ColumnGeometry columnAt(const ChartPoint& c, const Where& where) const
   {
     ColumnGeometry g;
