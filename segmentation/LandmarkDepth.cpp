@@ -1,0 +1,353 @@
+#include "segmentation/LandmarkDepth.h"
+
+#include "segmentation/RangeMapImageGeometry.h"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <vtkImageData.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace caps::seg {
+
+namespace {
+
+constexpr double kAirHu = -1000.0;
+
+} // namespace
+
+const char* conventionName(DepthConvention convention)
+{
+  switch (convention)
+  {
+  case DepthConvention::SkinNormal:
+    return "perpendicular to the skin";
+  case DepthConvention::NearestBone:
+    return "to the nearest bone";
+  case DepthConvention::NotADepth:
+    return "not a bone depth";
+  }
+  return "";
+}
+
+DepthConvention depthConventionOf(const std::string& landmarkName)
+{
+  // The nose tip has cartilage beneath it: the tables give no depth there.
+  if (landmarkName == "pronasale")
+    return DepthConvention::NotADepth;
+  // Under the chin and at the jaw's angle the skin normal runs along the
+  // bone's curved edge rather than into it; the CT studies measure these to
+  // the bony landmark, the nearest bone.
+  if (landmarkName == "menton" || landmarkName == "gonion_left" || landmarkName == "gonion_right")
+    return DepthConvention::NearestBone;
+  return DepthConvention::SkinNormal;
+}
+
+BoneDepthProbe::BoneDepthProbe(vtkImageData* ct, vtkImageData* boneMask, double boneThresholdHu, double skinThresholdHu,
+                               double searchDistance)
+  : ct_(ct), mask_(nullptr), threshold_(boneThresholdHu), skinThreshold_(skinThresholdHu),
+    searchDistance_(searchDistance)
+{
+  if (!ct || ct->GetNumberOfScalarComponents() != 1 || !ct->GetScalarPointer())
+    throw std::invalid_argument("The landmark depths need a CT with one value per voxel.");
+  if (!boneMask || boneMask->GetScalarType() != VTK_UNSIGNED_CHAR || boneMask->GetNumberOfScalarComponents() != 1 ||
+      !boneMask->GetScalarPointer())
+    throw std::invalid_argument("The landmark depths need the bone mask (unsigned char, one value per voxel).");
+  geometry_ = ImageGeometry::of(ct);
+  if (!ImageGeometry::of(boneMask).sameGrid(geometry_))
+    throw std::invalid_argument("The bone mask is not on the CT's grid.");
+  if (!(searchDistance > 0.0))
+    throw std::invalid_argument("The bone search distance must be positive.");
+  dims_ = geometry_.dimensions();
+  if (dims_[0] < 2 || dims_[1] < 2 || dims_[2] < 2)
+    throw std::invalid_argument("The CT must have at least two voxels along each axis.");
+  mask_ = static_cast<const unsigned char*>(boneMask->GetScalarPointer());
+}
+
+Eigen::Vector3d BoneDepthProbe::indexOf(const Eigen::Vector3d& world) const
+{
+  const Eigen::Vector3d start(geometry_.extent[0], geometry_.extent[2], geometry_.extent[4]);
+  return geometry_.worldToIndex(world) - start;
+}
+
+Eigen::Vector3d BoneDepthProbe::worldOf(const Eigen::Vector3d& index) const
+{
+  const Eigen::Vector3d start(geometry_.extent[0], geometry_.extent[2], geometry_.extent[4]);
+  return geometry_.indexToWorld(index + start);
+}
+
+bool BoneDepthProbe::inMask(int i, int j, int k) const
+{
+  if (i < 0 || j < 0 || k < 0 || i >= dims_[0] || j >= dims_[1] || k >= dims_[2])
+    return false;
+  return mask_[i + dims_[0] * (j + std::ptrdiff_t(dims_[1]) * k)] != 0;
+}
+
+bool BoneDepthProbe::inMask(const Eigen::Vector3d& index) const
+{
+  return inMask(int(std::lround(index.x())), int(std::lround(index.y())), int(std::lround(index.z())));
+}
+
+bool BoneDepthProbe::maskTouches(const Eigen::Vector3d& index) const
+{
+  const int i0 = int(std::floor(index.x())), j0 = int(std::floor(index.y())), k0 = int(std::floor(index.z()));
+  for (int k = k0; k <= k0 + 1; ++k)
+    for (int j = j0; j <= j0 + 1; ++j)
+      for (int i = i0; i <= i0 + 1; ++i)
+        if (inMask(i, j, k))
+          return true;
+  return false;
+}
+
+double BoneDepthProbe::huAtIndex(const Eigen::Vector3d& index) const
+{
+  const double x = index.x(), y = index.y(), z = index.z();
+  if (!(x >= 0.0 && y >= 0.0 && z >= 0.0 && x <= dims_[0] - 1 && y <= dims_[1] - 1 && z <= dims_[2] - 1))
+    return kAirHu;
+  const int i = std::min(int(x), dims_[0] - 2), j = std::min(int(y), dims_[1] - 2), k = std::min(int(z), dims_[2] - 2);
+  const double fx = x - i, fy = y - j, fz = z - k;
+  // GetScalarComponentAsDouble takes indices in the extent's own numbering.
+  auto v = [&](int a, int b, int c) {
+    return ct_->GetScalarComponentAsDouble(geometry_.extent[0] + i + a, geometry_.extent[2] + j + b,
+                                           geometry_.extent[4] + k + c, 0);
+  };
+  const double c00 = v(0, 0, 0) + fx * (v(1, 0, 0) - v(0, 0, 0));
+  const double c10 = v(0, 1, 0) + fx * (v(1, 1, 0) - v(0, 1, 0));
+  const double c01 = v(0, 0, 1) + fx * (v(1, 0, 1) - v(0, 0, 1));
+  const double c11 = v(0, 1, 1) + fx * (v(1, 1, 1) - v(0, 1, 1));
+  const double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
+}
+
+double BoneDepthProbe::hu(const Eigen::Vector3d& world) const
+{
+  return huAtIndex(indexOf(world));
+}
+
+double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector3d& direction,
+                                Eigen::Vector3d* hit) const
+{
+  const double step = 0.25 * geometry_.spacing.minCoeff();
+  const Eigen::Vector3d d = direction.normalized();
+  auto index = [&](double t) { return indexOf(from + t * d); };
+  auto isBone = [&](double t) { return huAtIndex(index(t)) >= threshold_; };
+  if (isBone(0.0) && inMask(index(0.0)))
+  {
+    if (hit)
+      *hit = from;
+    return 0.0;
+  }
+  // March to the first rise of the HU through the threshold (refined by
+  // bisection: the sub-voxel place) next to the bone mask: the mask's islands
+  // and holes are the segmentation's decision, so bright tissue it left out
+  // (metal, contrast) is passed through.
+  double previous = 0.0;
+  bool wasBone = isBone(0.0);
+  for (double t = step; t <= searchDistance_; t += step)
+  {
+    const bool bone = isBone(t);
+    if (bone && !wasBone)
+    {
+      double outside = previous, inside = t;
+      for (int it = 0; it < 30; ++it)
+      {
+        const double mid = 0.5 * (outside + inside);
+        (isBone(mid) ? inside : outside) = mid;
+      }
+      const double crossing = 0.5 * (outside + inside);
+      if (maskTouches(index(crossing + 2.0 * step)))
+      {
+        if (hit)
+          *hit = from + crossing * d;
+        return crossing;
+      }
+    }
+    wasBone = bone;
+    previous = t;
+  }
+  return RangeMap::quietNaN();
+}
+
+double BoneDepthProbe::toNearest(const Eigen::Vector3d& from, double radius, Eigen::Vector3d* hit) const
+{
+  radius = std::min(radius, searchDistance_);
+  if (!(radius > 0.0) || !from.allFinite())
+    return RangeMap::quietNaN();
+  // The box of voxels a sphere of the radius reaches: along index axis a,
+  // radius times the norm of row a of the world-to-index map.
+  const Eigen::Matrix3d toIndex = geometry_.indexToWorldMatrix().inverse();
+  const Eigen::Vector3d centre = indexOf(from);
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a)
+  {
+    const double reach = radius * toIndex.row(a).norm() + 1.0;
+    lo[a] = std::max(0, int(std::floor(centre[a] - reach)));
+    hi[a] = std::min(dims_[a] - 1, int(std::ceil(centre[a] + reach)));
+  }
+  const double voxelDiagonal = geometry_.spacing.norm();
+  // The bone surface: on each voxel edge from a voxel of the bone mask to
+  // one outside it, where the HU (linear between the two) falls through the
+  // threshold; the edge's middle where it does not (a mask edge without a
+  // HU edge).
+  double best = radius;
+  bool found = false;
+  Eigen::Vector3d bestPoint;
+  constexpr int kOffsets[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int k = lo[2]; k <= hi[2]; ++k)
+    for (int j = lo[1]; j <= hi[1]; ++j)
+      for (int i = lo[0]; i <= hi[0]; ++i)
+      {
+        if (!inMask(i, j, k))
+          continue;
+        const Eigen::Vector3d inside(i, j, k);
+        if ((worldOf(inside) - from).norm() > best + voxelDiagonal)
+          continue;
+        for (const auto& o : kOffsets)
+        {
+          const int a = i + o[0], b = j + o[1], c = k + o[2];
+          if (a < 0 || b < 0 || c < 0 || a >= dims_[0] || b >= dims_[1] || c >= dims_[2] || inMask(a, b, c))
+            continue;
+          const Eigen::Vector3d outside(a, b, c);
+          const double vIn = huAtIndex(inside), vOut = huAtIndex(outside);
+          const double s = vIn >= threshold_ && vOut < threshold_ ? (vIn - threshold_) / (vIn - vOut) : 0.5;
+          const Eigen::Vector3d point = worldOf(inside + s * (outside - inside));
+          const double distance = (point - from).norm();
+          if (distance <= best)
+          {
+            best = distance;
+            bestPoint = point;
+            found = true;
+          }
+        }
+      }
+  if (!found)
+    return RangeMap::quietNaN();
+  if (hit)
+    *hit = bestPoint;
+  return best;
+}
+
+Eigen::Vector3d BoneDepthProbe::skinNormal(const Eigen::Vector3d& skinPoint) const
+{
+  const Eigen::Vector3d none = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+  // A first guess: the HU gradient (HU rises from air into tissue, so it
+  // points inward), fitted by least squares on a 5 x 5 x 5 stencil of half
+  // voxels.
+  const double h = 0.5 * geometry_.spacing.maxCoeff();
+  Eigen::Matrix3d normalMatrix = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (int a = -2; a <= 2; ++a)
+    for (int b = -2; b <= 2; ++b)
+      for (int c = -2; c <= 2; ++c)
+      {
+        const Eigen::Vector3d offset = h * Eigen::Vector3d(a, b, c);
+        normalMatrix += offset * offset.transpose();
+        rhs += offset * hu(skinPoint + offset); // the stencil is symmetric: the mean drops out
+      }
+  Eigen::Vector3d normal = normalMatrix.ldlt().solve(rhs);
+  if (!(normal.norm() > 0.0))
+    return none;
+  normal.normalize();
+  // Then the skin itself: the skin crossings on a 5 x 5 grid of lines along
+  // the normal (+-2 mm around the point) and the plane through them, twice.
+  // A gradient of a partial-volume ramp sampled on thick slices leans by a
+  // few degrees towards the grid; the crossings lie on the surface.
+  constexpr double kSpacing = 1.0, kReach = 4.0, kStep = 0.1;
+  for (int pass = 0; pass < 2; ++pass)
+  {
+    const Eigen::Vector3d t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
+    std::vector<Eigen::Vector3d> points;
+    for (int a = -2; a <= 2; ++a)
+      for (int b = -2; b <= 2; ++b)
+      {
+        const Eigen::Vector3d base = skinPoint + kSpacing * (a * t1 + b * t2);
+        auto inside = [&](double t) { return hu(base + t * normal) >= skinThreshold_; };
+        for (double t = -kReach; t < kReach; t += kStep)
+          if (!inside(t) && inside(t + kStep))
+          {
+            double out = t, in = t + kStep;
+            for (int it = 0; it < 20; ++it)
+            {
+              const double mid = 0.5 * (out + in);
+              (inside(mid) ? in : out) = mid;
+            }
+            points.push_back(base + 0.5 * (out + in) * normal);
+            break;
+          }
+      }
+    if (points.size() < 9)
+      break; // too little skin around the point: keep the gradient's normal
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& q : points)
+      mean += q;
+    mean /= double(points.size());
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (const auto& q : points)
+      scatter += (q - mean) * (q - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+    Eigen::Vector3d fitted = eig.eigenvectors().col(0);
+    normal = fitted.dot(normal) < 0.0 ? Eigen::Vector3d(-fitted) : fitted;
+  }
+  return normal;
+}
+
+BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
+{
+  BoneDepth out;
+  if (!skinPoint.allFinite())
+    return out;
+  out.skinPoint = skinPoint;
+  out.inwardNormal = skinNormal(skinPoint);
+  if (out.inwardNormal.allFinite())
+    out.alongSkinNormal = alongRay(skinPoint, out.inwardNormal, &out.boneAlongNormal);
+  // The nearest bone is no farther than the bone along the normal; the
+  // search reaches a voxel past it, for the surface's discretisation.
+  const bool alongFound = std::isfinite(out.alongSkinNormal);
+  const double radius = alongFound ? out.alongSkinNormal + geometry_.spacing.norm() : searchDistance_;
+  out.toNearestBone = toNearest(skinPoint, radius, &out.nearestBone);
+  if (alongFound && !(out.toNearestBone <= out.alongSkinNormal))
+  {
+    out.toNearestBone = out.alongSkinNormal;
+    out.nearestBone = out.boneAlongNormal;
+  }
+  return out;
+}
+
+double LandmarkDepth::depth() const
+{
+  switch (convention)
+  {
+  case DepthConvention::SkinNormal:
+    return bone.alongSkinNormal;
+  case DepthConvention::NearestBone:
+    return bone.toNearestBone;
+  case DepthConvention::NotADepth:
+    break;
+  }
+  return RangeMap::quietNaN();
+}
+
+std::vector<LandmarkDepth> landmarkDepths(const std::vector<Landmark>& landmarks, const RangeMap& skin,
+                                          const BoneDepthProbe& probe)
+{
+  std::vector<LandmarkDepth> rows;
+  rows.reserve(landmarks.size());
+  for (const Landmark& l : landmarks)
+  {
+    LandmarkDepth row;
+    row.landmark = l;
+    row.convention = depthConventionOf(l.name);
+    const double r = skin.empty() ? RangeMap::quietNaN() : skin.sample(l.theta, l.z);
+    if (std::isfinite(r))
+      row.bone = probe.measure(skin.frame().toWorld(r, l.theta, l.z));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+} // namespace caps::seg

@@ -1,0 +1,136 @@
+#pragma once
+/// @file LandmarkDepth.h
+/// @brief Soft-tissue depth at a landmark, measured in the CT itself (not in
+///        the range maps) by the conventions of the published depth tables.
+///
+/// The range maps give thickness along the ray from the cylinder's axis and
+/// along the map's own normal, marched to the bone map: both miss bone the
+/// radial ray never meets (the teeth behind the lips, bone that overhangs)
+/// and follow the map's resolution. A landmark's depth is read from the CT
+/// at full resolution instead, two ways (thesis §4.3 measures landmark
+/// distances; the conventions are those of the soft-tissue depth tables):
+/// - along the skin normal: from the skin point inward, perpendicular to the
+///   skin, to where the line first enters bone. This is what an ultrasound
+///   probe held perpendicular to the skin measures (De Greef et al. 2006,
+///   "Large-scale in-vivo Caucasian facial soft tissue thickness database
+///   for craniofacial reconstruction", Forensic Sci Int 159S:S126-S146,
+///   967 adults), the largest table with these landmarks.
+/// - to the nearest bone: the shortest distance from the skin point to the
+///   bone surface, which is perpendicular to the bone there: the convention
+///   of the CT and MRI studies that measure "perpendicular to the bone"
+///   (Stephan and Simpson 2008, J Forensic Sci 53:1257-1272, review them).
+/// The nearest bone is never farther than the bone along the normal.
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "segmentation/Landmarks.h"
+#include "segmentation/RangeMap.h"
+#include "segmentation/RangeMapImageGeometry.h"
+
+class vtkImageData;
+
+namespace caps::seg {
+
+/// Which of the two measures a landmark's published depth follows.
+enum class DepthConvention
+{
+  SkinNormal,  ///< perpendicular to the skin, to the first bone met
+  NearestBone, ///< the shortest distance to the bone surface
+  NotADepth,   ///< no bone lies under the landmark (the nose tip: cartilage); shown, never compared
+};
+
+/// "perpendicular to the skin", "to the nearest bone", "not a bone depth".
+const char* conventionName(DepthConvention convention);
+
+/// The convention the published tables use for a standard landmark (by
+/// name); SkinNormal for a name that is not a standard landmark.
+DepthConvention depthConventionOf(const std::string& landmarkName);
+
+/// Where the bone is from one skin point.
+struct BoneDepth
+{
+  Eigen::Vector3d skinPoint = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+  /// Inward unit normal of the skin at skinPoint, from the CT's gradient.
+  Eigen::Vector3d inwardNormal = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+  double alongSkinNormal = RangeMap::quietNaN(); ///< mm; NaN: no bone within the search distance
+  Eigen::Vector3d boneAlongNormal = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+  double toNearestBone = RangeMap::quietNaN(); ///< mm; NaN: no bone within the search distance
+  Eigen::Vector3d nearestBone = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+};
+
+/**
+ * @brief Finds the bone surface from points on the skin, in the CT: the
+ *        crossing of boneThresholdHu (trilinear HU, refined by bisection, as
+ *        the range maps find it) next to the bone mask.
+ *
+ * The images are referenced, not copied: they must outlive the probe.
+ */
+class BoneDepthProbe
+{
+public:
+  /// @a ct HU, one component, any scalar type; @a boneMask unsigned char on
+  /// the same grid, non-zero in bone; the HU of the bone's and the skin's
+  /// surfaces (the segmentation's thresholds). @a searchDistance (mm)
+  /// bounds both measures.
+  /// @throws std::invalid_argument for a missing image, another grid or type.
+  BoneDepthProbe(vtkImageData* ct, vtkImageData* boneMask, double boneThresholdHu, double skinThresholdHu = -400.0,
+                 double searchDistance = 60.0);
+
+  /// Both measures from @a skinPoint (LPS mm), along skinNormal().
+  BoneDepth measure(const Eigen::Vector3d& skinPoint) const;
+
+  /// The inward normal of the skin at @a skinPoint, at the CT's resolution:
+  /// the plane fitted to the skin's HU crossings within 2 mm of the point
+  /// (started from the HU gradient); NaN where the CT has no skin edge there.
+  Eigen::Vector3d skinNormal(const Eigen::Vector3d& skinPoint) const;
+
+  /// Distance along the unit @a direction from @a from to the first bone
+  /// crossing (0 if @a from is in bone); NaN if none within the search
+  /// distance. @a hit gets the crossing.
+  double alongRay(const Eigen::Vector3d& from, const Eigen::Vector3d& direction, Eigen::Vector3d* hit = nullptr) const;
+
+  /// Distance from @a from to the nearest point of the bone surface within
+  /// @a radius (mm; at most the search distance); NaN if none. @a hit gets it.
+  double toNearest(const Eigen::Vector3d& from, double radius, Eigen::Vector3d* hit = nullptr) const;
+
+  /// The HU at a world point (trilinear; -1000 outside the CT).
+  double hu(const Eigen::Vector3d& world) const;
+
+private:
+  // Indices are 0-based continuous voxel indices (the extent's start at 0).
+  Eigen::Vector3d indexOf(const Eigen::Vector3d& world) const;
+  Eigen::Vector3d worldOf(const Eigen::Vector3d& index) const;
+  bool inMask(int i, int j, int k) const;
+  bool inMask(const Eigen::Vector3d& index) const;      ///< the nearest voxel
+  bool maskTouches(const Eigen::Vector3d& index) const; ///< any voxel of the trilinear cell
+  double huAtIndex(const Eigen::Vector3d& index) const;
+
+  vtkImageData* ct_;
+  const unsigned char* mask_;
+  ImageGeometry geometry_;
+  std::array<int, 3> dims_;
+  double threshold_;
+  double skinThreshold_;
+  double searchDistance_;
+};
+
+/// One row of the landmark depth table.
+struct LandmarkDepth
+{
+  Landmark landmark;
+  DepthConvention convention = DepthConvention::SkinNormal;
+  BoneDepth bone;
+  /// The depth by the landmark's convention (mm); NaN where it has none.
+  double depth() const;
+};
+
+/// The depths at @a landmarks, each from its skin point on @a skin (the
+/// range map at its (θ, z)); NaN rows where the skin map has no point.
+std::vector<LandmarkDepth> landmarkDepths(const std::vector<Landmark>& landmarks, const RangeMap& skin,
+                                          const BoneDepthProbe& probe);
+
+} // namespace caps::seg

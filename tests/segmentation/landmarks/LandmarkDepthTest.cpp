@@ -1,0 +1,191 @@
+// Landmark depths measured in a synthetic CT: a skin sphere over a bone
+// sphere, each boundary a 2 mm partial-volume ramp whose middle is the
+// surface, on an anisotropic grid whose extent does not start at 0. The two
+// measures have closed forms: the ray from the skin point along the inward
+// normal meets the bone sphere where |p - t n - c_b| = R_b; the nearest bone
+// is |p - c_b| - R_b away.
+
+#include <algorithm>
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+
+#include "LandmarkPhantoms.h"
+#include "segmentation/LandmarkDepth.h"
+
+namespace caps::seg::test {
+namespace {
+
+constexpr double kAir = -1000, kTissue = 40, kBone = 1000;
+constexpr double kThreshold = 0.5 * (kTissue + kBone); // the ramp's middle: the surface
+constexpr double kSkinThreshold = 0.5 * (kAir + kTissue);
+
+struct SpheresCt
+{
+  Eigen::Vector3d skinCentre{0, 0, 0};
+  double skinRadius = 45;
+  Eigen::Vector3d boneCentre{0, 0, 0};
+  double boneRadius = 35;
+  /// A bright bead that is not bone (not in the mask): metal, contrast.
+  Eigen::Vector3d beadCentre{1e9, 0, 0};
+  double beadRadius = 0;
+
+  vtkNew<vtkImageData> ct, mask;
+
+  /// A CT's point spread: each boundary a 2 mm ramp.
+  static double ramp(double insideBy) { return std::clamp(0.5 * insideBy + 0.5, 0.0, 1.0); }
+
+  double huAt(const Eigen::Vector3d& x) const
+  {
+    double hu = kAir + (kTissue - kAir) * ramp(skinRadius - (x - skinCentre).norm());
+    hu += (kBone - kTissue) * ramp(boneRadius - (x - boneCentre).norm());
+    if ((x - beadCentre).norm() < beadRadius)
+      hu = 3000;
+    return hu;
+  }
+
+  void build()
+  {
+    for (vtkImageData* image : {ct.GetPointer(), mask.GetPointer()})
+    {
+      image->SetExtent(10, 109, -5, 94, 3, 75);
+      image->SetSpacing(1.0, 1.0, 1.4);
+      image->SetOrigin(-60.0, -45.0, -54.2); // voxel (10, -5, 3) at (-50, -50, -50)
+    }
+    ct->AllocateScalars(VTK_SHORT, 1);
+    mask->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+    const int* e = ct->GetExtent();
+    for (int k = e[4]; k <= e[5]; ++k)
+      for (int j = e[2]; j <= e[3]; ++j)
+        for (int i = e[0]; i <= e[1]; ++i)
+        {
+          double world[3];
+          ct->TransformIndexToPhysicalPoint(i, j, k, world);
+          const Eigen::Vector3d x(world[0], world[1], world[2]);
+          const double hu = huAt(x);
+          *static_cast<short*>(ct->GetScalarPointer(i, j, k)) = static_cast<short>(std::lround(hu));
+          const bool bone = (x - boneCentre).norm() <= boneRadius && hu >= kThreshold;
+          *static_cast<unsigned char*>(mask->GetScalarPointer(i, j, k)) = bone ? 1 : 0;
+        }
+  }
+
+  /// The closed forms from the skin point in direction u from the skin's centre.
+  double alongNormal(const Eigen::Vector3d& u) const
+  {
+    const Eigen::Vector3d p = skinCentre + skinRadius * u, n = -u;
+    // |p + t n - c|^2 = R^2: t^2 + 2 t n.(p - c) + |p - c|^2 - R^2 = 0, the smaller root.
+    const Eigen::Vector3d w = p - boneCentre;
+    const double b = n.dot(w), c = w.squaredNorm() - boneRadius * boneRadius;
+    return -b - std::sqrt(b * b - c);
+  }
+  double nearest(const Eigen::Vector3d& u) const
+  {
+    return (skinCentre + skinRadius * u - boneCentre).norm() - boneRadius;
+  }
+};
+
+std::vector<Eigen::Vector3d> directions()
+{
+  std::vector<Eigen::Vector3d> out;
+  for (double polar : {-50.0, -20.0, 0.0, 25.0, 55.0})
+    for (double azimuth = -170.0; azimuth < 180.0; azimuth += 40.0)
+      out.emplace_back(std::cos(polar * kDeg) * std::cos(azimuth * kDeg),
+                       std::cos(polar * kDeg) * std::sin(azimuth * kDeg), std::sin(polar * kDeg));
+  return out;
+}
+
+TEST(LandmarkDepth, ConcentricSpheresGiveTheLayerThicknessBothWays)
+{
+  SpheresCt phantom;
+  phantom.build();
+  const BoneDepthProbe probe(phantom.ct, phantom.mask, kThreshold, kSkinThreshold);
+  double worst = 0.0;
+  for (const Eigen::Vector3d& u : directions())
+  {
+    const BoneDepth d = probe.measure(phantom.skinCentre + phantom.skinRadius * u);
+    EXPECT_NEAR(d.alongSkinNormal, 10.0, 0.3);
+    EXPECT_NEAR(d.toNearestBone, 10.0, 0.3);
+    EXPECT_GT(d.inwardNormal.dot(-u), std::cos(1.0 * kDeg)); // the CT's normal is the sphere's
+    worst = std::max({worst, std::abs(d.alongSkinNormal - 10.0), std::abs(d.toNearestBone - 10.0)});
+  }
+  std::printf("concentric spheres, 10 mm of tissue: worst error %.3f mm over %zu points\n", worst, directions().size());
+}
+
+TEST(LandmarkDepth, OffsetBoneSeparatesTheSkinNormalFromTheNearestBone)
+{
+  SpheresCt phantom;
+  phantom.boneCentre = {0.0, 12.0, 0.0};
+  phantom.boneRadius = 25.0;
+  phantom.build();
+  const BoneDepthProbe probe(phantom.ct, phantom.mask, kThreshold, kSkinThreshold);
+  int differing = 0;
+  double worstNormal = 0.0, worstDepth = 0.0;
+  for (const Eigen::Vector3d& u : directions())
+  {
+    const BoneDepth d = probe.measure(phantom.skinCentre + phantom.skinRadius * u);
+    const double along = phantom.alongNormal(u), nearest = phantom.nearest(u);
+    worstNormal = std::max(worstNormal, std::acos(std::min(1.0, d.inwardNormal.dot(-u))) / kDeg);
+    worstDepth = std::max({worstDepth, std::abs(d.alongSkinNormal - along), std::abs(d.toNearestBone - nearest)});
+    EXPECT_NEAR(d.alongSkinNormal, along, 0.3) << u.transpose();
+    EXPECT_NEAR(d.toNearestBone, nearest, 0.3) << u.transpose();
+    EXPECT_LE(d.toNearestBone, d.alongSkinNormal + 1e-9);
+    // The points found lie on the bone surface.
+    EXPECT_NEAR((d.nearestBone - phantom.boneCentre).norm(), phantom.boneRadius, 0.3);
+    EXPECT_NEAR((d.boneAlongNormal - phantom.boneCentre).norm(), phantom.boneRadius, 0.3);
+    differing += along - nearest > 1.0;
+  }
+  EXPECT_GT(differing, 5); // the phantom does tell the two conventions apart
+  EXPECT_LT(worstNormal, 1.0);
+  std::printf("bone 12 mm off centre: worst skin normal %.2f deg, worst depth error %.3f mm; %d of %zu points "
+              "differ by more than 1 mm between the conventions\n",
+              worstNormal, worstDepth, differing, directions().size());
+}
+
+TEST(LandmarkDepth, BrightTissueOutsideTheBoneMaskIsNotBone)
+{
+  SpheresCt phantom;
+  phantom.beadCentre = {0.0, -40.0, 0.0}; // 5 mm under the skin at the front (-y)
+  phantom.beadRadius = 2.5;
+  phantom.build();
+  const BoneDepthProbe probe(phantom.ct, phantom.mask, kThreshold, kSkinThreshold);
+  const BoneDepth d = probe.measure({0.0, -45.0, 0.0});
+  EXPECT_NEAR(d.alongSkinNormal, 10.0, 0.3);
+  EXPECT_NEAR(d.toNearestBone, 10.0, 0.3);
+}
+
+TEST(LandmarkDepth, NoBoneWithinReachIsNaNAndBadImagesAreRefused)
+{
+  SpheresCt phantom;
+  phantom.build();
+  const BoneDepthProbe nearOnly(phantom.ct, phantom.mask, kThreshold, kSkinThreshold, 5.0);
+  const BoneDepth d = nearOnly.measure({45.0, 0.0, 0.0});
+  EXPECT_TRUE(std::isnan(d.alongSkinNormal));
+  EXPECT_TRUE(std::isnan(d.toNearestBone));
+  EXPECT_THROW(BoneDepthProbe(phantom.ct, phantom.ct, kThreshold), std::invalid_argument); // not a mask
+  vtkNew<vtkImageData> other;
+  other->SetDimensions(5, 5, 5);
+  other->AllocateScalars(VTK_UNSIGNED_CHAR, 1);
+  EXPECT_THROW(BoneDepthProbe(phantom.ct, other, kThreshold), std::invalid_argument);
+}
+
+TEST(LandmarkDepth, EachLandmarkHasItsPublishedConvention)
+{
+  EXPECT_EQ(depthConventionOf("pronasale"), DepthConvention::NotADepth);
+  EXPECT_EQ(depthConventionOf("menton"), DepthConvention::NearestBone);
+  EXPECT_EQ(depthConventionOf("glabella"), DepthConvention::SkinNormal);
+  LandmarkDepth row;
+  row.bone.alongSkinNormal = 7.0;
+  row.bone.toNearestBone = 5.0;
+  row.convention = DepthConvention::SkinNormal;
+  EXPECT_EQ(row.depth(), 7.0);
+  row.convention = DepthConvention::NearestBone;
+  EXPECT_EQ(row.depth(), 5.0);
+  row.convention = DepthConvention::NotADepth;
+  EXPECT_TRUE(std::isnan(row.depth()));
+}
+
+} // namespace
+} // namespace caps::seg::test
