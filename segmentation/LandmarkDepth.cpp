@@ -318,9 +318,17 @@ BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
   return out;
 }
 
+DepthConvention LandmarkDepth::measuredBy() const
+{
+  if (convention == DepthConvention::SkinNormal && !std::isfinite(bone.alongSkinNormal) &&
+      std::isfinite(bone.toNearestBone))
+    return DepthConvention::NearestBone;
+  return convention;
+}
+
 double LandmarkDepth::depth() const
 {
-  switch (convention)
+  switch (measuredBy())
   {
   case DepthConvention::SkinNormal:
     return bone.alongSkinNormal;
@@ -332,22 +340,12 @@ double LandmarkDepth::depth() const
   return RangeMap::quietNaN();
 }
 
-std::vector<LandmarkDepth> landmarkDepths(const std::vector<Landmark>& landmarks, const RangeMap& skin,
-                                          const BoneDepthProbe& probe)
+std::string LandmarkDepth::describeConvention() const
 {
-  std::vector<LandmarkDepth> rows;
-  rows.reserve(landmarks.size());
-  for (const Landmark& l : landmarks)
-  {
-    LandmarkDepth row;
-    row.landmark = l;
-    row.convention = depthConventionOf(l.name);
-    const double r = skin.empty() ? RangeMap::quietNaN() : skin.sample(l.theta, l.z);
-    if (std::isfinite(r))
-      row.bone = probe.measure(skin.frame().toWorld(r, l.theta, l.z));
-    rows.push_back(row);
-  }
-  return rows;
+  std::string name = conventionName(measuredBy());
+  if (measuredBy() != convention)
+    name += " (no bone perpendicular to the skin)";
+  return name;
 }
 
 } // namespace caps::seg

@@ -124,13 +124,15 @@ struct LandmarkDepth
   Landmark landmark;
   DepthConvention convention = DepthConvention::SkinNormal;
   BoneDepth bone;
-  /// The depth by the landmark's convention (mm); NaN where it has none.
+  /// The convention the depth was measured by: the landmark's, except where
+  /// the line perpendicular to the skin meets no bone within reach (the lips
+  /// of a patient without teeth, skin over a thin bone the CT cannot show)
+  /// and the nearest bone is taken instead.
+  DepthConvention measuredBy() const;
+  /// The depth by measuredBy() (mm); NaN where there is none.
   double depth() const;
+  /// measuredBy()'s name, with why when it is not the landmark's own.
+  std::string describeConvention() const;
 };
-
-/// The depths at @a landmarks, each from its skin point on @a skin (the
-/// range map at its (θ, z)); NaN rows where the skin map has no point.
-std::vector<LandmarkDepth> landmarkDepths(const std::vector<Landmark>& landmarks, const RangeMap& skin,
-                                          const BoneDepthProbe& probe);
 
 } // namespace caps::seg

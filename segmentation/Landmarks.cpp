@@ -13,7 +13,10 @@ namespace caps::seg {
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
-constexpr const char* kHeader = "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm";
+constexpr const char* kShortHeader = "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm";
+constexpr const char* kHeader =
+  "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention";
+constexpr std::size_t kShortColumns = 8, kColumns = 12;
 
 void checkFrame(const RangeMap& reference, const RangeMap& map, const char* what)
 {
@@ -122,9 +125,13 @@ void writeLandmarkCsv(const std::filesystem::path& path, const std::vector<Landm
       throw std::invalid_argument("The landmark name \"" + name +
                                   "\" cannot be written to CSV: it must be non-empty and hold no "
                                   "comma, quote or line break.");
+    if (row.convention.find_first_of(",\"\r\n") != std::string::npos)
+      throw std::invalid_argument("The depth convention \"" + row.convention +
+                                  "\" cannot be written to CSV: it must hold no comma, quote or line break.");
     out << name << ',' << number(row.landmark.theta / kDegree) << ',' << number(row.landmark.z) << ','
         << number(row.position.x()) << ',' << number(row.position.y()) << ',' << number(row.position.z()) << ','
-        << number(row.radial) << ',' << number(row.normal) << '\n';
+        << number(row.radial) << ',' << number(row.normal) << ',' << number(row.ctSkinNormal) << ','
+        << number(row.ctNearestBone) << ',' << number(row.depth) << ',' << row.convention << '\n';
   }
   std::filesystem::path temporary = path;
   temporary += ".tmp";
@@ -157,6 +164,7 @@ std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path
   std::string line;
   int lineNumber = 0;
   bool header = false;
+  std::size_t columns = kColumns;
   std::vector<LandmarkThickness> rows;
   while (std::getline(file, line))
   {
@@ -171,15 +179,20 @@ std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path
       std::string joined;
       for (std::size_t i = 0; i < fields.size(); ++i)
         joined += (i ? "," : "") + fields[i];
-      if (joined != kHeader)
-        throw fail(lineNumber, std::string("the header must be \"") + kHeader + "\".");
+      if (joined != kHeader && joined != kShortHeader)
+        throw fail(lineNumber, std::string("the header must be \"") + kHeader + "\" (or its first 8 columns).");
+      columns = joined == kHeader ? kColumns : kShortColumns;
       header = true;
       continue;
     }
-    if (fields.size() != 8)
-      throw fail(lineNumber, "expected 8 fields, found " + std::to_string(fields.size()) + ".");
-    double v[7];
-    for (int k = 0; k < 7; ++k)
+    if (fields.size() != columns)
+      throw fail(lineNumber,
+                 "expected " + std::to_string(columns) + " fields, found " + std::to_string(fields.size()) + ".");
+    double v[10];
+    const int numberFields = int(columns) - (columns == kColumns ? 2 : 1); // all but the name (and the convention)
+    for (int k = 0; k < 10; ++k)
+      v[k] = RangeMap::quietNaN();
+    for (int k = 0; k < numberFields; ++k)
     {
       const std::string& f = fields[k + 1];
       if (f.empty() || f == "nan" || f == "NaN")
@@ -198,6 +211,11 @@ std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path
     row.position = Eigen::Vector3d(v[2], v[3], v[4]);
     row.radial = v[5];
     row.normal = v[6];
+    row.ctSkinNormal = v[7];
+    row.ctNearestBone = v[8];
+    row.depth = v[9];
+    if (columns == kColumns)
+      row.convention = fields[11];
     rows.push_back(row);
   }
   if (!header)

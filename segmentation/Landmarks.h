@@ -51,6 +51,14 @@ struct LandmarkThickness
   double radial = RangeMap::quietNaN();
   /// Thickness along the inward skin normal at (θ, z), mm; NaN where none.
   double normal = RangeMap::quietNaN();
+  /// Measured in the CT at full resolution (LandmarkDepth.h): from the skin
+  /// point along the skin's normal to the first bone, and to the nearest
+  /// bone (mm); the depth by the landmark's published convention and that
+  /// convention's name. NaN and empty where not measured.
+  double ctSkinNormal = RangeMap::quietNaN();
+  double ctNearestBone = RangeMap::quietNaN();
+  double depth = RangeMap::quietNaN();
+  std::string convention;
 };
 
 /// The thickness table: for each landmark, its skin point and the radial and
@@ -62,16 +70,18 @@ std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& la
                                                  const RangeMap& radial, const RangeMap& normal);
 
 /// Writes the table as CSV with the header
-/// `name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm` (x, y, z in LPS mm), one
-/// row per landmark, numbers in the shortest form that reads back exactly, NaN
-/// as an empty field. Atomic: written beside, then renamed.
+/// `name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention`
+/// (x, y, z in LPS mm), one row per landmark, numbers in the shortest form
+/// that reads back exactly, NaN as an empty field. Atomic: written beside,
+/// then renamed.
 /// @throws std::invalid_argument if a name is empty or holds a comma, quote or line break;
 ///         std::runtime_error if the file cannot be written.
 void writeLandmarkCsv(const std::filesystem::path& path, const std::vector<LandmarkThickness>& rows);
 
 /// Reads a file writeLandmarkCsv() wrote (or a person edited): the header must
-/// name the 8 columns in that order; blank lines are skipped; an empty field
-/// or "nan" is NaN. name, theta_deg and z_mm are required on each row.
+/// name the 12 columns in that order, or the first 8 (the table before the
+/// CT-measured depths); blank lines are skipped; an empty field or "nan" is
+/// NaN. name, theta_deg and z_mm are required on each row.
 /// @throws std::runtime_error naming the file and line of the first problem.
 std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path);
 

@@ -130,8 +130,8 @@ std::vector<seg::Landmark> readUserLandmarks(const fs::path& file, const seg::Cy
 // user's, from --landmarks), with the thickness under each: a first table for
 // the thickness review, to be corrected by the surgeon (the CSV can be edited
 // and read back).
-void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& userLandmarks, const fs::path& file,
-                        std::ostream& out, std::ostream& err)
+void writeLandmarkTable(const RangeMapLogic& logic, const VolumeNode& volume, const RangeMapOutput& maps,
+                        const fs::path& userLandmarks, const fs::path& file, std::ostream& out, std::ostream& err)
 {
   std::vector<seg::Landmark> landmarks;
   if (!userLandmarks.empty())
@@ -152,19 +152,22 @@ void writeLandmarkTable(const RangeMapOutput& maps, const fs::path& userLandmark
       err << "warning: " << warning << "\n";
     landmarks = std::move(placement.landmarks);
   }
-  const auto rows = seg::landmarkThickness(landmarks, maps.skin, maps.thickness, maps.thicknessNormal);
+  auto rows = seg::landmarkThickness(landmarks, maps.skin, maps.thickness, maps.thicknessNormal);
+  logic.measureLandmarkDepths(volume, rows);
   if (userLandmarks.empty())
     out << "Thickness at the landmarks placed automatically (check them; mm):\n";
   else
     out << "Thickness at the landmarks of " << userLandmarks.string() << " (mm):\n";
-  out << "  landmark            theta    z     radial  normal\n";
+  out << "                                      range maps      in the CT\n"
+         "  landmark            theta    z     radial  normal  normal nearest   depth (convention)\n";
   for (const auto& row : rows)
   {
     std::string name = row.landmark.name;
     name.resize(std::max<std::size_t>(name.size(), 18), ' ');
     out << "  " << name << std::fixed << std::setprecision(0) << std::setw(6) << row.landmark.theta * 180.0 / M_PI
         << std::setprecision(1) << std::setw(7) << row.landmark.z << std::setw(8) << row.radial << std::setw(8)
-        << row.normal << "\n";
+        << row.normal << std::setw(8) << row.ctSkinNormal << std::setw(8) << row.ctNearestBone << std::setw(8)
+        << row.depth << "   " << row.convention << "\n";
   }
   out.unsetf(std::ios::floatfield);
   seg::writeLandmarkCsv(file, rows);
@@ -231,7 +234,7 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
       writeRangeMapPreview(node->values(), node->zMin(), node->zMax(), style, args.out / file.png);
       out << "wrote " << (args.out / file.png).string() << "\n";
     }
-    writeLandmarkTable(maps, args.landmarks, args.out / "landmarks.csv", out, err);
+    writeLandmarkTable(logic, *volume, maps, args.landmarks, args.out / "landmarks.csv", out, err);
     return 0;
   });
 }

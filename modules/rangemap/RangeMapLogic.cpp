@@ -14,6 +14,7 @@
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/VolumeNode.h"
+#include "segmentation/LandmarkDepth.h"
 #include "segmentation/RangeMapBuilder.h"
 
 namespace caps {
@@ -207,6 +208,26 @@ RangeMapResult RangeMapLogic::run(const VolumeNode& volume, const Parameters& pa
   if (output)
     *output = std::move(computed);
   return result;
+}
+
+bool RangeMapLogic::measureLandmarkDepths(const VolumeNode& volume, std::vector<seg::LandmarkThickness>& rows) const
+{
+  SegmentLogic segment(scene());
+  const LabelMapNode* labels = segment.findLabelMap(volume);
+  if (!labels)
+    return false;
+  const Parameters thresholds = forLabelMap(Parameters{}, *labels);
+  const auto bone = SegmentLogic::maskOf(labels->image(), kBoneLabel);
+  const seg::BoneDepthProbe probe(volume.image(), bone, thresholds.boneThresholdHu, thresholds.skinThresholdHu);
+  for (seg::LandmarkThickness& row : rows)
+  {
+    const seg::LandmarkDepth d{row.landmark, seg::depthConventionOf(row.landmark.name), probe.measure(row.position)};
+    row.ctSkinNormal = d.bone.alongSkinNormal;
+    row.ctNearestBone = d.bone.toNearestBone;
+    row.depth = d.depth();
+    row.convention = d.describeConvention();
+  }
+  return true;
 }
 
 Eigen::MatrixXf RangeMapLogic::toMatrix(const seg::RangeMap& map)

@@ -13,6 +13,7 @@
 
 #include "modules/core/Module.h"
 #include "segmentation/HeadAxis.h"
+#include "segmentation/Landmarks.h"
 #include "segmentation/RangeMap.h"
 #include "segmentation/Thickness.h"
 
@@ -132,6 +133,13 @@ public:
   /// The map a node holds, on its frame.
   static seg::RangeMap toRangeMap(const RangeMapNode& node);
   ///@}
+
+  /// Fills the CT-measured depth columns of @a rows (seg::LandmarkDepth:
+  /// along the skin's normal, to the nearest bone, and the depth by each
+  /// landmark's published convention) from @a volume's CT and the bone and
+  /// thresholds of its label map, each from the row's skin point. Leaves
+  /// them NaN (and returns false) when the volume has no label map yet.
+  bool measureLandmarkDepths(const VolumeNode& volume, std::vector<seg::LandmarkThickness>& rows) const;
 
   /// One line per fact: the axis (origin, direction, tilt, slices, residual) and z range.
   static std::string describeAxis(const seg::HeadAxisFit& axis);

@@ -209,11 +209,36 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   // command writes them, and every landmark placed with its thickness.
   const auto folder = caps::test::artifacts() / "modules";
   std::filesystem::create_directories(folder);
-  const auto table = caps::seg::landmarkThickness(placed.landmarks, skinMap, caps::RangeMapLogic::toRangeMap(radial),
-                                                  caps::RangeMapLogic::toRangeMap(normal));
+  auto table = caps::seg::landmarkThickness(placed.landmarks, skinMap, caps::RangeMapLogic::toRangeMap(radial),
+                                            caps::RangeMapLogic::toRangeMap(normal));
+  ASSERT_TRUE(rangeMaps.measureLandmarkDepths(*volume, table));
+  int compared = 0;
   for (const auto& row : table)
-    std::printf("[ landmark ] %-17s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm\n",
-                row.landmark.name.c_str(), degrees(row.landmark.theta), row.landmark.z, row.radial, row.normal);
+  {
+    std::printf("[ landmark ] %-17s theta %6.1f deg, z %6.1f mm: radial %5.1f mm, normal %5.1f mm; in the CT: "
+                "normal %5.1f mm, nearest bone %5.1f mm, depth %5.1f mm %s\n",
+                row.landmark.name.c_str(), degrees(row.landmark.theta), row.landmark.z, row.radial, row.normal,
+                row.ctSkinNormal, row.ctNearestBone, row.depth, row.convention.c_str());
+    // Every landmark but the nose tip (cartilage, no bone under it) has a
+    // depth, and the nearest bone is never farther than the bone along the normal.
+    if (row.landmark.name != "pronasale")
+    {
+      EXPECT_TRUE(std::isfinite(row.depth)) << row.landmark.name;
+    }
+    if (std::isfinite(row.ctSkinNormal))
+    {
+      EXPECT_LE(row.ctNearestBone, row.ctSkinNormal + 1e-9) << row.landmark.name;
+    }
+    // Two independent measures of the same thing: the normal thickness map
+    // marches the map's normal to the bone map; the CT's marches the skin's
+    // own normal through the CT. Where both find the bone they agree.
+    if (std::isfinite(row.normal) && std::isfinite(row.ctSkinNormal) && row.ctSkinNormal < 20.0)
+    {
+      EXPECT_NEAR(row.ctSkinNormal, row.normal, 1.0) << row.landmark.name;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 6);
   caps::seg::writeLandmarkCsv(folder / "sample-landmarks.csv", table);
   caps::PreviewStyle style;
   style.title = "Sample CT: radial soft-tissue thickness";

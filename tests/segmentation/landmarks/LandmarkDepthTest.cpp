@@ -185,6 +185,13 @@ TEST(LandmarkDepth, EachLandmarkHasItsPublishedConvention)
   EXPECT_EQ(row.depth(), 5.0);
   row.convention = DepthConvention::NotADepth;
   EXPECT_TRUE(std::isnan(row.depth()));
+  // No bone perpendicular to the skin (lips without teeth behind them): the
+  // nearest bone, and the table says so.
+  row.convention = DepthConvention::SkinNormal;
+  row.bone.alongSkinNormal = RangeMap::quietNaN();
+  EXPECT_EQ(row.measuredBy(), DepthConvention::NearestBone);
+  EXPECT_EQ(row.depth(), 5.0);
+  EXPECT_EQ(row.describeConvention(), "to the nearest bone (no bone perpendicular to the skin)");
 }
 
 } // namespace

@@ -96,14 +96,21 @@ TEST(LandmarkThickness, EmptyMapsGiveNaNColumnsAndOtherGridsAreRefused)
 TEST(LandmarkCsv, RoundTripsExactly)
 {
   const SphereMaps& m = sphereMaps();
-  const auto table = landmarkThickness(someLandmarks(), m.skin, m.radial, m.normal);
+  auto table = landmarkThickness(someLandmarks(), m.skin, m.radial, m.normal);
+  ASSERT_GE(table.size(), 2u);
+  table[0].ctSkinNormal = 6.25;
+  table[0].ctNearestBone = 5.0 / 3.0;
+  table[0].depth = 6.25;
+  table[0].convention = "perpendicular to the skin";
+  table[1].ctNearestBone = 0.1;
   const auto path = scratch("landmarks.csv");
   writeLandmarkCsv(path, table);
   {
     std::ifstream in(path);
     std::string header;
     std::getline(in, header);
-    EXPECT_EQ(header, "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm");
+    EXPECT_EQ(header, "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,"
+                      "convention");
   }
   const auto back = readLandmarkCsv(path);
   ASSERT_EQ(back.size(), table.size());
@@ -118,6 +125,10 @@ TEST(LandmarkCsv, RoundTripsExactly)
       EXPECT_TRUE(same(back[k].position[c], table[k].position[c])) << k << " " << c;
     EXPECT_TRUE(same(back[k].radial, table[k].radial)) << k;
     EXPECT_TRUE(same(back[k].normal, table[k].normal)) << k;
+    EXPECT_TRUE(same(back[k].ctSkinNormal, table[k].ctSkinNormal)) << k;
+    EXPECT_TRUE(same(back[k].ctNearestBone, table[k].ctNearestBone)) << k;
+    EXPECT_TRUE(same(back[k].depth, table[k].depth)) << k;
+    EXPECT_EQ(back[k].convention, table[k].convention) << k;
   }
   std::filesystem::remove_all(path.parent_path());
 }
@@ -158,6 +169,13 @@ TEST(LandmarkCsv, ReportsTheLineOfAProblemAndRefusesBadNames)
   LandmarkThickness bad;
   bad.landmark = {"chin, soft tissue", -kPi / 2, 0.0};
   EXPECT_THROW(writeLandmarkCsv(path, {bad}), std::invalid_argument);
+  bad.landmark.name = "chin";
+  bad.convention = "perpendicular, to the skin";
+  EXPECT_THROW(writeLandmarkCsv(path, {bad}), std::invalid_argument);
+  // The full header wants its 12 fields on every row.
+  writeText("name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention\n"
+            "chin,-90,1,,,,,,\n");
+  EXPECT_THROW(readLandmarkCsv(path), std::runtime_error);
   std::filesystem::remove_all(path.parent_path());
 }
 
