@@ -5,7 +5,10 @@
 #include <iterator>
 #include <limits>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
+#include <string>
+#include <string_view>
 
 namespace caps::seg {
 
@@ -92,6 +95,61 @@ LateralPoint widest(const RangeMap& map, double zLow, double zHigh, double fromF
   return best;
 }
 
+/// Why the most prominent point of the midline profile @a p, at row @a tip,
+/// is not a nose tip, or "" when it is one. A nose is a narrow feature: its
+/// tip stands 15-30 mm in front of the cheeks beside it and of the nasion
+/// above it, where a brow or a forehead stands a few mm in front of what
+/// surrounds it. The most prominent point at the edge of the scan is where
+/// the scan cuts the face, not a feature.
+std::string whyNotANose(const RangeMap& skin, const std::vector<double>& p, int tip)
+{
+  constexpr double kEdgeMargin = 5.0;        // mm of face the scan must show beyond the tip
+  constexpr double kSmallestNose = 8.0;      // mm the tip must stand in front of the cheeks and the nasion
+  constexpr double kBeside = 20.0 * kDegree; // beside the nose: the cheek next to the ala
+  const CylindricalFrame& frame = skin.frame();
+  int lowest = -1, highest = -1;
+  for (int j = 0; j < static_cast<int>(p.size()); ++j)
+    if (std::isfinite(p[j]))
+    {
+      lowest = lowest < 0 ? j : lowest;
+      highest = j;
+    }
+  const double zTip = frame.indexToZ(tip);
+  auto mm = [](double v) {
+    std::ostringstream s;
+    s.precision(1);
+    s << std::fixed << v;
+    return s.str();
+  };
+  if (zTip - frame.indexToZ(lowest) < kEdgeMargin)
+    return "the most prominent point of the face's profile is at the lower edge of the scan (z = " + mm(zTip) +
+           " mm): the scan ends above the nose";
+  if (frame.indexToZ(highest) - zTip < kEdgeMargin)
+    return "the most prominent point of the face's profile is at the upper edge of the scan (z = " + mm(zTip) + " mm)";
+  const double beside =
+    std::max(midlineProfile(skin, kFrontTheta - kBeside, 1)[tip], midlineProfile(skin, kFrontTheta + kBeside, 1)[tip]);
+  if (std::isfinite(beside) && p[tip] - beside < kSmallestNose)
+    return "the most prominent point of the face's profile (z = " + mm(zTip) + " mm) stands only " +
+           mm(p[tip] - beside) + " mm in front of the skin 20 degrees beside it, less than a nose (" +
+           mm(kSmallestNose) + " mm or more): the nose is not in the scan";
+  const int above = frame.indexToZ(highest) >= zTip + 10.0 ? extremum(p, frame, zTip + 10.0, zTip + 50.0, -1.0) : -1;
+  if (above >= 0 && p[tip] - p[above] < kSmallestNose)
+    return "the most prominent point of the face's profile (z = " + mm(zTip) + " mm) stands only " +
+           mm(p[tip] - p[above]) + " mm in front of the profile 10-50 mm above it, less than a nose (" +
+           mm(kSmallestNose) + " mm or more): the nose is not in the scan";
+  return {};
+}
+
+/// How far a landmark's rule can be trusted (this file's header comment).
+const char* confidenceOf(std::string_view name)
+{
+  if (name == "pronasale" || name == "pogonion" || name == "nasion" || name == "glabella" || name == "forehead")
+    return "reliable";
+  if (name.starts_with("zygion") || name.starts_with("gonion"))
+    return "approximate";
+  return "fair";
+}
+
 } // namespace
 
 std::vector<double> midlineProfile(const RangeMap& skin, double theta, int halfColumns)
@@ -135,6 +193,12 @@ ProfileFeatures findProfileFeatures(const RangeMap& skin, int halfColumns)
   if (f.pronasale < 0)
     throw std::runtime_error("The skin range map has no skin on the front of the face (θ = -90°) "
                              "in the upper two thirds of the scan: no landmark can be placed.");
+  f.noseMissing = whyNotANose(skin, p, f.pronasale);
+  if (!f.noseMissing.empty())
+  {
+    f.pronasale = -1; // every midline rule starts from the nose tip
+    return f;
+  }
   const int n = f.pronasale;
   const double zN = z(n);
 
@@ -246,11 +310,31 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   for (std::size_t k = 0; k < definitions.size(); ++k)
   {
     const Candidate& c = candidates[k];
-    const bool inside = std::isfinite(c.theta) && std::isfinite(c.z) && c.z >= frame.zMin() && c.z <= frame.zMax();
-    if (inside)
+    LandmarkStatus status{definitions[k].name, LandmarkState::Placed, confidenceOf(definitions[k].name), {}};
+    if (!f.noseMissing.empty())
+    {
+      status.state = LandmarkState::NotInScan;
+      status.reason = "placed from the nose tip, and " + f.noseMissing;
+    }
+    else if (std::isfinite(c.z) && (c.z < frame.zMin() || c.z > frame.zMax()))
+    {
+      status.state = LandmarkState::NotInScan;
+      status.reason = "its place (z = " + std::to_string(static_cast<int>(std::lround(c.z))) +
+                      " mm) is beyond the scan (z " + std::to_string(static_cast<int>(std::lround(frame.zMin()))) +
+                      " to " + std::to_string(static_cast<int>(std::lround(frame.zMax()))) + " mm)";
+    }
+    else if (!(std::isfinite(c.theta) && std::isfinite(c.z)))
+    {
+      status.state = LandmarkState::NotFound;
+      status.reason = c.why;
+    }
+    if (status.state == LandmarkState::Placed)
       result.landmarks.push_back({definitions[k].name, CylindricalFrame::wrapTheta(c.theta), c.z});
     else
-      result.warnings.push_back(std::string(definitions[k].name) + " not placed: " + c.why + ".");
+      result.warnings.push_back(status.name +
+                                (status.state == LandmarkState::NotInScan ? " not in the scan: " : " not found: ") +
+                                status.reason + ".");
+    result.status.push_back(std::move(status));
   }
   return result;
 }

@@ -12,7 +12,14 @@
 /// nasion, glabella, subnasale and lip rules read p through a 5-row running
 /// median (one-row glitches are not features); the others read p itself.
 /// - pronasale (reliable): the largest p in the upper two thirds of the rows
-///   (below lie the neck and the shoulders, which can reach further out).
+///   (below lie the neck and the shoulders, which can reach further out),
+///   if it is a nose: at least 5 mm inside the scan's rows of skin, and at
+///   least 8 mm in front of the skin 20° beside it and of the profile 10 to
+///   50 mm above it (a nose stands 15-30 mm out; a brow or a forehead, the
+///   most prominent point of a scan cut above the nose, a few mm). Otherwise
+///   the nose is not in the scan, and neither is any landmark below: every
+///   rule here starts from the nose tip, so none is placed, each listed as
+///   not in the scan with why (LandmarkPlacement::status).
 /// - jaw underside (helper, reliable): walking down from the pronasale, the
 ///   first row with p < 60 % of the pronasale's (the neck is much closer to
 ///   the axis than the face).
@@ -76,17 +83,45 @@ struct ProfileFeatures
   int labraleInferius = -1;
   /// z of the menton (mm, between rows); NaN where not found.
   double mentonZ = RangeMap::quietNaN();
+  /// Why the profile's most prominent point is not a nose tip (at the edge
+  /// of the scan, or standing less than a nose in front of the profile above
+  /// it): the nose is not in the scan, pronasale is -1 and so is every
+  /// feature found from it. Empty when the nose tip was found.
+  std::string noseMissing;
 };
 
-/// The profile features by the rules in this file's comment.
+/// The profile features by the rules in this file's comment; none when the
+/// nose is not in the scan (ProfileFeatures::noseMissing says why).
 /// @throws std::runtime_error if the profile has no finite sample in its upper two thirds.
 ProfileFeatures findProfileFeatures(const RangeMap& skin, int halfColumns = 3);
+
+/// Whether a standard landmark was placed.
+enum class LandmarkState
+{
+  Placed,
+  NotInScan, ///< its anatomy lies outside the scanned region
+  NotFound,  ///< inside the scan, but its feature is not on the profile
+};
+
+/// What became of one standard landmark.
+struct LandmarkStatus
+{
+  std::string name;
+  LandmarkState state = LandmarkState::Placed;
+  /// How far its rule can be trusted: "reliable", "fair" or "approximate"
+  /// (this file's header comment); a person checks the others first.
+  const char* confidence = "";
+  std::string reason; ///< why it is not placed; empty when it is
+};
 
 struct LandmarkPlacement
 {
   /// The landmarks found, in standardLandmarks() order (missing ones left out).
   std::vector<Landmark> landmarks;
-  /// One line per landmark not found, saying why.
+  /// Every standard landmark, in standardLandmarks() order, placed or not.
+  std::vector<LandmarkStatus> status;
+  /// One line per landmark not placed, saying why: "<name> not in the scan:
+  /// ..." or "<name> not found: ...".
   std::vector<std::string> warnings;
   ProfileFeatures features;
 

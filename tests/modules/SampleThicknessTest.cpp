@@ -176,11 +176,42 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
       std::printf("[ profile  ] z %7.1f mm  r %6.1f mm%s%s%s\n", skin.zAt(j), profile[j],
                   j == nose ? "  <- nose tip" : "", j == chin ? "  <- chin" : "", j == jaw ? "  <- under the jaw" : "");
   ASSERT_GE(chin, 0) << "no chin found below the nose tip";
+  // How clearly the nose tip is a nose (seg::placeLandmarks refuses one that
+  // stands less than 8 mm in front of the skin 20° beside it).
+  const double beside = std::max(caps::seg::midlineProfile(skinMap, front - 20.0 * kPi / 180.0, 1)[nose],
+                                 caps::seg::midlineProfile(skinMap, front + 20.0 * kPi / 180.0, 1)[nose]);
+  std::printf("[ nose     ] the tip stands %.1f mm in front of the skin 20 deg beside it\n", profile[nose] - beside);
+  EXPECT_GT(profile[nose] - beside, 8.0);
   const double zChin = skin.zAt(chin);
   // The nose tip lies in front of the chin, and the chin 30-110 mm under it.
   EXPECT_GT(profile[nose], profile[chin] + 5.0);
   EXPECT_GT(zNose - zChin, 30.0);
   EXPECT_LT(zNose - zChin, 110.0);
+
+  // The same head scanned only from 15 mm above the nose tip up (a cranium
+  // CT, orbits to vertex): no landmark of the nose, the lips, the chin or the
+  // cheeks is placed, each is listed as not in the scan.
+  {
+    const caps::seg::CylindricalFrame& frame = skinMap.frame();
+    const int cut = static_cast<int>(columnOf(skin, zNose + 15.0));
+    const caps::seg::CylindricalFrame upper(frame.origin(), frame.direction(), frame.indexToZ(cut), frame.zMax(),
+                                            frame.nTheta(), frame.nZ() - cut);
+    auto crop = [&](const caps::seg::RangeMap& map) {
+      caps::seg::RangeMap part(upper);
+      for (int j = 0; j < upper.nZ(); ++j)
+        for (int i = 0; i < upper.nTheta(); ++i)
+          part.at(i, j) = map.at(i, j + cut);
+      return part;
+    };
+    const caps::seg::LandmarkPlacement cranium = caps::seg::placeLandmarks(crop(skinMap), crop(boneMap));
+    std::printf("[ cranium  ] scan from z %.1f mm: %s\n", upper.zMin(), cranium.features.noseMissing.c_str());
+    for (const auto& status : cranium.status)
+      if (status.name != "glabella" && status.name != "nasion" && status.name != "forehead")
+      {
+        EXPECT_EQ(cranium.find(status.name), nullptr) << status.name;
+        EXPECT_EQ(status.state, caps::seg::LandmarkState::NotInScan) << status.name;
+      }
+  }
 
   const caps::seg::Landmark* forehead = placed.find("forehead");
   const caps::seg::Landmark* rightCheek = placed.find("mid_cheek_right");

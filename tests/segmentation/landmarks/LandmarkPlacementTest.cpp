@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -174,8 +175,92 @@ TEST(LandmarkPlacement, AFaceWithoutAJawGivesWarningsNotGuesses)
   EXPECT_EQ(placed.find("gonion_left"), nullptr);
   bool mentioned = false;
   for (const auto& w : placed.warnings)
-    mentioned = mentioned || w.rfind("pogonion not placed", 0) == 0;
+    mentioned = mentioned || w.rfind("pogonion not found", 0) == 0;
   EXPECT_TRUE(mentioned);
+}
+
+/// The stylised head scanned over z in [zMin, zMax] only (a CT that does not
+/// hold the whole face).
+LandmarkPlacement placeOnScanOf(double zMin, double zMax)
+{
+  const CylindricalFrame frame(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ(), zMin, zMax, 512,
+                               static_cast<int>(std::lround(zMax - zMin)) + 1);
+  return placeLandmarks(fillMap(frame, StylisedHead::skin), fillMap(frame, StylisedHead::bone));
+}
+
+const LandmarkStatus& statusOf(const LandmarkPlacement& placed, const std::string& name)
+{
+  for (const auto& s : placed.status)
+    if (s.name == name)
+      return s;
+  throw std::runtime_error("no status for " + name);
+}
+
+TEST(LandmarkPlacement, EveryStandardLandmarkHasAStatusAndAConfidence)
+{
+  const LandmarkPlacement placed = placeOnScanOf(-120.0, 110.0);
+  ASSERT_EQ(placed.status.size(), standardLandmarks().size());
+  for (std::size_t k = 0; k < placed.status.size(); ++k)
+  {
+    EXPECT_EQ(placed.status[k].name, standardLandmarks()[k].name);
+    EXPECT_EQ(placed.status[k].state, LandmarkState::Placed)
+      << placed.status[k].name << ": " << placed.status[k].reason;
+    EXPECT_TRUE(std::string(placed.status[k].confidence) == "reliable" ||
+                std::string(placed.status[k].confidence) == "fair" ||
+                std::string(placed.status[k].confidence) == "approximate");
+  }
+  EXPECT_EQ(std::string(statusOf(placed, "pronasale").confidence), "reliable");
+  EXPECT_EQ(std::string(statusOf(placed, "gonion_left").confidence), "approximate");
+  EXPECT_TRUE(placed.warnings.empty());
+}
+
+TEST(LandmarkPlacement, AScanCutAboveTheNosePlacesNoFaceLandmark)
+{
+  // A cranium-only scan: from just above the nose (its tip at z = 0, the
+  // nasion at 30, the glabella at 42) to the vertex. The brow is the most
+  // prominent point left, and it is no nose.
+  for (const double zMin : {10.0, 25.0, 35.0})
+  {
+    const LandmarkPlacement placed = placeOnScanOf(zMin, 110.0);
+    EXPECT_TRUE(placed.landmarks.empty()) << "scan from z = " << zMin << ": " << placed.landmarks.size()
+                                          << " placed, the first " << placed.landmarks.front().name;
+    EXPECT_EQ(placed.features.pronasale, -1);
+    EXPECT_FALSE(placed.features.noseMissing.empty());
+    for (const char* name : {"pronasale", "subnasale", "labrale_superius", "labrale_inferius", "pogonion", "menton",
+                             "mid_cheek_left", "zygion_right", "gonion_left"})
+    {
+      const LandmarkStatus& s = statusOf(placed, name);
+      EXPECT_EQ(s.state, LandmarkState::NotInScan) << name;
+      EXPECT_NE(s.reason.find("nose"), std::string::npos) << name << ": " << s.reason;
+    }
+    std::printf("scan from z = %.0f mm: %s\n", zMin, placed.features.noseMissing.c_str());
+  }
+}
+
+TEST(LandmarkPlacement, AScanThatEndsAtTheNoseTipPlacesNoFaceLandmark)
+{
+  // The skin is found only from z = 2 mm up (a scan whose lowest slices cut
+  // through the nose just above its tip; the map's rows below are empty):
+  // the most prominent point is the edge of the scan, not the tip.
+  const CylindricalFrame frame = StylisedHead::frame();
+  const RangeMap skin =
+    fillMap(frame, [](double theta, double z) { return z < 2.0 ? std::nan("") : StylisedHead::skin(theta, z); });
+  const LandmarkPlacement placed = placeLandmarks(skin);
+  EXPECT_TRUE(placed.landmarks.empty());
+  EXPECT_NE(placed.features.noseMissing.find("edge of the scan"), std::string::npos) << placed.features.noseMissing;
+}
+
+TEST(LandmarkPlacement, ALandmarkBeyondTheScanIsListedAsNotInTheScan)
+{
+  // The scan ends 60 mm above the nose tip: the forehead landmark (75 mm
+  // above it) is not in the scan; the face below it all is.
+  const LandmarkPlacement placed = placeOnScanOf(-120.0, 60.0);
+  const LandmarkStatus& forehead = statusOf(placed, "forehead");
+  EXPECT_EQ(forehead.state, LandmarkState::NotInScan);
+  EXPECT_NE(forehead.reason.find("beyond the scan"), std::string::npos) << forehead.reason;
+  EXPECT_EQ(statusOf(placed, "glabella").state, LandmarkState::Placed);
+  EXPECT_EQ(statusOf(placed, "pogonion").state, LandmarkState::Placed);
+  EXPECT_EQ(placed.landmarks.size(), standardLandmarks().size() - 1);
 }
 
 TEST(LandmarkPlacement, RefusesAnEmptyFaceAndABoneMapOnAnotherGrid)
