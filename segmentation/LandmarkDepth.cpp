@@ -142,10 +142,28 @@ double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector
       *hit = from;
     return 0.0;
   }
-  // March to the first rise of the HU through the threshold (refined by
-  // bisection: the sub-voxel place) next to the bone mask: the mask's islands
+  // March to the first rise of the HU through the threshold next to the
+  // bone mask (refined by bisection: the sub-voxel place); the mask's islands
   // and holes are the segmentation's decision, so bright tissue it left out
-  // (metal, contrast) is passed through.
+  // (metal, contrast) is passed through. A thin wall (the maxillary sinus's,
+  // under a millimetre) is in the mask but its HU between the voxel centres
+  // stays under the threshold: where the line comes within a voxel of the
+  // mask without a rise within two voxels, the edge of the first mask voxel
+  // it enters is taken (to half a voxel), as the range maps do.
+  auto bisect = [&](double outside, double inside, auto&& in) {
+    for (int it = 0; it < 30; ++it)
+    {
+      const double mid = 0.5 * (outside + inside);
+      (in(mid) ? inside : outside) = mid;
+    }
+    return 0.5 * (outside + inside);
+  };
+  auto found = [&](double t) {
+    if (hit)
+      *hit = from + t * d;
+    return t;
+  };
+  const double window = 2.0 * geometry_.spacing.maxCoeff();
   double previous = 0.0;
   bool wasBone = isBone(0.0);
   for (double t = step; t <= searchDistance_; t += step)
@@ -153,19 +171,28 @@ double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector
     const bool bone = isBone(t);
     if (bone && !wasBone)
     {
-      double outside = previous, inside = t;
-      for (int it = 0; it < 30; ++it)
-      {
-        const double mid = 0.5 * (outside + inside);
-        (isBone(mid) ? inside : outside) = mid;
-      }
-      const double crossing = 0.5 * (outside + inside);
+      const double crossing = bisect(previous, t, isBone);
       if (maskTouches(index(crossing + 2.0 * step)))
+        return found(crossing);
+    }
+    else if (maskTouches(index(t)))
+    {
+      // Within two voxels: a HU rise, else the first voxel of the mask
+      // itself (its edge between voxel centres), else this place.
+      bool before = bone;
+      double intoMask = -1.0;
+      for (double u = t + step; u <= t + window; u += step)
       {
-        if (hit)
-          *hit = from + crossing * d;
-        return crossing;
+        const bool now = isBone(u);
+        if (now && !before)
+          return found(bisect(u - step, u, isBone));
+        before = now;
+        if (intoMask < 0.0 && inMask(index(u)))
+          intoMask = u;
       }
+      if (intoMask > 0.0)
+        return found(bisect(intoMask - step, intoMask, [&](double v) { return inMask(index(v)); }));
+      return found(bisect(previous, t, [&](double v) { return maskTouches(index(v)); }));
     }
     wasBone = bone;
     previous = t;

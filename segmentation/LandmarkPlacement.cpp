@@ -140,6 +140,31 @@ std::string whyNotANose(const RangeMap& skin, const std::vector<double>& p, int 
   return {};
 }
 
+/// The mid-cheek's distance from the midline: under the pupil, half the
+/// mean adult interpupillary distance (63 mm; Farkas, Anthropometry of the
+/// Head and Face, 1994).
+constexpr double kCheekOffset = 32.0;
+
+/// θ of the skin @a offset mm from the midsagittal plane (the plane of the
+/// axis and the front) at height @a z, on @a side (+1 left, -1 right):
+/// walking out from the front, the first sample whose r |cos θ| reaches it;
+/// NaN when the skin ends first.
+double besideTheMidline(const RangeMap& skin, double z, double offset, int side)
+{
+  const CylindricalFrame& frame = skin.frame();
+  const double step = 0.25 * frame.thetaStep();
+  for (double a = 0.0; a <= 0.5 * std::numbers::pi; a += step)
+  {
+    const double theta = kFrontTheta + side * a;
+    const double r = skin.sample(theta, z);
+    if (!std::isfinite(r))
+      return nan;
+    if (r * std::abs(std::cos(theta)) >= offset)
+      return theta;
+  }
+  return nan;
+}
+
 /// How far a landmark's rule can be trusted (this file's header comment).
 const char* confidenceOf(std::string_view name)
 {
@@ -284,7 +309,9 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
     double theta, z;
     const char* why;
   };
-  const double front = kFrontTheta, cheek = 50 * kDegree;
+  const double front = kFrontTheta;
+  const double cheekLeft = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, +1) : nan;
+  const double cheekRight = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, -1) : nan;
   const char* noJaw = "no jaw underside (profile below 60 % of the nose tip) below the nose tip";
   const Candidate candidates[] = {
     {front, z(f.glabella), "no nasion 10-50 mm above the nose tip"},
@@ -300,8 +327,8 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
     {zyR.theta, zyR.z, "no finite sample beside the face between the nose tip and the nasion"},
     {goL.theta, goL.z, "no menton, or no finite sample beside the jaw"},
     {goR.theta, goR.z, "no menton, or no finite sample beside the jaw"},
-    {front + cheek, zPrn, ""},
-    {front - cheek, zPrn, ""},
+    {cheekLeft, zPrn, "no skin 32 mm left of the midline at the nose tip's height"},
+    {cheekRight, zPrn, "no skin 32 mm right of the midline at the nose tip's height"},
     {front, zPrn + 75.0, "75 mm above the nose tip is beyond the scan"},
   };
   const auto& definitions = standardLandmarks();

@@ -41,8 +41,11 @@
 ///   in [z_pog + 0.25 d, z_sn − 0.45 d].
 /// - mid-philtrum (fair): on the midline half-way in z between the subnasale
 ///   and the labrale superius.
-/// - mid-cheek left/right (fair, as a place): θ = -π/2 ± 50° at the height of
-///   the pronasale, over the maxilla below the zygoma.
+/// - mid-cheek left/right (fair): at the height of the nose tip, 32 mm
+///   either side of the midsagittal plane (the plane of the axis and the
+///   front): under the pupil (half the mean adult interpupillary distance,
+///   Farkas 1994), beside the ala over the maxilla. (An angle from the axis
+///   would put it at the jaw on a wide face.)
 /// - zygion left/right (approximate): the laterally widest point, largest
 ///   r·|cos θ|, of the bone map (the skin map without one) for z between the
 ///   pronasale and the nasion and θ 25° to 80° from the front on that side

@@ -11,6 +11,8 @@
 #include "modules/report/PlanAnimation.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/Storyboard.h"
+#include "modules/report/ThicknessReport.h"
+#include "modules/rangemap/RangeMapLogic.h"
 #include "modules/volumes/CommandLine.h"
 #include "scene/Scene.h"
 #include "scene/SceneBundle.h"
@@ -398,6 +400,126 @@ int runSnapshot(ModuleLogic&, const std::vector<std::string>& args, std::ostream
   }
 }
 
+const char* kThicknessReportUsage =
+  "usage: caps thickness-report CT|SCENE.caps --pdf OUT.pdf [--deidentify] [--paper a4|letter]\n"
+  "                             [--reviewer NAME] [--date YYYY-MM-DD]\n"
+  "\n"
+  "Writes the soft-tissue thickness review as a PDF (thesis §2.1, §4.2, §4.3): the\n"
+  "patient and study, the standard facial landmarks placed automatically with their\n"
+  "confidence and the depth at each measured in the CT by its published convention\n"
+  "(perpendicular to the skin, or to the nearest bone), the landmarks not placed and\n"
+  "why, the thickness statistics of the face, the thickness maps unwrapped and\n"
+  "painted on the face with the landmarks numbered, and the method.\n"
+  "\n"
+  "  CT                 a CT as caps info reads it (DICOM folder, NRRD, NIfTI, MetaImage):\n"
+  "                     segmented and mapped with the default thresholds first\n"
+  "  SCENE.caps         a saved scene with its CT, label map and range maps\n"
+  "  --pdf OUT.pdf      the report to write (replaced only once the new one is complete)\n"
+  "  --deidentify       leaves out the patient's name, ID, birth date and the folders the\n"
+  "                     data came from, in the text and in the PDF's metadata\n"
+  "  --paper a4|letter  paper size (default a4)\n"
+  "  --reviewer NAME    who reviewed it, in the header (default: a line to sign)\n"
+  "  --date YYYY-MM-DD  the review date (default today)\n"
+  "\n"
+  "Figures are rendered offscreen; without a display, CAPS starts its own X server\n"
+  "(Xvfb, Debian package xvfb).\n"
+  "Exit status: 0 when written, 1 when the CT or scene cannot be reviewed (the\n"
+  "message says why), 2 on wrong usage.\n";
+
+struct ThicknessReportArgs
+{
+  fs::path input;
+  fs::path pdf;
+  report::ThicknessReportOptions options;
+  bool help = false;
+};
+
+std::optional<std::string> parseThicknessReport(const std::vector<std::string>& args, ThicknessReportArgs& parsed)
+{
+  for (std::size_t i = 0; i < args.size(); ++i)
+  {
+    const std::string& a = args[i];
+    const bool hasValue = i + 1 < args.size();
+    if (a == "--help" || a == "-h")
+      parsed.help = true;
+    else if (a == "--pdf")
+    {
+      if (!hasValue)
+        return "--pdf needs the file to write";
+      parsed.pdf = args[++i];
+    }
+    else if (a == "--deidentify")
+      parsed.options.deidentify = true;
+    else if (a == "--paper")
+    {
+      const std::string paper = hasValue ? args[++i] : "";
+      if (paper == "a4" || paper == "A4")
+        parsed.options.paper = report::PaperSize::A4;
+      else if (paper == "letter" || paper == "Letter")
+        parsed.options.paper = report::PaperSize::Letter;
+      else
+        return "--paper needs a4 or letter";
+    }
+    else if (a == "--reviewer")
+    {
+      if (!hasValue)
+        return "--reviewer needs a name";
+      parsed.options.reviewer = args[++i];
+    }
+    else if (a == "--date")
+    {
+      const std::string date = hasValue ? args[++i] : "";
+      if (date.size() != 10 || date[4] != '-' || date[7] != '-')
+        return "--date needs a date as YYYY-MM-DD";
+      parsed.options.date = date;
+    }
+    else if (!a.empty() && a[0] == '-')
+      return "unknown option " + a;
+    else if (parsed.input.empty())
+      parsed.input = a;
+    else
+      return "one CT or scene at a time (got " + parsed.input.string() + " and " + a + ")";
+  }
+  if (parsed.help)
+    return std::nullopt;
+  if (parsed.input.empty())
+    return "CT or SCENE.caps missing";
+  if (parsed.pdf.empty())
+    return "--pdf OUT.pdf missing";
+  return std::nullopt;
+}
+
+/// A saved scene is a folder holding scene.json; anything else is a CT.
+bool isSceneBundle(const fs::path& path)
+{
+  return fs::is_directory(path) && fs::exists(path / "scene.json");
+}
+
+int runThicknessReport(ModuleLogic& logic, const std::vector<std::string>& argv, std::ostream& out, std::ostream& err)
+{
+  return cli::runCommand<ThicknessReportArgs>(
+    "thickness-report", kThicknessReportUsage, argv, out, err, parseThicknessReport, [&](ThicknessReportArgs& args) {
+      const TaskProgress progress = cli::consoleProgress(err);
+      Scene& scene = logic.scene();
+      if (isSceneBundle(args.input))
+        loadScene(args.input, scene);
+      else
+      {
+        seg::CtReadOptions read;
+        read.progress = progress;
+        VolumeNode* volume = cli::loadCt(logic, args.input, read, err);
+        RangeMapLogic(scene).run(*volume, RangeMapLogic::Parameters{}, progress);
+      }
+      const report::ReportDocument doc = report::buildThicknessReport(scene, args.options, progress);
+      if (!args.pdf.parent_path().empty())
+        fs::create_directories(args.pdf.parent_path());
+      const report::PdfMetadata metadata{report::kThicknessReportTitle, std::string("CAPS ") + CAPS_VERSION};
+      const int pages = doc.writePdf(args.pdf, args.options.paper, metadata);
+      out << "wrote " << args.pdf.string() << " (" << pages << " pages)\n";
+      return 0;
+    });
+}
+
 } // namespace
 
 std::vector<ModuleCommand> reportCommands()
@@ -405,7 +527,9 @@ std::vector<ModuleCommand> reportCommands()
   return {{"report", "write the plan report of a scene as a PDF", kReportUsage, runReport},
           {"snapshot", "add a view of a plan to the scene's storyboard", kSnapshotUsage, runSnapshot},
           {"animate", "export a plan's pre -> post animation and a turntable as PNG frames and MP4", kAnimateUsage,
-           runAnimate}};
+           runAnimate},
+          {"thickness-report", "write the soft-tissue thickness review of a CT or scene as a PDF",
+           kThicknessReportUsage, runThicknessReport}};
 }
 
 } // namespace caps

@@ -32,6 +32,12 @@ struct SpheresCt
   /// A bright bead that is not bone (not in the mask): metal, contrast.
   Eigen::Vector3d beadCentre{1e9, 0, 0};
   double beadRadius = 0;
+  /// A thin bony wall (a sinus's) of this outer radius about the bone's
+  /// centre, air inside it down to the bone sphere; 0: none. Its HU, spread
+  /// by the 2 mm point spread, stays under the threshold; the segmentation
+  /// has it in the mask, 1.6 mm thick.
+  double wallRadius = 0;
+  static constexpr double kWallThickness = 0.6;
 
   vtkNew<vtkImageData> ct, mask;
 
@@ -41,7 +47,18 @@ struct SpheresCt
   double huAt(const Eigen::Vector3d& x) const
   {
     double hu = kAir + (kTissue - kAir) * ramp(skinRadius - (x - skinCentre).norm());
-    hu += (kBone - kTissue) * ramp(boneRadius - (x - boneCentre).norm());
+    const double r = (x - boneCentre).norm();
+    if (wallRadius > 0)
+    {
+      // The wall: a 0.6 mm slab seen through a 2 mm box (its peak 30 % of
+      // the bone's contrast), then air, then the bone sphere.
+      const double inner = wallRadius - kWallThickness;
+      hu += (kBone - kTissue) * std::max(0.0, std::min(r + 1.0, wallRadius) - std::max(r - 1.0, inner)) / 2.0;
+      hu += (kAir - kTissue) * ramp(inner - 1.0 - r);
+      hu += (kBone - kAir) * ramp(boneRadius - r);
+    }
+    else
+      hu += (kBone - kTissue) * ramp(boneRadius - r);
     if ((x - beadCentre).norm() < beadRadius)
       hu = 3000;
     return hu;
@@ -67,7 +84,9 @@ struct SpheresCt
           const Eigen::Vector3d x(world[0], world[1], world[2]);
           const double hu = huAt(x);
           *static_cast<short*>(ct->GetScalarPointer(i, j, k)) = static_cast<short>(std::lround(hu));
-          const bool bone = (x - boneCentre).norm() <= boneRadius && hu >= kThreshold;
+          const double r = (x - boneCentre).norm();
+          const bool wall = wallRadius > 0 && std::abs(r - (wallRadius - 0.5 * kWallThickness)) <= 0.8;
+          const bool bone = wall || (r <= boneRadius && hu >= kThreshold);
           *static_cast<unsigned char*>(mask->GetScalarPointer(i, j, k)) = bone ? 1 : 0;
         }
   }
@@ -154,6 +173,28 @@ TEST(LandmarkDepth, BrightTissueOutsideTheBoneMaskIsNotBone)
   const BoneDepth d = probe.measure({0.0, -45.0, 0.0});
   EXPECT_NEAR(d.alongSkinNormal, 10.0, 0.3);
   EXPECT_NEAR(d.toNearestBone, 10.0, 0.3);
+}
+
+TEST(LandmarkDepth, AThinWallInTheMaskIsBoneThoughItsHuStaysUnderTheThreshold)
+{
+  // Skin at 45 mm, a 0.6 mm wall at 33 mm (its HU peak about 330 against a
+  // 520 threshold), air, bone from 20 mm: the wall is the bone under the skin.
+  SpheresCt phantom;
+  phantom.wallRadius = 33.0;
+  phantom.boneRadius = 20.0;
+  phantom.build();
+  double peak = -1e9;
+  for (double r = 30.0; r <= 36.0; r += 0.05)
+    peak = std::max(peak, phantom.huAt({0.0, -r, 0.0}));
+  ASSERT_LT(peak, kThreshold); // the wall never reaches the threshold
+  const BoneDepthProbe probe(phantom.ct, phantom.mask, kThreshold, kSkinThreshold);
+  for (const Eigen::Vector3d& u : directions())
+  {
+    const BoneDepth d = probe.measure(phantom.skinCentre + phantom.skinRadius * u);
+    // To the wall, to within a voxel of the mask's edge (not the bone 25 mm deep).
+    EXPECT_NEAR(d.alongSkinNormal, 45.0 - 33.0, 1.5) << u.transpose();
+    EXPECT_NEAR(d.toNearestBone, 45.0 - 33.0, 1.5) << u.transpose();
+  }
 }
 
 TEST(LandmarkDepth, NoBoneWithinReachIsNaNAndBadImagesAreRefused)
