@@ -166,8 +166,8 @@ void addLandmarks(ReportDocument& doc, const Review& r)
       if (s.name == row.landmark.name)
         confidence = s.confidence;
     rows.push_back({std::to_string(k + 1), readable(row.landmark.name), orDash(confidence), fixed(row.depth, 1),
-                    shortConvention(row), fixed(row.ctSkinNormal, 1), fixed(row.ctNearestBone, 1),
-                    fixed(row.radial, 1), fixed(row.normal, 1)});
+                    shortConvention(row), fixed(row.ctSkinNormal, 1), fixed(row.ctNearestBone, 1), fixed(row.radial, 1),
+                    fixed(row.normal, 1)});
   }
   if (!rows.empty())
   {
@@ -243,9 +243,9 @@ void addStatistics(ReportDocument& doc, const Review& r)
                                                : " (10 mm beyond the lowest and highest landmarks)") +
                 "; each map sample counts once.");
   std::vector<std::vector<std::string>> rows;
-  for (const auto& [name, map] : {std::pair<const char*, const seg::RangeMap*>{"Radial (skin to bone along the ray)",
-                                                                               &r.radial},
-                                  {"Along the skin normal", &r.normal}})
+  for (const auto& [name, map] :
+       {std::pair<const char*, const seg::RangeMap*>{"Radial (skin to bone along the ray)", &r.radial},
+        {"Along the skin normal", &r.normal}})
   {
     if (map->empty())
       continue;
@@ -296,8 +296,8 @@ std::optional<QImage> paintedFace(Scene& scene, const Review& r, double dpi)
   figure.printWidthMm = 120.0;
   figure.width = pixels(figure.printWidthMm, dpi);
   figure.height = int(std::lround(figure.width * 0.95));
-  figure.colourBar =
-    render::ColourBar{"soft-tissue thickness, radial (mm)", {0.0, kThicknessHigh}, render::ColourMap::Viridis, 7, "%.0f"};
+  figure.colourBar = render::ColourBar{
+    "soft-tissue thickness, radial (mm)", {0.0, kThicknessHigh}, render::ColourMap::Viridis, 7, "%.0f"};
   const FaceRegion region = faceRegion(r);
   const Eigen::Vector3d target = frame.origin() + frame.direction() * (0.5 * (region.zLow + region.zHigh));
   // A sphere round the face's landmarks (their z range, 10 mm beyond).
@@ -348,16 +348,15 @@ void addMethod(ReportDocument& doc, const Review& r)
   const seg::CylindricalFrame& f = r.skin.frame();
   const Eigen::Vector3d& o = f.origin();
   const Eigen::Vector3d& d = f.direction();
-  doc.fields(
-    {{"Skin and bone",
-      r.thresholds ? "the CT thresholded at " + fixed(r.thresholds->skinHu, 0) + " HU (air / tissue) and " +
-                       fixed(r.thresholds->boneHu, 0) + " HU (tissue / bone)"
-                   : std::string("a label map of unknown thresholds")},
-     {"Head axis", "through (" + fixed(o.x(), 1) + ", " + fixed(o.y(), 1) + ", " + fixed(o.z(), 1) +
-                     ") mm, direction (" + fixed(d.x(), 3) + ", " + fixed(d.y(), 3) + ", " + fixed(d.z(), 3) +
-                     ") (LPS)"},
-     {"Range maps", std::to_string(f.nTheta()) + " × " + std::to_string(f.nZ()) + " samples, z " +
-                      fixed(f.zMin(), 0) + " to " + fixed(f.zMax(), 0) + " mm (thesis §4.2)"}});
+  doc.fields({{"Skin and bone", r.thresholds
+                                  ? "the CT thresholded at " + fixed(r.thresholds->skinHu, 0) +
+                                      " HU (air / tissue) and " + fixed(r.thresholds->boneHu, 0) + " HU (tissue / bone)"
+                                  : std::string("a label map of unknown thresholds")},
+              {"Head axis", "through (" + fixed(o.x(), 1) + ", " + fixed(o.y(), 1) + ", " + fixed(o.z(), 1) +
+                              ") mm, direction (" + fixed(d.x(), 3) + ", " + fixed(d.y(), 3) + ", " + fixed(d.z(), 3) +
+                              ") (LPS)"},
+              {"Range maps", std::to_string(f.nTheta()) + " × " + std::to_string(f.nZ()) + " samples, z " +
+                               fixed(f.zMin(), 0) + " to " + fixed(f.zMax(), 0) + " mm (thesis §4.2)"}});
   doc.paragraph(
     "Depth conventions. Perpendicular to the skin: from the skin point along the skin's own normal (the plane "
     "through the skin's CT crossings within 2 mm) to where the line first enters bone (the CT's HU crossing "
