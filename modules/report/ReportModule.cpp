@@ -12,6 +12,7 @@
 #include "modules/core/Module.h"
 #include "modules/report/PlanReport.h"
 #include "modules/report/ReportCommands.h"
+#include "modules/report/ThicknessReport.h"
 #include "segmentation/Progress.h"
 
 #ifndef CAPS_VERSION
@@ -86,6 +87,40 @@ void exportPdf(ModuleLogic& logic, ModuleHost& host, PdfKind kind)
   host.showStatus("Wrote " + file.toStdString() + " (" + std::to_string(pages) + " pages)");
 }
 
+/// File > Export thickness report: the review of the scene's CT (its range
+/// maps must be made), under a modal progress dialog as the plan report.
+void exportThicknessReport(ModuleLogic& logic, ModuleHost& host)
+{
+  const QString file =
+    QFileDialog::getSaveFileName(host.window(), "Export the thickness report", "thickness-report.pdf", "PDF (*.pdf)");
+  if (file.isEmpty())
+    return;
+  const std::string what = "Writing the thickness report...";
+  host.showStatus(what);
+  report::ReportDocument doc("");
+  {
+    ModalProgress dialog(host.window(), QString::fromStdString(what), "Thickness report", "report.progress");
+    try
+    {
+      doc = report::buildThicknessReport(logic.scene(), report::ThicknessReportOptions{}, dialog.progress());
+      dialog.finish();
+    }
+    catch (const seg::Cancelled&)
+    {
+      host.showStatus("The thickness report was cancelled; nothing was written.");
+      return;
+    }
+    catch (...)
+    {
+      host.showStatus("");
+      throw;
+    }
+  }
+  const report::PdfMetadata metadata{report::kThicknessReportTitle, std::string("CAPS ") + CAPS_VERSION};
+  const int pages = doc.writePdf(file.toStdString(), report::PaperSize::A4, metadata);
+  host.showStatus("Wrote " + file.toStdString() + " (" + std::to_string(pages) + " pages)");
+}
+
 void printReport(ModuleLogic& logic, ModuleHost& host)
 {
   QPrinter printer(QPrinter::HighResolution);
@@ -116,7 +151,8 @@ public:
   {
     return "Documents the plan (thesis §2.1, §3.3.3): a printed or PDF report with the procedure, the "
            "incision on the patient's face, measurements, the predicted result and its stresses, the tissue "
-           "thickness, the storyboard of snapshots and the model's assumptions.";
+           "thickness, the storyboard of snapshots and the model's assumptions; and the soft-tissue thickness "
+           "review: the landmarks with their depths, the thickness maps and how they were measured.";
   }
   std::vector<ModuleCommand> commands() const override { return reportCommands(); }
   std::vector<ModuleAction> actions() const override
@@ -128,7 +164,9 @@ public:
             {"File", "Export plan report with &convergence study as PDF...", "",
              [](ModuleLogic& logic, ModuleHost& host) { exportPdf(logic, host, PdfKind::WithConvergenceStudy); }},
             {"File", "&Print plan report...", "Ctrl+P",
-             [](ModuleLogic& logic, ModuleHost& host) { printReport(logic, host); }}};
+             [](ModuleLogic& logic, ModuleHost& host) { printReport(logic, host); }},
+            {"File", "Export &thickness report as PDF...", "",
+             [](ModuleLogic& logic, ModuleHost& host) { exportThicknessReport(logic, host); }}};
   }
   std::unique_ptr<ModuleLogic> createLogic(Scene& scene) const override { return std::make_unique<ReportLogic>(scene); }
 };

@@ -36,7 +36,8 @@ TEST(ModuleManager, LoadsTheVolumesPluginFromItsFile)
 }
 
 // The Report module adds File > Export (plain, de-identified, with the
-// convergence study) and File > Print to the workstation.
+// convergence study), File > Print and File > Export thickness report to the
+// workstation.
 TEST(ModuleManager, TheReportModuleAddsExportAndPrintToTheFileMenu)
 {
   caps::ModuleManager manager;
@@ -50,10 +51,11 @@ TEST(ModuleManager, TheReportModuleAddsExportAndPrintToTheFileMenu)
     EXPECT_TRUE(bool(action.run)) << action.title;
     titles.push_back(action.title);
   }
-  ASSERT_EQ(titles.size(), 4u);
+  ASSERT_EQ(titles.size(), 5u);
   EXPECT_EQ(titles[0], "Export plan report as &PDF...");
   EXPECT_EQ(titles[2], "Export plan report with &convergence study as PDF...");
   EXPECT_EQ(titles[3], "&Print plan report...");
+  EXPECT_EQ(titles[4], "Export &thickness report as PDF...");
   EXPECT_NE(manager.findCommand("report").second, nullptr);
 }
 

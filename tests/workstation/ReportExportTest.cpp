@@ -2,7 +2,8 @@
 // 2): the save dialog answered, the report written while a progress dialog
 // names each step, the status bar saying where; and Cancel in that progress
 // dialog stops the report and writes nothing; the same with the
-// convergence study, cancelled inside one of its solves.
+// convergence study, cancelled inside one of its solves; and the thickness
+// report from the same menu.
 
 #include <filesystem>
 #include <functional>
@@ -156,6 +157,31 @@ TEST(ReportExport, TheConvergenceStudyRunsFromTheMenuAndCancelsMidSolve)
   EXPECT_EQ(workstation.window().reportedErrors().size(), errorsBefore) << workstation.errors();
   EXPECT_NE(workstation.window().statusBar()->currentMessage().indexOf("cancelled"), -1)
     << workstation.window().statusBar()->currentMessage().toStdString();
+}
+
+// File > Export thickness report (issue 22 item 5): the review of the
+// scene's CT written where the user says, the status bar naming it, the
+// landmark table in it.
+TEST(ReportExport, TheThicknessReportIsWrittenFromTheFileMenu)
+{
+  test::Workstation workstation;
+  workstation.window().openPath(test::reportDemoFolder() / "sample.caps");
+  ASSERT_TRUE(workstation.waitUntilIdle(120)) << workstation.errors();
+  QAction* exportThickness = actionNamed(workstation.window(), "Export &thickness report as PDF...");
+  ASSERT_NE(exportThickness, nullptr);
+  const fs::path file = test::scratchFolder() / "thickness-report.pdf";
+  const std::size_t errorsBefore = workstation.window().reportedErrors().size();
+  answerSaveDialog(file);
+  exportThickness->trigger();
+  ASSERT_TRUE(fs::exists(file)) << workstation.errors();
+  EXPECT_EQ(workstation.window().reportedErrors().size(), errorsBefore) << workstation.errors();
+  const auto info = test::runProcess("pdfinfo " + test::quoted(file.string()));
+  EXPECT_NE(info.output.find("CAPS soft-tissue thickness report"), std::string::npos) << info.output;
+  const auto text = test::runProcess("pdftotext " + test::quoted(file.string()) + " -");
+  EXPECT_NE(text.output.find("pogonion"), std::string::npos) << text.output;
+  EXPECT_NE(text.output.find("perpendicular to the skin"), std::string::npos) << text.output;
+  const std::string status = workstation.window().statusBar()->currentMessage().toStdString();
+  EXPECT_NE(status.find(file.string()), std::string::npos) << status;
 }
 
 } // namespace
