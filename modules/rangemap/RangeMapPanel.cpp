@@ -33,9 +33,9 @@ namespace caps {
 namespace {
 
 constexpr double kDegree = std::numbers::pi / 180.0;
-constexpr double kHistogramBin = 1.0; // mm
-constexpr int kHistogramBins = 30;
-constexpr double kThicknessTop = 30.0; // mm: facial soft tissue is thinner almost everywhere
+constexpr double kHistogramBin = 1.0;   // mm
+constexpr double kHistogramTop = 100.0; // mm: the histogram's widest range
+constexpr double kThicknessTop = 30.0;  // mm: facial soft tissue is thinner almost everywhere
 // The segmentation's skin: translucent so the bone shows through it.
 constexpr double kSkinOpacity = 0.6;
 
@@ -130,7 +130,8 @@ void RangeMapPanel::addThicknessReview(QVBoxLayout* layout)
   row->addWidget(map_kind_, 1);
   paint_ = new QCheckBox(tr("On the 3D skin"), review);
   paint_->setObjectName("rangemap.paintThickness");
-  paint_->setToolTip(tr("Paints the radial thickness on the skin surface with the same colours"));
+  paint_->setToolTip(tr("Paints the thickness the map shows (radial or along the normal) on the skin surface with "
+                        "the same colours"));
   row->addWidget(paint_);
   reviewLayout->addLayout(row);
   map_view_ = new RangeMapView(review);
@@ -190,7 +191,7 @@ void RangeMapPanel::addLandmarks(QVBoxLayout* layout)
 void RangeMapPanel::connectControls()
 {
   connect(run_, &QPushButton::clicked, this, &RangeMapPanel::run);
-  connect(map_kind_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) { showMap(); });
+  connect(map_kind_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) { chooseMap(); });
   connect(paint_, &QCheckBox::toggled, this, &RangeMapPanel::paintThickness);
   connect(map_view_, &RangeMapView::hovered, this, &RangeMapPanel::showProbe);
   connect(map_view_, &RangeMapView::clicked, this, &RangeMapPanel::locate);
@@ -266,9 +267,33 @@ void RangeMapPanel::reloadMaps()
     histogram_->setCounts({}, kHistogramBin);
     return;
   }
+  updateThicknessScale();
+  showMap();
+  updateLandmarks();
+  if (paint_->isChecked())
+    paintThickness(true);
+}
+
+void RangeMapPanel::chooseMap()
+{
+  const int kind = map_kind_->currentData().toInt();
+  const ThicknessMeasure chosen = kind == kThicknessNormal   ? ThicknessMeasure::AlongNormal
+                                  : kind == kThicknessRadial ? ThicknessMeasure::Radial
+                                                             : measure_;
+  const bool changed = chosen != measure_;
+  measure_ = chosen;
+  if (changed && review_)
+    updateThicknessScale();
+  showMap();
+  if (changed && review_ && paint_->isChecked())
+    paintThickness(true);
+}
+
+void RangeMapPanel::updateThicknessScale()
+{
   // The thickness colours run to the face's 98th percentile, in whole 5 mm,
   // so a few deep samples (the orbits, the nose) do not wash the face out.
-  const std::vector<int> counts = review_->faceHistogram(kHistogramBin, 200);
+  const std::vector<int> counts = review_->faceHistogram(kHistogramBin, 200, measure_);
   long total = 0;
   for (int c : counts)
     total += c;
@@ -283,15 +308,17 @@ void RangeMapPanel::reloadMaps()
       break;
     }
   }
-  // The neck and the scalp's edges reach far deeper than the face: the
-  // colours stop at 30 mm, deeper is the last colour.
+  // The colours stop at 30 mm (facial soft tissue is thinner almost
+  // everywhere; deeper is the last colour). The histogram reaches the face's
+  // 98th percentile, whatever it is: behind the nose and the eyes the bone
+  // lies 30-60 mm deep, and one bar of "30 and more" would hide it.
   thickness_top_ = std::clamp(std::ceil(p98 / 5.0) * 5.0, 5.0, kThicknessTop);
-  histogram_->setCounts(review_->faceHistogram(kHistogramBin, std::min(kHistogramBins, int(thickness_top_ + 5))),
-                        kHistogramBin);
-  showMap();
-  updateLandmarks();
-  if (paint_->isChecked())
-    paintThickness(true);
+  const double histogramTop = std::clamp(std::ceil(p98 / 5.0) * 5.0, 10.0, kHistogramTop);
+  const double bin = histogramTop > 40.0 ? 2.0 * kHistogramBin : kHistogramBin;
+  histogram_->setCounts(review_->faceHistogram(bin, int(std::lround(histogramTop / bin)) + 1, measure_), bin,
+                        tr("soft-tissue thickness %1 over the face (mm); last bar: %2 mm and more")
+                          .arg(measureName(measure_))
+                          .arg(histogramTop, 0, 'f', 0));
 }
 
 void RangeMapPanel::showMap()
@@ -379,10 +406,10 @@ void RangeMapPanel::paintThickness(bool on)
   }
   if (on && review_)
   {
-    skin->setPolyData(review_->paintThickness(skin->polyData()));
+    skin->setPolyData(review_->paintThickness(skin->polyData(), measure_));
     skin->setColourMap(render::colourMapName(render::ColourMap::Thickness));
     skin->setScalarRange({0.0, thickness_top_});
-    skin->setColourBarTitle("Soft-tissue thickness (mm)");
+    skin->setColourBarTitle(std::string("Soft-tissue thickness, ") + measureName(measure_) + " (mm)");
     skin->setOpacity(1.0);
     skin->setColourArray("thickness_mm");
   }

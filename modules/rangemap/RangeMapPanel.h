@@ -46,6 +46,10 @@ private:
   void run();
   void updateFromScene();
   void reloadMaps();
+  /// The thickness colours' top and the histogram, for the measure shown.
+  void updateThicknessScale();
+  /// The map kind chosen: the measure every thickness view follows.
+  void chooseMap();
   void showMap();
   void showProbe(double theta, double z);
   void locate(double theta, double z);
@@ -61,6 +65,9 @@ private:
   int observer_ = -1;
   std::optional<ThicknessReview> review_;
   double thickness_top_ = 25.0; ///< top of the thickness colour range (mm)
+  /// The thickness the map, the paint on the skin and the histogram show
+  /// (the last one chosen while the map shows a skin or bone radius).
+  ThicknessMeasure measure_ = ThicknessMeasure::Radial;
   bool reload_pending_ = false;
   QCheckBox* smooth_ = nullptr;
   QPushButton* run_ = nullptr;

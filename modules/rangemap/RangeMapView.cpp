@@ -237,10 +237,12 @@ ThicknessHistogram::ThicknessHistogram(QWidget* parent) : QWidget(parent)
   setMinimumHeight(100);
 }
 
-void ThicknessHistogram::setCounts(std::vector<int> counts, double binWidth)
+void ThicknessHistogram::setCounts(std::vector<int> counts, double binWidth, QString caption)
 {
   counts_ = std::move(counts);
   bin_width_ = binWidth;
+  caption_ = std::move(caption);
+  setAccessibleDescription(caption_); // what a screen reader says it counts
   update();
 }
 
@@ -275,7 +277,7 @@ void ThicknessHistogram::paintEvent(QPaintEvent*)
     painter.drawText(QPointF(x - metrics.horizontalAdvance(label) / 2.0, plot.bottom() + 15), label);
   }
   painter.drawText(QRectF(0, plot.bottom() + 16, width(), 16), Qt::AlignCenter,
-                   tr("soft-tissue thickness over the face (mm); last bar: and more"));
+                   caption_.isEmpty() ? tr("soft-tissue thickness over the face (mm); last bar: and more") : caption_);
   painter.drawText(QRectF(0, plot.top() - 4, plot.left() - 4, 16), Qt::AlignRight, QString::number(most));
   painter.drawText(QRectF(0, plot.bottom() - 12, plot.left() - 4, 16), Qt::AlignRight, "0");
 }

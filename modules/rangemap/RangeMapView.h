@@ -72,8 +72,10 @@ class ThicknessHistogram : public QWidget
   Q_OBJECT
 public:
   explicit ThicknessHistogram(QWidget* parent = nullptr);
-  /// counts[k] is the bin [k·binWidth, (k+1)·binWidth); the last holds the rest.
-  void setCounts(std::vector<int> counts, double binWidth);
+  /// counts[k] is the bin [k·binWidth, (k+1)·binWidth); the last holds the
+  /// rest. @a caption says what is counted, under the axis.
+  void setCounts(std::vector<int> counts, double binWidth, QString caption = {});
+  const QString& caption() const { return caption_; }
   QSize sizeHint() const override { return {380, 120}; }
 
 protected:
@@ -82,6 +84,7 @@ protected:
 private:
   std::vector<int> counts_;
   double bin_width_ = 1.0;
+  QString caption_;
 };
 
 } // namespace caps

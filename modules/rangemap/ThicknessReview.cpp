@@ -1,5 +1,6 @@
 #include "modules/rangemap/ThicknessReview.h"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -13,6 +14,7 @@
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
+#include "segmentation/LandmarkPlacement.h"
 
 namespace caps {
 namespace {
@@ -45,9 +47,36 @@ std::optional<ThicknessReview> ThicknessReview::fromScene(const Scene& scene)
   const RangeMapNode* normal = skin ? RangeMapLogic::builtWith(scene, *skin, "thickness-normal") : nullptr;
   if (!skin || !bone || !thickness)
     return std::nullopt;
-  return ThicknessReview(RangeMapLogic::toRangeMap(*skin), RangeMapLogic::toRangeMap(*bone),
+  ThicknessReview review(RangeMapLogic::toRangeMap(*skin), RangeMapLogic::toRangeMap(*bone),
                          RangeMapLogic::toRangeMap(*thickness),
                          normal ? RangeMapLogic::toRangeMap(*normal) : seg::RangeMap());
+  // The face's rows, from the landmarks the maps give (none: every row).
+  try
+  {
+    const seg::LandmarkPlacement placed = seg::placeLandmarks(review.skin_, review.bone_);
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    for (const seg::Landmark& l : placed.landmarks)
+    {
+      low = std::min(low, l.z);
+      high = std::max(high, l.z);
+    }
+    if (low <= high)
+      review.setFaceRows(low - 10.0, high + 10.0);
+  }
+  catch (const std::exception&)
+  { // no face on the maps: every row
+  }
+  return review;
+}
+
+const char* measureName(ThicknessMeasure measure)
+{
+  return measure == ThicknessMeasure::AlongNormal ? "along the skin normal" : "radial";
+}
+
+const seg::RangeMap& ThicknessReview::thicknessMap(ThicknessMeasure measure) const
+{
+  return measure == ThicknessMeasure::AlongNormal && !thickness_normal_.empty() ? thickness_normal_ : thickness_;
 }
 
 ThicknessReview::ThicknessReview(seg::RangeMap skin, seg::RangeMap bone, seg::RangeMap thickness,
@@ -81,8 +110,9 @@ std::array<double, 2> ThicknessReview::chartOf(const std::array<double, 3>& worl
   return {c.theta, c.z};
 }
 
-vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surface) const
+vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surface, ThicknessMeasure measure) const
 {
+  const seg::RangeMap& map = thicknessMap(measure);
   auto painted = vtkSmartPointer<vtkPolyData>::New();
   painted->ShallowCopy(surface);
   // The point data is the source's: a new array must not land in it.
@@ -97,28 +127,35 @@ vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surfac
     double p[3];
     surface->GetPoint(i, p);
     const auto [theta, z] = chartOf({p[0], p[1], p[2]});
-    values->SetValue(i, thickness_.sample(theta, z));
+    values->SetValue(i, map.sample(theta, z));
   }
   painted->GetPointData()->AddArray(values);
   return painted;
 }
 
-std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins) const
+std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins, ThicknessMeasure measure) const
 {
+  constexpr double kHalfWidth = 75.0 * std::numbers::pi / 180.0; // the cheeks, not the ears
   std::vector<int> counts(static_cast<std::size_t>(std::max(bins, 0)), 0);
   if (counts.empty() || !(binWidth > 0.0))
     return counts;
-  const seg::CylindricalFrame& frame = thickness_.frame();
-  for (int j = 0; j < thickness_.nZ(); ++j)
-    for (int i = 0; i < thickness_.nTheta(); ++i)
+  const seg::RangeMap& map = thicknessMap(measure);
+  const seg::CylindricalFrame& frame = map.frame();
+  for (int j = 0; j < map.nZ(); ++j)
+  {
+    const double z = frame.indexToZ(j);
+    if (face_rows_ && (z < (*face_rows_)[0] || z > (*face_rows_)[1]))
+      continue;
+    for (int i = 0; i < map.nTheta(); ++i)
     {
-      const double theta = frame.indexToTheta(i);
-      const float t = thickness_.at(i, j);
-      if (theta > 0.0 || !std::isfinite(t) || t < 0.0f)
+      const double fromFront = std::abs(seg::CylindricalFrame::wrapTheta(frame.indexToTheta(i) + std::numbers::pi / 2));
+      const float t = map.at(i, j);
+      if (fromFront > kHalfWidth || !std::isfinite(t) || t < 0.0f)
         continue;
       const auto bin = std::min(static_cast<std::size_t>(t / binWidth), counts.size() - 1);
       ++counts[bin];
     }
+  }
   return counts;
 }
 

@@ -33,6 +33,16 @@ struct ThicknessProbe
   std::array<double, 3> skinPoint{}; ///< the skin there (patient LPS); NaN without skin
 };
 
+/// Which thickness a view shows.
+enum class ThicknessMeasure
+{
+  Radial,     ///< skin r − bone r along the ray from the axis
+  AlongNormal ///< along the inward skin normal to the bone (the radial one where the scene has no such map)
+};
+
+/// "radial", "along the skin normal".
+const char* measureName(ThicknessMeasure measure);
+
 /// @class ThicknessReview
 /// @brief The skin, bone and thickness maps of the scene's newest range-map set.
 class ThicknessReview
@@ -55,14 +65,25 @@ public:
   /// The chart point (θ, z) of a world point, as the maps' frame sees it.
   std::array<double, 2> chartOf(const std::array<double, 3>& world) const;
 
-  /// A copy of @a surface with the point array "thickness_mm": the radial
-  /// thickness at each vertex's (θ, z) (NaN off the maps).
-  vtkSmartPointer<vtkPolyData> paintThickness(vtkPolyData* surface) const;
+  /// The map of @a measure (the radial one when the normal map is missing).
+  const seg::RangeMap& thicknessMap(ThicknessMeasure measure) const;
 
-  /// Counts of the radial thickness over the face (θ in [-π, 0], the front
-  /// half), in bins of @a binWidth mm from 0; values from the last bin's
-  /// start up go into it.
-  std::vector<int> faceHistogram(double binWidth, int bins) const;
+  /// A copy of @a surface with the point array "thickness_mm": the thickness
+  /// by @a measure at each vertex's (θ, z) (NaN off the maps).
+  vtkSmartPointer<vtkPolyData> paintThickness(vtkPolyData* surface,
+                                              ThicknessMeasure measure = ThicknessMeasure::Radial) const;
+
+  /// The face's rows of the maps: from 10 mm below the lowest standard
+  /// landmark placed on them to 10 mm above the highest (fromScene() finds
+  /// them with seg::placeLandmarks); unset: every row.
+  void setFaceRows(double zLow, double zHigh) { face_rows_ = std::array<double, 2>{zLow, zHigh}; }
+  const std::optional<std::array<double, 2>>& faceRows() const { return face_rows_; }
+
+  /// Counts of the thickness by @a measure over the face: 75° either side of
+  /// the front, on the face's rows (faceRows(); every row when unset), in
+  /// bins of @a binWidth mm from 0; values from the last bin's start up go
+  /// into it. Not the neck, the scalp or the ears, which are far thicker.
+  std::vector<int> faceHistogram(double binWidth, int bins, ThicknessMeasure measure = ThicknessMeasure::Radial) const;
 
   /// The landmarks as CSV, one row each: name, x, y, z (LPS mm), theta
   /// (degrees), z along the axis (mm), skin radius, bone radius, thickness
@@ -71,6 +92,7 @@ public:
 
 private:
   seg::RangeMap skin_, bone_, thickness_, thickness_normal_;
+  std::optional<std::array<double, 2>> face_rows_;
 };
 
 } // namespace caps

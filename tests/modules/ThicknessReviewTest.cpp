@@ -97,22 +97,56 @@ TEST(ThicknessReview, PaintedSkinCarriesTheThicknessUnderEachVertex)
   EXPECT_EQ(surface->GetPointData()->GetArray("thickness_mm"), nullptr);
 }
 
-TEST(ThicknessReview, FaceHistogramCountsTheFrontHalf)
+TEST(ThicknessReview, FaceHistogramCountsTheFaceByTheMeasureShown)
+{
+  caps::seg::CylindricalFrame frame;
+  caps::ThicknessReview review = makeReview(frame);
+  // Thickness 10 + 0.1 z (normal: 0.99 times it): rows z_j = -50 + 2 j; the
+  // face's columns lie within 75° of the front (θ = -90°), not the ears.
+  int faceColumns = 0;
+  for (int i = 0; i < frame.nTheta(); ++i)
+    faceColumns += std::abs(std::remainder(frame.indexToTheta(i) + kPi / 2, 2 * kPi)) <= 75.0 * kPi / 180.0;
+  ASSERT_GT(faceColumns, 0);
+  ASSERT_LT(faceColumns, frame.nTheta() / 2);
+  auto expected = [&](double scale, double zLow, double zHigh) {
+    std::vector<int> counts(12, 0);
+    for (int j = 0; j < frame.nZ(); ++j)
+    {
+      const double z = frame.indexToZ(j);
+      if (z < zLow || z > zHigh)
+        continue;
+      const double t = scale * (10.0 + 0.1 * z);
+      counts[std::min<size_t>(size_t(std::floor(float(t) + 1e-6)), counts.size() - 1)] += faceColumns;
+    }
+    return counts;
+  };
+  EXPECT_EQ(review.faceHistogram(1.0, 12), expected(1.0, -1e9, 1e9));
+  EXPECT_EQ(review.faceHistogram(1.0, 12, caps::ThicknessMeasure::AlongNormal), expected(0.99, -1e9, 1e9));
+  // Only the face's rows once they are known (the landmarks' span).
+  review.setFaceRows(-20.0, 30.0);
+  EXPECT_EQ(review.faceHistogram(1.0, 12), expected(1.0, -20.0, 30.0));
+}
+
+TEST(ThicknessReview, TheSkinIsPaintedWithTheMeasureShown)
 {
   caps::seg::CylindricalFrame frame;
   const caps::ThicknessReview review = makeReview(frame);
-  // Thickness 10 + 0.1 z: rows z_j = -50 + 2 j, so row j falls in bin
-  // floor(5 + 0.2 j) of 1 mm bins; every front column (θ <= 0) counts.
-  int frontColumns = 0;
-  for (int i = 0; i < frame.nTheta(); ++i)
-    frontColumns += frame.indexToTheta(i) <= 0.0;
-  std::vector<int> expected(12, 0);
-  for (int j = 0; j < frame.nZ(); ++j)
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  const Eigen::Vector3d p = frame.toWorld(skinRadius(12.0), -1.0, 12.0);
+  points->InsertNextPoint(p.data());
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->SetPoints(points);
+  for (const auto measure : {caps::ThicknessMeasure::Radial, caps::ThicknessMeasure::AlongNormal})
   {
-    const double t = 10.0 + 0.1 * frame.indexToZ(j);
-    expected[std::min<size_t>(size_t(std::floor(t + 1e-9)), expected.size() - 1)] += frontColumns;
+    const auto painted = review.paintThickness(surface, measure);
+    auto* values = vtkDoubleArray::SafeDownCast(painted->GetPointData()->GetArray("thickness_mm"));
+    ASSERT_NE(values, nullptr);
+    const double radial = skinRadius(12.0) - kBoneRadius;
+    EXPECT_NEAR(values->GetValue(0), measure == caps::ThicknessMeasure::Radial ? radial : 0.99 * radial, 1e-4);
   }
-  EXPECT_EQ(review.faceHistogram(1.0, 12), expected);
+  // Without a normal map the normal measure falls back on the radial one.
+  const caps::ThicknessReview radialOnly(review.skin(), review.bone(), review.thickness(), caps::seg::RangeMap());
+  EXPECT_EQ(&radialOnly.thicknessMap(caps::ThicknessMeasure::AlongNormal), &radialOnly.thickness());
 }
 
 TEST(ThicknessReview, LandmarksCsvHasOneRowPerLandmarkWithItsThickness)

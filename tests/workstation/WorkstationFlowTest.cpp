@@ -201,6 +201,22 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   auto* skinSurface = static_cast<caps::SurfaceNode*>(caps::test::nodeNamed(scene, "Skin"));
   ASSERT_NE(skinSurface, nullptr);
   EXPECT_EQ(skinSurface->colourArray(), "thickness_mm");
+  EXPECT_NE(skinSurface->colourBarTitle().find("radial"), std::string::npos) << skinSurface->colourBarTitle();
+  // Thickness along the normal chosen: the paint on the skin and the
+  // histogram follow the map (they stayed radial before).
+  auto* mapKind = ws.widget<QComboBox>("rangemap.mapKind");
+  ASSERT_NE(mapKind, nullptr);
+  mapKind->setCurrentIndex(1);
+  ws.settle(200);
+  EXPECT_NE(skinSurface->colourBarTitle().find("along the skin normal"), std::string::npos)
+    << skinSurface->colourBarTitle();
+  auto* histogram = ws.widget<QWidget>("rangemap.histogram");
+  ASSERT_NE(histogram, nullptr);
+  EXPECT_TRUE(histogram->accessibleDescription().contains("along the skin normal"))
+    << histogram->accessibleDescription().toStdString();
+  mapKind->setCurrentIndex(0);
+  ws.settle(200);
+  EXPECT_NE(skinSurface->colourBarTitle().find("radial"), std::string::npos) << skinSurface->colourBarTitle();
   ws.screenshot("flow-03-thickness");
 
   // 4. A Z-plasty placed by a click on the left cheek of the 3D face.
