@@ -28,6 +28,8 @@
 #include "scene/Scene.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
+#include "segmentation/LandmarkPlacement.h"
+#include "segmentation/Landmarks.h"
 
 namespace caps {
 namespace {
@@ -163,9 +165,15 @@ void RangeMapPanel::addLandmarks(QVBoxLayout* layout)
   add_landmark_->setToolTip(tr("Then click the point on the skin in the 3D view"));
   nameRow->addWidget(add_landmark_);
   marksLayout->addLayout(nameRow);
-  landmarks_ = new QTableWidget(0, 5, marks);
+  place_landmarks_ = new QPushButton(tr("Place standard landmarks"), marks);
+  place_landmarks_->setObjectName("rangemap.placeLandmarks");
+  place_landmarks_->setToolTip(tr("Places the standard facial landmarks from the maps, where their anatomy is in "
+                                  "the scan (check each: they are a first guess)"));
+  marksLayout->addWidget(place_landmarks_);
+  landmarks_ = new QTableWidget(0, 7, marks);
   landmarks_->setObjectName("rangemap.landmarks");
-  landmarks_->setHorizontalHeaderLabels({tr("Name"), tr("θ (°)"), tr("z (mm)"), tr("Radial (mm)"), tr("Normal (mm)")});
+  landmarks_->setHorizontalHeaderLabels({tr("Name"), tr("θ (°)"), tr("z (mm)"), tr("Radial (mm)"), tr("Normal (mm)"),
+                                         tr("Depth in the CT (mm)"), tr("Measured")});
   landmarks_->horizontalHeader()->setSectionResizeMode(QHeaderView::ResizeToContents);
   landmarks_->horizontalHeader()->setStretchLastSection(true);
   landmarks_->verticalHeader()->hide();
@@ -196,6 +204,7 @@ void RangeMapPanel::connectControls()
   connect(map_view_, &RangeMapView::hovered, this, &RangeMapPanel::showProbe);
   connect(map_view_, &RangeMapView::clicked, this, &RangeMapPanel::locate);
   connect(add_landmark_, &QPushButton::clicked, this, &RangeMapPanel::addLandmark);
+  connect(place_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::placeStandardLandmarks);
   connect(remove_landmark_, &QPushButton::clicked, this, &RangeMapPanel::removeLandmark);
   connect(export_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::exportLandmarks);
   connect(landmarks_, &QTableWidget::cellDoubleClicked, this, [this](int r, int) {
@@ -257,9 +266,10 @@ void RangeMapPanel::updateFromScene()
 void RangeMapPanel::reloadMaps()
 {
   review_ = ThicknessReview::fromScene(logic_.scene());
+  depths_.clear(); // new maps may come with a new CT or label map
   const bool ready = review_.has_value();
-  for (QWidget* w :
-       std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, locate_, remove_landmark_, export_landmarks_})
+  for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, place_landmarks_, locate_,
+                                                    remove_landmark_, export_landmarks_})
     w->setEnabled(ready);
   if (!ready)
   {
@@ -495,19 +505,83 @@ void RangeMapPanel::updateLandmarks()
   for (std::size_t r = 0; r < list.size(); ++r)
   {
     const QString name = QString::fromStdString(list[r].name);
-    QStringList cells{name, "-", "-", "-", "-"};
+    QStringList cells{name, "-", "-", "-", "-", "-", "-"};
     if (review_)
     {
       const auto chart = review_->chartOf(list[r].position);
       const ThicknessProbe p = review_->probe(chart[0], chart[1]);
-      cells = QStringList{name, QString::number(p.theta / kDegree, 'f', 1), QString::number(p.z, 'f', 1),
-                          millimetres(p.thickness), millimetres(p.thicknessNormal)};
+      const MeasuredDepth* d = depthOf(list[r]);
+      cells = QStringList{name,
+                          QString::number(p.theta / kDegree, 'f', 1),
+                          QString::number(p.z, 'f', 1),
+                          millimetres(p.thickness),
+                          millimetres(p.thicknessNormal),
+                          d ? millimetres(d->depth) : QString("-"),
+                          d ? QString::fromStdString(d->convention) : QString("-")};
       onMap.emplace_back(name, chart);
     }
     for (int c = 0; c < cells.size(); ++c)
       landmarks_->setItem(static_cast<int>(r), c, new QTableWidgetItem(cells[c]));
   }
   map_view_->setLandmarks(std::move(onMap));
+}
+
+const RangeMapPanel::MeasuredDepth* RangeMapPanel::depthOf(const LandmarksNode::Landmark& landmark)
+{
+  if (auto found = depths_.find(landmark.name); found != depths_.end() && found->second.position == landmark.position)
+    return &found->second;
+  const VolumeNode* volume = currentVolume(logic_.scene());
+  if (!volume)
+    return nullptr;
+  seg::LandmarkThickness row;
+  row.landmark.name = landmark.name;
+  row.position = Eigen::Vector3d(landmark.position[0], landmark.position[1], landmark.position[2]);
+  std::vector<seg::LandmarkThickness> rows{row};
+  try
+  {
+    if (!logic_.measureLandmarkDepths(*volume, rows))
+      return nullptr; // no label map yet: nothing says where the bone is
+  }
+  catch (const std::exception&)
+  {
+    return nullptr; // a CT the label map does not fit: the maps' columns still read
+  }
+  MeasuredDepth& d = depths_[landmark.name];
+  d = {landmark.position, rows.front().depth, rows.front().convention};
+  return &d;
+}
+
+void RangeMapPanel::placeStandardLandmarks()
+{
+  if (!review_)
+    return;
+  seg::LandmarkPlacement placed;
+  try
+  {
+    placed = seg::placeLandmarks(review_->skin(), review_->bone());
+  }
+  catch (const std::exception& e)
+  {
+    host_.showError("Place the standard landmarks", e.what());
+    return;
+  }
+  LandmarksNode* node = landmarksNode(true);
+  std::vector<LandmarksNode::Landmark> list;
+  for (const auto& l : node->landmarks())
+    if (seg::landmarkDescription(l.name).empty()) // the user's own stay
+      list.push_back(l);
+  for (const seg::Landmark& l : placed.landmarks)
+  {
+    const ThicknessProbe p = review_->probe(l.theta, l.z);
+    if (std::isfinite(p.skinPoint[0]))
+      list.push_back({l.name, p.skinPoint});
+  }
+  node->setLandmarks(std::move(list));
+  std::string status = "Placed " + std::to_string(placed.landmarks.size()) + " of " +
+                       std::to_string(placed.status.size()) + " standard landmarks (check each)";
+  if (!placed.warnings.empty())
+    status += "; " + placed.warnings.front() + (placed.warnings.size() > 1 ? " (and others, see the report)" : "");
+  host_.showStatus(status);
 }
 
 void RangeMapPanel::run()

@@ -5,6 +5,7 @@
 /// probe, the thickness painted on the 3D skin, its histogram, and
 /// landmarks with their thickness, exportable as CSV.
 
+#include <map>
 #include <optional>
 
 #include <QWidget>
@@ -55,10 +56,24 @@ private:
   void locate(double theta, double z);
   void paintThickness(bool on);
   void addLandmark();
+  /// The standard landmarks placed from the maps (seg::placeLandmarks) into
+  /// the scene's landmarks, replacing those of the same names; the user's own
+  /// stay. Those not placed are named in the status bar with why.
+  void placeStandardLandmarks();
   void removeLandmark();
   void exportLandmarks();
   void updateLandmarks();
   LandmarksNode* landmarksNode(bool create);
+  /// The depth at a landmark measured in the CT by its convention, and the
+  /// convention, kept per name and position (the measure reads the CT).
+  struct MeasuredDepth
+  {
+    std::array<double, 3> position{};
+    double depth = 0.0;
+    std::string convention;
+  };
+  const MeasuredDepth* depthOf(const LandmarksNode::Landmark& landmark);
+  std::map<std::string, MeasuredDepth> depths_;
 
   RangeMapLogic& logic_;
   ModuleHost& host_;
@@ -80,6 +95,7 @@ private:
   QLineEdit* landmark_name_ = nullptr;
   QTableWidget* landmarks_ = nullptr;
   QPushButton* add_landmark_ = nullptr;
+  QPushButton* place_landmarks_ = nullptr;
   QPushButton* remove_landmark_ = nullptr;
   QPushButton* export_landmarks_ = nullptr;
   QPushButton* locate_ = nullptr;

@@ -17,6 +17,7 @@
 #include <QMouseEvent>
 #include <QPushButton>
 #include <QSlider>
+#include <QTableWidget>
 
 #include <vtkCamera.h>
 #include <vtkImageData.h>
@@ -217,6 +218,24 @@ TEST(WorkstationFlow, FromTheSampleCtToASavedPrediction)
   mapKind->setCurrentIndex(0);
   ws.settle(200);
   EXPECT_NE(skinSurface->colourBarTitle().find("radial"), std::string::npos) << skinSurface->colourBarTitle();
+  // The standard landmarks placed from the maps, each with its depth measured
+  // in the CT by its convention (saved with the scene below).
+  press(ws, "rangemap.placeLandmarks");
+  ws.settle(300);
+  auto* table = ws.widget<QTableWidget>("rangemap.landmarks");
+  ASSERT_NE(table, nullptr);
+  EXPECT_GE(table->rowCount(), 10);
+  bool chin = false;
+  for (int r = 0; r < table->rowCount(); ++r)
+    if (table->item(r, 0)->text() == "pogonion")
+    {
+      chin = true;
+      const double depth = table->item(r, 5)->text().toDouble();
+      EXPECT_GT(depth, 6.0); // De Greef et al. 2006: about 10-12 mm at the chin
+      EXPECT_LT(depth, 18.0);
+      EXPECT_EQ(table->item(r, 6)->text().toStdString(), "perpendicular to the skin");
+    }
+  EXPECT_TRUE(chin);
   ws.screenshot("flow-03-thickness");
 
   // 4. A Z-plasty placed by a click on the left cheek of the 3D face.
