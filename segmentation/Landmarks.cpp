@@ -77,8 +77,10 @@ const std::vector<LandmarkDefinition>& standardLandmarks()
     {"zygion_right", "Most lateral point of the skin over the right zygomatic arch."},
     {"gonion_left", "Skin over the angle of the left mandible."},
     {"gonion_right", "Skin over the angle of the right mandible."},
-    {"mid_cheek_left", "Left cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
-    {"mid_cheek_right", "Right cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
+    {"mid_cheek_left",
+     "Left cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
+    {"mid_cheek_right",
+     "Right cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
     {"forehead", "Mid-forehead on the midline, 75 mm above the nose tip (below the hairline)."},
   };
   return definitions;
