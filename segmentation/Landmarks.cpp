@@ -15,8 +15,8 @@ namespace {
 constexpr double kDegree = std::numbers::pi / 180.0;
 constexpr const char* kShortHeader = "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm";
 constexpr const char* kHeader =
-  "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention";
-constexpr std::size_t kShortColumns = 8, kColumns = 12;
+  "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention,note";
+constexpr std::size_t kShortColumns = 8, kColumns = 13;
 
 void checkFrame(const RangeMap& reference, const RangeMap& map, const char* what)
 {
@@ -127,13 +127,15 @@ void writeLandmarkCsv(const std::filesystem::path& path, const std::vector<Landm
       throw std::invalid_argument("The landmark name \"" + name +
                                   "\" cannot be written to CSV: it must be non-empty and hold no "
                                   "comma, quote or line break.");
-    if (row.convention.find_first_of(",\"\r\n") != std::string::npos)
-      throw std::invalid_argument("The depth convention \"" + row.convention +
-                                  "\" cannot be written to CSV: it must hold no comma, quote or line break.");
+    for (const std::string* text : {&row.convention, &row.note})
+      if (text->find_first_of(",\"\r\n") != std::string::npos)
+        throw std::invalid_argument("\"" + *text +
+                                    "\" cannot be written to the landmark CSV: it must hold no comma, quote or line "
+                                    "break.");
     out << name << ',' << number(row.landmark.theta / kDegree) << ',' << number(row.landmark.z) << ','
         << number(row.position.x()) << ',' << number(row.position.y()) << ',' << number(row.position.z()) << ','
         << number(row.radial) << ',' << number(row.normal) << ',' << number(row.ctSkinNormal) << ','
-        << number(row.ctNearestBone) << ',' << number(row.depth) << ',' << row.convention << '\n';
+        << number(row.ctNearestBone) << ',' << number(row.depth) << ',' << row.convention << ',' << row.note << '\n';
   }
   std::filesystem::path temporary = path;
   temporary += ".tmp";
@@ -191,7 +193,8 @@ std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path
       throw fail(lineNumber,
                  "expected " + std::to_string(columns) + " fields, found " + std::to_string(fields.size()) + ".");
     double v[10];
-    const int numberFields = int(columns) - (columns == kColumns ? 2 : 1); // all but the name (and the convention)
+    const int numberFields =
+      int(columns) - (columns == kColumns ? 3 : 1); // all but the name (the convention, the note)
     for (int k = 0; k < 10; ++k)
       v[k] = RangeMap::quietNaN();
     for (int k = 0; k < numberFields; ++k)
@@ -217,7 +220,10 @@ std::vector<LandmarkThickness> readLandmarkCsv(const std::filesystem::path& path
     row.ctNearestBone = v[8];
     row.depth = v[9];
     if (columns == kColumns)
+    {
       row.convention = fields[11];
+      row.note = fields[12];
+    }
     rows.push_back(row);
   }
   if (!header)

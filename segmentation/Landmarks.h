@@ -59,6 +59,8 @@ struct LandmarkThickness
   double ctNearestBone = RangeMap::quietNaN();
   double depth = RangeMap::quietNaN();
   std::string convention;
+  /// What spoils the measure, if anything (metal streaks in its slices).
+  std::string note;
 };
 
 /// The thickness table: for each landmark, its skin point and the radial and
@@ -70,7 +72,7 @@ std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& la
                                                  const RangeMap& radial, const RangeMap& normal);
 
 /// Writes the table as CSV with the header
-/// `name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention`
+/// `name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention,note`
 /// (x, y, z in LPS mm), one row per landmark, numbers in the shortest form
 /// that reads back exactly, NaN as an empty field. Atomic: written beside,
 /// then renamed.
@@ -79,7 +81,7 @@ std::vector<LandmarkThickness> landmarkThickness(const std::vector<Landmark>& la
 void writeLandmarkCsv(const std::filesystem::path& path, const std::vector<LandmarkThickness>& rows);
 
 /// Reads a file writeLandmarkCsv() wrote (or a person edited): the header must
-/// name the 12 columns in that order, or the first 8 (the table before the
+/// name the 13 columns in that order, or the first 8 (the table before the
 /// CT-measured depths); blank lines are skipped; an empty field or "nan" is
 /// NaN. name, theta_deg and z_mm are required on each row.
 /// @throws std::runtime_error naming the file and line of the first problem.

@@ -167,7 +167,7 @@ void writeLandmarkTable(const RangeMapLogic& logic, const VolumeNode& volume, co
     out << "  " << name << std::fixed << std::setprecision(0) << std::setw(6) << row.landmark.theta * 180.0 / M_PI
         << std::setprecision(1) << std::setw(7) << row.landmark.z << std::setw(8) << row.radial << std::setw(8)
         << row.normal << std::setw(8) << row.ctSkinNormal << std::setw(8) << row.ctNearestBone << std::setw(8)
-        << row.depth << "   " << row.convention << "\n";
+        << row.depth << "   " << row.convention << (row.note.empty() ? "" : "; " + row.note) << "\n";
   }
   out.unsetf(std::ios::floatfield);
   seg::writeLandmarkCsv(file, rows);
@@ -201,6 +201,13 @@ int runRangeMap(ModuleLogic& moduleLogic, const std::vector<std::string>& argv, 
     out << "Soft-tissue thickness (mm):     min  median    mean     p95\n";
     printStatistics(out, "radial r_skin - r_bone", maps.radialStatistics, samples);
     printStatistics(out, "along the skin normal  ", maps.normalStatistics, samples);
+    // Metal spoils the slices it lies in: say so before anything is read off them.
+    const auto& metal = logic.metalOf(*volume);
+    for (std::size_t k = 0; k < std::min<std::size_t>(metal.size(), 5); ++k)
+      err << "warning: " << seg::describe(metal[k], volume->image())
+          << "; the skin, bone and thickness there are not to be trusted\n";
+    if (metal.size() > 5)
+      err << "warning: " << metal.size() - 5 << " more pieces of metal\n";
 
     struct Output
     {

@@ -219,6 +219,7 @@ bool RangeMapLogic::measureLandmarkDepths(const VolumeNode& volume, std::vector<
   const Parameters thresholds = forLabelMap(Parameters{}, *labels);
   const auto bone = SegmentLogic::maskOf(labels->image(), kBoneLabel);
   const seg::BoneDepthProbe probe(volume.image(), bone, thresholds.boneThresholdHu, thresholds.skinThresholdHu);
+  const std::vector<seg::MetalPiece>& metal = metalOf(volume);
   for (seg::LandmarkThickness& row : rows)
   {
     const seg::LandmarkDepth d{row.landmark, seg::depthConventionOf(row.landmark.name), probe.measure(row.position)};
@@ -226,8 +227,30 @@ bool RangeMapLogic::measureLandmarkDepths(const VolumeNode& volume, std::vector<
     row.ctNearestBone = d.bone.toNearestBone;
     row.depth = d.depth();
     row.convention = d.describeConvention();
+    row.note.clear();
+    if (const seg::MetalPiece* piece = seg::streaksAt(metal, volume.image(), row.position))
+    {
+      std::ostringstream note;
+      note.precision(0);
+      note << std::fixed << "in the streaks of the metal or contrast at (" << piece->centroid.x() << " "
+           << piece->centroid.y() << " " << piece->centroid.z() << ") mm: check it on the slices";
+      row.note = note.str();
+    }
   }
   return true;
+}
+
+const std::vector<seg::MetalPiece>& RangeMapLogic::metalOf(const VolumeNode& volume) const
+{
+  vtkImageData* image = volume.image();
+  if (!image)
+  {
+    metal_ = {};
+    return metal_.pieces;
+  }
+  if (metal_.image != image || metal_.modified != image->GetMTime())
+    metal_ = {image, image->GetMTime(), seg::findMetal(image)};
+  return metal_.pieces;
 }
 
 Eigen::MatrixXf RangeMapLogic::toMatrix(const seg::RangeMap& map)

@@ -14,6 +14,7 @@
 #include "modules/core/Module.h"
 #include "segmentation/HeadAxis.h"
 #include "segmentation/Landmarks.h"
+#include "segmentation/MetalArtefacts.h"
 #include "segmentation/RangeMap.h"
 #include "segmentation/Thickness.h"
 
@@ -141,10 +142,23 @@ public:
   /// them NaN (and returns false) when the volume has no label map yet.
   bool measureLandmarkDepths(const VolumeNode& volume, std::vector<seg::LandmarkThickness>& rows) const;
 
+  /// The metal in @a volume's CT (seg::findMetal), found once per image and
+  /// kept; a landmark in the slices its streaks spoil gets a note.
+  const std::vector<seg::MetalPiece>& metalOf(const VolumeNode& volume) const;
+
   /// One line per fact: the axis (origin, direction, tilt, slices, residual) and z range.
   static std::string describeAxis(const seg::HeadAxisFit& axis);
 
 private:
+  /// metalOf()'s findings, for the image (and its modification time) they are of.
+  struct MetalCache
+  {
+    const void* image = nullptr;
+    unsigned long modified = 0;
+    std::vector<seg::MetalPiece> pieces;
+  };
+  mutable MetalCache metal_;
+
   /// The maps a new run for @a volume replaces: those recording it as their
   /// source, whichever logic made them.
   static std::vector<NodeId> mapsOfVolume(const Scene& scene, const VolumeNode& volume);

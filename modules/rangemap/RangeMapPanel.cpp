@@ -522,6 +522,12 @@ void RangeMapPanel::updateLandmarks()
     }
     for (int c = 0; c < cells.size(); ++c)
       landmarks_->setItem(static_cast<int>(r), c, new QTableWidgetItem(cells[c]));
+    if (const MeasuredDepth* d = review_ ? depthOf(list[r]) : nullptr; d && !d->note.empty())
+    { // metal streaks in its slices: say so where the depth is read
+      auto* measured = landmarks_->item(static_cast<int>(r), 6);
+      measured->setText(measured->text() + tr("; check: metal streaks"));
+      measured->setToolTip(QString::fromStdString(d->note));
+    }
   }
   map_view_->setLandmarks(std::move(onMap));
 }
@@ -547,7 +553,7 @@ const RangeMapPanel::MeasuredDepth* RangeMapPanel::depthOf(const LandmarksNode::
     return nullptr; // a CT the label map does not fit: the maps' columns still read
   }
   MeasuredDepth& d = depths_[landmark.name];
-  d = {landmark.position, rows.front().depth, rows.front().convention};
+  d = {landmark.position, rows.front().depth, rows.front().convention, rows.front().note};
   return &d;
 }
 

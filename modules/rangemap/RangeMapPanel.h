@@ -71,6 +71,7 @@ private:
     std::array<double, 3> position{};
     double depth = 0.0;
     std::string convention;
+    std::string note; ///< what spoils it (metal streaks), if anything
   };
   const MeasuredDepth* depthOf(const LandmarksNode::Landmark& landmark);
   std::map<std::string, MeasuredDepth> depths_;

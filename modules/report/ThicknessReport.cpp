@@ -26,6 +26,7 @@
 #include "scene/VolumeNode.h"
 #include "segmentation/LandmarkDepth.h"
 #include "segmentation/LandmarkPlacement.h"
+#include "segmentation/MetalArtefacts.h"
 #include "segmentation/Landmarks.h"
 #include "segmentation/Thickness.h"
 
@@ -91,6 +92,7 @@ struct Review
   std::string notPlacedAtAll; ///< why no landmark could be placed (the profile has no face)
   std::vector<seg::LandmarkThickness> rows;
   std::optional<LabelMapNode::Thresholds> thresholds;
+  std::vector<std::string> metal; ///< each piece of metal (or undiluted contrast) and the slices it spoils
 };
 
 /// 1. The CT, the newest maps, the landmarks and their depths.
@@ -123,7 +125,10 @@ Review gather(Scene& scene)
     r.notPlacedAtAll = e.what();
   }
   r.rows = seg::landmarkThickness(r.placement.landmarks, r.skin, r.radial, r.normal);
-  RangeMapLogic(scene).measureLandmarkDepths(*r.volume, r.rows);
+  const RangeMapLogic logic(scene);
+  logic.measureLandmarkDepths(*r.volume, r.rows);
+  for (const seg::MetalPiece& piece : logic.metalOf(*r.volume))
+    r.metal.push_back(seg::describe(piece, r.volume->image()));
   if (const LabelMapNode* labels = SegmentLogic(scene).findLabelMap(*r.volume))
     r.thresholds = labels->thresholds();
   return r;
@@ -179,6 +184,15 @@ void addLandmarks(ReportDocument& doc, const Review& r)
                   "(lips without teeth behind them, bone too thin for the CT); none, no bone beneath (the nose "
                   "tip's cartilage).");
   }
+  std::vector<std::vector<std::string>> spoiled;
+  for (std::size_t k = 0; k < r.rows.size(); ++k)
+    if (!r.rows[k].note.empty())
+      spoiled.push_back({std::to_string(k + 1), readable(r.rows[k].landmark.name), r.rows[k].note});
+  if (!spoiled.empty())
+  {
+    doc.heading("Landmarks to check on the slices", 2);
+    doc.table({"#", "Landmark", "Why"}, spoiled);
+  }
   std::vector<std::vector<std::string>> missing;
   for (const seg::LandmarkStatus& s : r.placement.status)
     if (s.state != seg::LandmarkState::Placed)
@@ -230,6 +244,23 @@ seg::RangeMap within(const seg::RangeMap& map, const FaceRegion& region)
         out.at(i, j) = seg::RangeMap::quietNaN();
     }
   return out;
+}
+
+/// What spoils the CT: metal, or contrast still undiluted in a vein.
+void addArtefacts(ReportDocument& doc, const Review& r)
+{
+  if (r.metal.empty())
+    return;
+  doc.heading("Metal and dense contrast", 2);
+  doc.paragraph("Voxels at 3000 HU and above: metal (fillings, crowns, plates) or contrast still undiluted in a "
+                "vein. Their streaks cross the whole slice, so skin, bone and thickness found in these slices are "
+                "not measurements to trust.");
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t k = 0; k < r.metal.size() && k < 8; ++k)
+    rows.push_back({std::to_string(k + 1), r.metal[k]});
+  if (r.metal.size() > 8)
+    rows.push_back({"…", std::to_string(r.metal.size() - 8) + " smaller pieces"});
+  doc.table({"#", "Where, and the slices it spoils"}, rows);
 }
 
 /// 3. The face's thickness statistics, both measures.
@@ -386,6 +417,7 @@ ReportDocument buildThicknessReport(Scene& scene, const ThicknessReportOptions& 
                     " · landmarks placed automatically: check each before relying on its depth");
   addHeader(doc, patient, options);
   addLandmarks(doc, r);
+  addArtefacts(doc, r);
   addStatistics(doc, r);
   seg::reportProgress(progress, 0.4, "Rendering the thickness maps");
   addFigures(doc, scene, r, options.figureDpi);

@@ -15,6 +15,7 @@
 
 #include "LandmarkPhantoms.h"
 #include "segmentation/LandmarkDepth.h"
+#include "segmentation/MetalArtefacts.h"
 
 namespace caps::seg::test {
 namespace {
@@ -195,6 +196,52 @@ TEST(LandmarkDepth, AThinWallInTheMaskIsBoneThoughItsHuStaysUnderTheThreshold)
     EXPECT_NEAR(d.alongSkinNormal, 45.0 - 33.0, 1.5) << u.transpose();
     EXPECT_NEAR(d.toNearestBone, 45.0 - 33.0, 1.5) << u.transpose();
   }
+}
+
+TEST(MetalArtefacts, MetalIsFoundWithTheSlicesItsStreaksSpoil)
+{
+  // Two fillings (3071 HU beads of 2 and 1.5 mm radius) in the head, and a
+  // speck of saturated enamel (one voxel) that is no metal.
+  SpheresCt phantom;
+  phantom.build();
+  auto put = [&](const Eigen::Vector3d& centre, double radius) {
+    int n = 0;
+    const int* e = phantom.ct->GetExtent();
+    for (int k = e[4]; k <= e[5]; ++k)
+      for (int j = e[2]; j <= e[3]; ++j)
+        for (int i = e[0]; i <= e[1]; ++i)
+        {
+          double world[3];
+          phantom.ct->TransformIndexToPhysicalPoint(i, j, k, world);
+          if ((Eigen::Vector3d(world[0], world[1], world[2]) - centre).norm() <= radius)
+          {
+            *static_cast<short*>(phantom.ct->GetScalarPointer(i, j, k)) = 3071;
+            ++n;
+          }
+        }
+    return n;
+  };
+  const int big = put({10.0, -30.0, -8.4}, 2.0);
+  const int small = put({-12.0, -28.0, 14.0}, 1.5);
+  *static_cast<short*>(phantom.ct->GetScalarPointer(60, 40, 40)) = 3071;
+  ASSERT_GT(big, small);
+  const std::vector<MetalPiece> pieces = findMetal(phantom.ct);
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces[0].voxels, big); // largest first
+  EXPECT_EQ(pieces[1].voxels, small);
+  EXPECT_LT((pieces[0].centroid - Eigen::Vector3d(10.0, -30.0, -8.4)).norm(), 0.5);
+  EXPECT_LT((pieces[1].centroid - Eigen::Vector3d(-12.0, -28.0, 14.0)).norm(), 0.5);
+  EXPECT_EQ(pieces[0].peakHu, 3071.0);
+  // Its slices, 5 mm (4 slices of 1.4 mm) either side, are spoiled: a skin
+  // point 8 mm from it in its slice is, one 9 mm above it is not.
+  EXPECT_EQ(pieces[0].lastSpoiled - pieces[0].lastSlice, 4);
+  EXPECT_EQ(streaksAt(pieces, phantom.ct, {40.0, 8.0, -8.4}), &pieces[0]);
+  EXPECT_EQ(streaksAt(pieces, phantom.ct, {10.0, -30.0, -8.4 + 2.0 + 5.0 + 2.0}), nullptr);
+  EXPECT_NE(describe(pieces[0], phantom.ct).find("3071.0 HU"), std::string::npos) << describe(pieces[0], phantom.ct);
+  // A CT without metal has none.
+  SpheresCt clean;
+  clean.build();
+  EXPECT_TRUE(findMetal(clean.ct).empty());
 }
 
 TEST(LandmarkDepth, NoBoneWithinReachIsNaNAndBadImagesAreRefused)

@@ -102,6 +102,7 @@ TEST(LandmarkCsv, RoundTripsExactly)
   table[0].ctNearestBone = 5.0 / 3.0;
   table[0].depth = 6.25;
   table[0].convention = "perpendicular to the skin";
+  table[0].note = "in the streaks of metal";
   table[1].ctNearestBone = 0.1;
   const auto path = scratch("landmarks.csv");
   writeLandmarkCsv(path, table);
@@ -110,7 +111,7 @@ TEST(LandmarkCsv, RoundTripsExactly)
     std::string header;
     std::getline(in, header);
     EXPECT_EQ(header, "name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,"
-                      "convention");
+                      "convention,note");
   }
   const auto back = readLandmarkCsv(path);
   ASSERT_EQ(back.size(), table.size());
@@ -129,6 +130,7 @@ TEST(LandmarkCsv, RoundTripsExactly)
     EXPECT_TRUE(same(back[k].ctNearestBone, table[k].ctNearestBone)) << k;
     EXPECT_TRUE(same(back[k].depth, table[k].depth)) << k;
     EXPECT_EQ(back[k].convention, table[k].convention) << k;
+    EXPECT_EQ(back[k].note, table[k].note) << k;
   }
   std::filesystem::remove_all(path.parent_path());
 }
@@ -172,9 +174,9 @@ TEST(LandmarkCsv, ReportsTheLineOfAProblemAndRefusesBadNames)
   bad.landmark.name = "chin";
   bad.convention = "perpendicular, to the skin";
   EXPECT_THROW(writeLandmarkCsv(path, {bad}), std::invalid_argument);
-  // The full header wants its 12 fields on every row.
-  writeText("name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention\n"
-            "chin,-90,1,,,,,,\n");
+  // The full header wants its 13 fields on every row.
+  writeText("name,theta_deg,z_mm,x,y,z,radial_mm,normal_mm,ct_skin_normal_mm,ct_nearest_bone_mm,depth_mm,convention,"
+            "note\nchin,-90,1,,,,,,\n");
   EXPECT_THROW(readLandmarkCsv(path), std::runtime_error);
   std::filesystem::remove_all(path.parent_path());
 }
