@@ -67,6 +67,51 @@ const char* kReportUsage = "usage: caps report SCENE.caps --pdf OUT.pdf [--deide
                            "Exit status: 0 when written, 1 when the scene cannot be reported (the message\n"
                            "says why), 2 on wrong usage.\n";
 
+/// The options every PDF report takes, where a report's parser meets them.
+struct PdfOptions
+{
+  fs::path* pdf;
+  bool* deidentify;
+  report::PaperSize* paper;
+  std::string* date;
+};
+
+/// Reads args[i] (and its value) when it is one of the PDF options, moving
+/// @a i past them. nullopt: not one of them; "": read; else what is wrong.
+std::optional<std::string> parsePdfOption(const std::vector<std::string>& args, std::size_t& i, const PdfOptions& o)
+{
+  const std::string& a = args[i];
+  const bool hasValue = i + 1 < args.size();
+  if (a == "--pdf")
+  {
+    if (!hasValue)
+      return std::string("--pdf needs the file to write");
+    *o.pdf = args[++i];
+  }
+  else if (a == "--deidentify")
+    *o.deidentify = true;
+  else if (a == "--paper")
+  {
+    const std::string paper = hasValue ? args[++i] : "";
+    if (paper == "a4" || paper == "A4")
+      *o.paper = report::PaperSize::A4;
+    else if (paper == "letter" || paper == "Letter")
+      *o.paper = report::PaperSize::Letter;
+    else
+      return std::string("--paper needs a4 or letter");
+  }
+  else if (a == "--date")
+  {
+    const std::string date = hasValue ? args[++i] : "";
+    if (date.size() != 10 || date[4] != '-' || date[7] != '-')
+      return std::string("--date needs a date as YYYY-MM-DD");
+    *o.date = date;
+  }
+  else
+    return std::nullopt;
+  return std::string();
+}
+
 struct ReportArgs
 {
   fs::path scene;
@@ -83,36 +128,17 @@ std::optional<std::string> parse(const std::vector<std::string>& args, ReportArg
     const bool hasValue = i + 1 < args.size();
     if (a == "--help" || a == "-h")
       parsed.help = true;
-    else if (a == "--pdf")
+    else if (const auto pdf = parsePdfOption(
+               args, i, {&parsed.pdf, &parsed.options.deidentify, &parsed.options.paper, &parsed.options.planningDate}))
     {
-      if (!hasValue)
-        return "--pdf needs the file to write";
-      parsed.pdf = args[++i];
-    }
-    else if (a == "--deidentify")
-      parsed.options.deidentify = true;
-    else if (a == "--paper")
-    {
-      const std::string paper = hasValue ? args[++i] : "";
-      if (paper == "a4" || paper == "A4")
-        parsed.options.paper = report::PaperSize::A4;
-      else if (paper == "letter" || paper == "Letter")
-        parsed.options.paper = report::PaperSize::Letter;
-      else
-        return "--paper needs a4 or letter";
+      if (!pdf->empty())
+        return pdf;
     }
     else if (a == "--surgeon")
     {
       if (!hasValue)
         return "--surgeon needs a name";
       parsed.options.surgeon = args[++i];
-    }
-    else if (a == "--date")
-    {
-      const std::string date = hasValue ? args[++i] : "";
-      if (date.size() != 10 || date[4] != '-' || date[7] != '-')
-        return "--date needs a date as YYYY-MM-DD";
-      parsed.options.planningDate = date;
     }
     else if (a == "--plan")
     {
@@ -442,36 +468,17 @@ std::optional<std::string> parseThicknessReport(const std::vector<std::string>& 
     const bool hasValue = i + 1 < args.size();
     if (a == "--help" || a == "-h")
       parsed.help = true;
-    else if (a == "--pdf")
+    else if (const auto pdf = parsePdfOption(
+               args, i, {&parsed.pdf, &parsed.options.deidentify, &parsed.options.paper, &parsed.options.date}))
     {
-      if (!hasValue)
-        return "--pdf needs the file to write";
-      parsed.pdf = args[++i];
-    }
-    else if (a == "--deidentify")
-      parsed.options.deidentify = true;
-    else if (a == "--paper")
-    {
-      const std::string paper = hasValue ? args[++i] : "";
-      if (paper == "a4" || paper == "A4")
-        parsed.options.paper = report::PaperSize::A4;
-      else if (paper == "letter" || paper == "Letter")
-        parsed.options.paper = report::PaperSize::Letter;
-      else
-        return "--paper needs a4 or letter";
+      if (!pdf->empty())
+        return pdf;
     }
     else if (a == "--reviewer")
     {
       if (!hasValue)
         return "--reviewer needs a name";
       parsed.options.reviewer = args[++i];
-    }
-    else if (a == "--date")
-    {
-      const std::string date = hasValue ? args[++i] : "";
-      if (date.size() != 10 || date[4] != '-' || date[7] != '-')
-        return "--date needs a date as YYYY-MM-DD";
-      parsed.options.date = date;
     }
     else if (!a.empty() && a[0] == '-')
       return "unknown option " + a;

@@ -9,13 +9,12 @@
 #include <string>
 #include <vector>
 
-#include <vtkDoubleArray.h>
 #include <vtkImageData.h>
-#include <vtkPointData.h>
 #include <vtkPolyData.h>
 
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapPreview.h"
+#include "modules/rangemap/ThicknessReview.h"
 #include "modules/report/PlanFigures.h"
 #include "modules/report/PlanReport.h"
 #include "modules/segment/SegmentLogic.h"
@@ -310,19 +309,9 @@ std::optional<QImage> paintedFace(Scene& scene, const Review& r, double dpi)
   if (!head || r.radial.empty())
     return std::nullopt;
   const seg::CylindricalFrame& frame = r.radial.frame();
-  auto painted = vtkSmartPointer<vtkPolyData>::New();
-  painted->ShallowCopy(head);
-  auto values = vtkSmartPointer<vtkDoubleArray>::New();
-  values->SetName("thickness_mm");
-  values->SetNumberOfValues(head->GetNumberOfPoints());
-  for (vtkIdType i = 0; i < head->GetNumberOfPoints(); ++i)
-  {
-    double x[3];
-    head->GetPoint(i, x);
-    const seg::CylindricalPoint c = frame.toCylindrical(Eigen::Vector3d(x[0], x[1], x[2]));
-    values->SetValue(i, r.radial.sample(c.theta, c.z));
-  }
-  painted->GetPointData()->AddArray(values);
+  // The Range maps panel's painting (its "thickness_mm"), radial.
+  const vtkSmartPointer<vtkPolyData> painted =
+    ThicknessReview(r.skin, r.bone, r.radial, r.normal).paintThickness(head, ThicknessMeasure::Radial);
   render::Figure figure;
   figure.printWidthMm = 120.0;
   figure.width = pixels(figure.printWidthMm, dpi);
@@ -401,7 +390,9 @@ void addMethod(ReportDocument& doc, const Review& r)
                 "rules are in the software's segmentation/LandmarkPlacement.h). A landmark is placed only where "
                 "its anatomy is in the scan: when the face's most prominent point is not a nose (it stands less "
                 "than 8 mm in front of the skin beside it or above it, or lies at the edge of the scan) no "
-                "landmark is placed, since every rule starts from the nose tip.");
+                "landmark is placed, since every rule starts from the nose tip. Metal and undiluted contrast: "
+                "connected voxels at 3000 HU and above (4 or more); the slices within 5 mm of them are spoiled "
+                "by their streaks, and a landmark there is listed to be checked on the slices.");
 }
 
 } // namespace
