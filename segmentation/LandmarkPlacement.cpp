@@ -126,8 +126,13 @@ std::string whyNotANose(const RangeMap& skin, const std::vector<double>& p, int 
            " mm): the scan ends above the nose";
   if (frame.indexToZ(highest) - zTip < kEdgeMargin)
     return "the most prominent point of the face's profile is at the upper edge of the scan (z = " + mm(zTip) + " mm)";
-  const double beside =
-    std::max(midlineProfile(skin, kFrontTheta - kBeside, 1)[tip], midlineProfile(skin, kFrontTheta + kBeside, 1)[tip]);
+  // The lower of the two sides: on a head turned a little on the table one
+  // side of the nose is nearer the midline, but the other is cheek.
+  const double right = midlineProfile(skin, kFrontTheta - kBeside, 1)[tip];
+  const double left = midlineProfile(skin, kFrontTheta + kBeside, 1)[tip];
+  const double beside = std::isfinite(right) && std::isfinite(left) ? std::min(right, left)
+                        : std::isfinite(right)                      ? right
+                                                                    : left;
   if (std::isfinite(beside) && p[tip] - beside < kSmallestNose)
     return "the most prominent point of the face's profile (z = " + mm(zTip) + " mm) stands only " +
            mm(p[tip] - beside) + " mm in front of the skin 20 degrees beside it, less than a nose (" +

@@ -14,8 +14,8 @@
 /// - pronasale (reliable): the largest p in the upper two thirds of the rows
 ///   (below lie the neck and the shoulders, which can reach further out),
 ///   if it is a nose: at least 5 mm inside the scan's rows of skin, and at
-///   least 8 mm in front of the skin 20° beside it and of the profile 10 to
-///   50 mm above it (a nose stands 15-30 mm out; a brow or a forehead, the
+///   least 8 mm in front of the skin 20° beside it (the lower side: a head
+///   turned a little has cheek there) and of the profile 10 to 50 mm above it (a nose stands 15-30 mm out; a brow or a forehead, the
 ///   most prominent point of a scan cut above the nose, a few mm). Otherwise
 ///   the nose is not in the scan, and neither is any landmark below: every
 ///   rule here starts from the nose tip, so none is placed, each listed as

@@ -178,7 +178,7 @@ TEST(SampleThickness, ForeheadCheeksAndChinArePlausible)
   ASSERT_GE(chin, 0) << "no chin found below the nose tip";
   // How clearly the nose tip is a nose (seg::placeLandmarks refuses one that
   // stands less than 8 mm in front of the skin 20° beside it).
-  const double beside = std::max(caps::seg::midlineProfile(skinMap, front - 20.0 * kPi / 180.0, 1)[nose],
+  const double beside = std::min(caps::seg::midlineProfile(skinMap, front - 20.0 * kPi / 180.0, 1)[nose],
                                  caps::seg::midlineProfile(skinMap, front + 20.0 * kPi / 180.0, 1)[nose]);
   std::printf("[ nose     ] the tip stands %.1f mm in front of the skin 20 deg beside it\n", profile[nose] - beside);
   EXPECT_GT(profile[nose] - beside, 8.0);

@@ -254,6 +254,20 @@ TEST(LandmarkPlacement, AScanThatEndsAtTheNoseTipPlacesNoFaceLandmark)
   EXPECT_NE(placed.features.noseMissing.find("edge of the scan"), std::string::npos) << placed.features.noseMissing;
 }
 
+TEST(LandmarkPlacement, ANoseOnAHeadTurnedALittleIsStillANose)
+{
+  // The stylised head turned 10° to its left on the table: the nose stands
+  // 10° from the midline, so one side 20° from the midline is beside the
+  // nose and the other is cheek.
+  const CylindricalFrame frame = StylisedHead::frame();
+  const double turn = 10 * kDeg;
+  const LandmarkPlacement placed =
+    placeLandmarks(fillMap(frame, [turn](double theta, double z) { return StylisedHead::skin(theta - turn, z); }));
+  EXPECT_TRUE(placed.features.noseMissing.empty()) << placed.features.noseMissing;
+  ASSERT_NE(placed.find("pronasale"), nullptr);
+  EXPECT_NEAR(placed.find("pronasale")->z, 0.0, 1.0);
+}
+
 TEST(LandmarkPlacement, ALandmarkBeyondTheScanIsListedAsNotInTheScan)
 {
   // The scan ends 60 mm above the nose tip: the forehead landmark (75 mm
