@@ -6,6 +6,8 @@
 // own names into it.
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <unistd.h>
 
@@ -14,6 +16,28 @@
 #include "app/RunProcess.h"
 
 namespace caps::test {
+
+/// The caps executable run with @a args (a shell command line's words).
+inline ProcessResult runCaps(const std::string& args)
+{
+  return runProcess(quoted(CAPS_EXECUTABLE) + " " + args);
+}
+
+/// A whole file, as bytes.
+inline std::string fileText(const std::filesystem::path& file)
+{
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// A PDF's text as poppler's pdftotext lays it out (pages separated by form feeds).
+inline std::string pdfText(const std::filesystem::path& pdf)
+{
+  const std::filesystem::path text = pdf.string() + ".txt";
+  const auto r = runProcess("pdftotext -layout " + quoted(pdf.string()) + " " + quoted(text.string()));
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  return fileText(text);
+}
 
 inline const std::filesystem::path& reportDemoFolder()
 {

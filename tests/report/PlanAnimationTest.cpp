@@ -40,15 +40,11 @@
 
 namespace fs = std::filesystem;
 using caps::test::quoted;
+using caps::test::runCaps;
 namespace report = caps::report;
 namespace render = caps::render;
 
 namespace {
-
-caps::test::ProcessResult runCaps(const std::string& args)
-{
-  return caps::test::runProcess(quoted(CAPS_EXECUTABLE) + " " + args);
-}
 
 const fs::path& demoFolder()
 {
