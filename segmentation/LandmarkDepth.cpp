@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
+#include <Eigen/QR>
 #include <vtkImageData.h>
 
 #include <algorithm>
@@ -18,6 +19,66 @@ namespace caps::seg {
 namespace {
 
 constexpr double kAirHu = -1000.0;
+
+/// The normal of the plane through @a points (total least squares), on the
+/// side of @a towards.
+Eigen::Vector3d planeNormal(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& towards)
+{
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& q : points)
+    mean += q;
+  mean /= double(points.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& q : points)
+    scatter += (q - mean) * (q - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+  const Eigen::Vector3d fitted = eig.eigenvectors().col(0);
+  return fitted.dot(towards) < 0.0 ? Eigen::Vector3d(-fitted) : fitted;
+}
+
+/// The normal at @a at of the polynomial height function h(u, v) fitted by
+/// least squares to @a points over the plane through @a at spanned by @a t1,
+/// @a t2 (heights along @a n): an osculating jet (Cazals and Pouget 2005,
+/// "Estimating differential quantities using polynomial fitting of
+/// osculating jets"). On a grid symmetric about the point a jet of degree d
+/// gives a slope exact on any patch of degree d + 1, where the plane through
+/// the points of a curved patch (total least squares) leans with the
+/// curvature and its change: by 5 degrees 1 mm beside the apex of a lip,
+/// over +-2 mm. Degree 3 with 40 points or more (its slope noise over 7 x 7
+/// crossings is a plane's over 5 x 5), 2 with 12, else the plane. A point
+/// more than 0.5 mm off the fit is the crossing of another surface (the ala
+/// beside the cheek): the worst is left out and the jet fitted again.
+Eigen::Vector3d jetNormal(std::vector<Eigen::Vector3d> points, const Eigen::Vector3d& at, const Eigen::Vector3d& n,
+                          const Eigen::Vector3d& t1, const Eigen::Vector3d& t2)
+{
+  constexpr double kOffTheSkin = 0.5; // mm
+  const std::size_t kept = points.size() / 2;
+  while (points.size() >= 12)
+  {
+    const int terms = points.size() >= 40 ? 10 : 6;
+    Eigen::MatrixXd design(points.size(), terms);
+    Eigen::VectorXd height(points.size());
+    for (std::size_t k = 0; k < points.size(); ++k)
+    {
+      const Eigen::Vector3d d = points[k] - at;
+      const double u = d.dot(t1), v = d.dot(t2);
+      const double row[10] = {1.0, u, v, u * u, u * v, v * v, u * u * u, u * u * v, u * v * v, v * v * v};
+      for (int c = 0; c < terms; ++c)
+        design(Eigen::Index(k), c) = row[c];
+      height(Eigen::Index(k)) = d.dot(n);
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(design);
+    if (qr.rank() < terms)
+      break;
+    const Eigen::VectorXd c = qr.solve(height);
+    Eigen::Index worst = 0;
+    const double worstResidual = (design * c - height).cwiseAbs().maxCoeff(&worst);
+    if (worstResidual <= kOffTheSkin || points.size() <= kept)
+      return (n - c(1) * t1 - c(2) * t2).normalized();
+    points.erase(points.begin() + worst);
+  }
+  return planeNormal(points, n);
+}
 
 } // namespace
 
@@ -43,7 +104,10 @@ DepthConvention depthConventionOf(const std::string& landmarkName)
   // Under the chin and at the jaw's angle the skin normal runs along the
   // bone's curved edge rather than into it; the CT studies measure these to
   // the bony landmark, the nearest bone.
-  if (landmarkName == "menton" || landmarkName == "gonion_left" || landmarkName == "gonion_right")
+  // At the rhinion the bone ends: the line perpendicular to the skin meets
+  // its edge or passes it, and the CT studies measure to the bone's end.
+  if (landmarkName == "menton" || landmarkName == "gonion_left" || landmarkName == "gonion_right" ||
+      landmarkName == "rhinion")
     return DepthConvention::NearestBone;
   return DepthConvention::SkinNormal;
 }
@@ -104,6 +168,18 @@ bool BoneDepthProbe::maskTouches(const Eigen::Vector3d& index) const
   return false;
 }
 
+bool BoneDepthProbe::goesIntoBone(const Eigen::Vector3d& world, const Eigen::Vector3d& direction) const
+{
+  const double h = 0.5 * geometry_.spacing.maxCoeff();
+  Eigen::Vector3d gradient;
+  for (int a = 0; a < 3; ++a)
+  {
+    const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(a);
+    gradient[a] = hu(world + e) - hu(world - e);
+  }
+  return gradient.dot(direction) >= 0.5 * gradient.norm() * direction.norm() && gradient.norm() > 0.0;
+}
+
 double BoneDepthProbe::huAtIndex(const Eigen::Vector3d& index) const
 {
   const double x = index.x(), y = index.y(), z = index.z();
@@ -148,8 +224,11 @@ double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector
   // (metal, contrast) is passed through. A thin wall (the maxillary sinus's,
   // under a millimetre) is in the mask but its HU between the voxel centres
   // stays under the threshold: where the line comes within a voxel of the
-  // mask without a rise within two voxels, the edge of the first mask voxel
-  // it enters is taken (to half a voxel), as the range maps do.
+  // mask, going into it, without a rise within two voxels, the edge of the
+  // first mask voxel it enters is taken (to half a voxel), as the range maps
+  // do. Going into it: within 60 degrees of the HU's gradient there. A line
+  // passing along a bone just outside it (under the chin, grazing the
+  // mandible's lower edge) goes on.
   auto bisect = [&](double outside, double inside, auto&& in) {
     for (int it = 0; it < 30; ++it)
     {
@@ -175,7 +254,7 @@ double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector
       if (maskTouches(index(crossing + 2.0 * step)))
         return found(crossing);
     }
-    else if (maskTouches(index(t)))
+    else if (maskTouches(index(t)) && goesIntoBone(from + t * d, d))
     {
       // Within two voxels: a HU rise, else the first voxel of the mask
       // itself (its edge between voxel centres), else this place.
@@ -280,8 +359,8 @@ Eigen::Vector3d BoneDepthProbe::skinNormal(const Eigen::Vector3d& skinPoint) con
   if (!(normal.norm() > 0.0))
     return none;
   normal.normalize();
-  // Then the skin itself: the skin crossings on a 5 x 5 grid of lines along
-  // the normal (+-2 mm around the point) and the plane through them, twice.
+  // Then the skin itself: the skin crossings on a 7 x 7 grid of lines along
+  // the normal (+-3 mm around the point) and the jet fitted to them, twice.
   // A gradient of a partial-volume ramp sampled on thick slices leans by a
   // few degrees towards the grid; the crossings lie on the surface.
   constexpr double kSpacing = 1.0, kReach = 4.0, kStep = 0.1;
@@ -289,8 +368,8 @@ Eigen::Vector3d BoneDepthProbe::skinNormal(const Eigen::Vector3d& skinPoint) con
   {
     const Eigen::Vector3d t1 = normal.unitOrthogonal(), t2 = normal.cross(t1);
     std::vector<Eigen::Vector3d> points;
-    for (int a = -2; a <= 2; ++a)
-      for (int b = -2; b <= 2; ++b)
+    for (int a = -3; a <= 3; ++a)
+      for (int b = -3; b <= 3; ++b)
       {
         const Eigen::Vector3d base = skinPoint + kSpacing * (a * t1 + b * t2);
         auto inside = [&](double t) { return hu(base + t * normal) >= skinThreshold_; };
@@ -309,18 +388,35 @@ Eigen::Vector3d BoneDepthProbe::skinNormal(const Eigen::Vector3d& skinPoint) con
       }
     if (points.size() < 9)
       break; // too little skin around the point: keep the gradient's normal
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const auto& q : points)
-      mean += q;
-    mean /= double(points.size());
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (const auto& q : points)
-      scatter += (q - mean) * (q - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-    Eigen::Vector3d fitted = eig.eigenvectors().col(0);
-    normal = fitted.dot(normal) < 0.0 ? Eigen::Vector3d(-fitted) : fitted;
+    normal = jetNormal(points, skinPoint, normal, t1, t2);
   }
   return normal;
+}
+
+Eigen::Vector3d BoneDepthProbe::ontoSkin(const Eigen::Vector3d& point, const Eigen::Vector3d& inwardNormal) const
+{
+  // The skin crossing (air to tissue, walking inward) on the line through
+  // the point along the normal nearest the point, within 4 mm.
+  constexpr double kReach = 4.0;
+  const double step = 0.1 * geometry_.spacing.minCoeff();
+  auto inside = [&](double t) { return hu(point + t * inwardNormal) >= skinThreshold_; };
+  auto crossingIn = [&](double a, double b) -> double {
+    if (inside(a) || !inside(b))
+      return RangeMap::quietNaN();
+    for (int it = 0; it < 30; ++it)
+    {
+      const double mid = 0.5 * (a + b);
+      (inside(mid) ? b : a) = mid;
+    }
+    return 0.5 * (a + b);
+  };
+  for (double s = 0.0; s < kReach; s += step)
+  {
+    for (const double t : {crossingIn(s, s + step), crossingIn(-s - step, -s)})
+      if (std::isfinite(t))
+        return point + t * inwardNormal;
+  }
+  return point;
 }
 
 BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
@@ -328,15 +424,27 @@ BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
   BoneDepth out;
   if (!skinPoint.allFinite())
     return out;
+  // From the skin itself: a map's skin point where its ray grazes the skin
+  // (under the chin) can lie half a millimetre off it. Within a quarter of a
+  // voxel the point is on the skin as far as the CT can tell, and stays.
   out.skinPoint = skinPoint;
   out.inwardNormal = skinNormal(skinPoint);
   if (out.inwardNormal.allFinite())
-    out.alongSkinNormal = alongRay(skinPoint, out.inwardNormal, &out.boneAlongNormal);
+  {
+    const Eigen::Vector3d onSkin = ontoSkin(skinPoint, out.inwardNormal);
+    if ((onSkin - skinPoint).norm() > 0.25 * geometry_.spacing.minCoeff())
+    {
+      const Eigen::Vector3d normal = skinNormal(onSkin);
+      if (normal.allFinite())
+        out.skinPoint = onSkin, out.inwardNormal = normal;
+    }
+    out.alongSkinNormal = alongRay(out.skinPoint, out.inwardNormal, &out.boneAlongNormal);
+  }
   // The nearest bone is no farther than the bone along the normal; the
   // search reaches a voxel past it, for the surface's discretisation.
   const bool alongFound = std::isfinite(out.alongSkinNormal);
   const double radius = alongFound ? out.alongSkinNormal + geometry_.spacing.norm() : searchDistance_;
-  out.toNearestBone = toNearest(skinPoint, radius, &out.nearestBone);
+  out.toNearestBone = toNearest(out.skinPoint, radius, &out.nearestBone);
   if (alongFound && !(out.toNearestBone <= out.alongSkinNormal))
   {
     out.toNearestBone = out.alongSkinNormal;

@@ -53,6 +53,8 @@ DepthConvention depthConventionOf(const std::string& landmarkName);
 /// Where the bone is from one skin point.
 struct BoneDepth
 {
+  /// Where both are measured from: the point asked for, moved along the
+  /// skin's normal onto the CT's skin (ontoSkin()).
   Eigen::Vector3d skinPoint = Eigen::Vector3d::Constant(RangeMap::quietNaN());
   /// Inward unit normal of the skin at skinPoint, from the CT's gradient.
   Eigen::Vector3d inwardNormal = Eigen::Vector3d::Constant(RangeMap::quietNaN());
@@ -84,8 +86,9 @@ public:
   BoneDepth measure(const Eigen::Vector3d& skinPoint) const;
 
   /// The inward normal of the skin at @a skinPoint, at the CT's resolution:
-  /// the plane fitted to the skin's HU crossings within 2 mm of the point
-  /// (started from the HU gradient); NaN where the CT has no skin edge there.
+  /// the polynomial surface (a cubic jet) fitted to the skin's HU crossings
+  /// within 3 mm of the point (started from the HU gradient); NaN where the
+  /// CT has no skin edge there.
   Eigen::Vector3d skinNormal(const Eigen::Vector3d& skinPoint) const;
 
   /// Distance along the unit @a direction from @a from to the first bone
@@ -97,6 +100,10 @@ public:
   /// @a radius (mm; at most the search distance); NaN if none. @a hit gets it.
   double toNearest(const Eigen::Vector3d& from, double radius, Eigen::Vector3d* hit = nullptr) const;
 
+  /// The skin crossing nearest @a point on the line through it along the
+  /// unit @a inwardNormal (within 4 mm); @a point itself where there is none.
+  Eigen::Vector3d ontoSkin(const Eigen::Vector3d& point, const Eigen::Vector3d& inwardNormal) const;
+
   /// The HU at a world point (trilinear; -1000 outside the CT).
   double hu(const Eigen::Vector3d& world) const;
 
@@ -107,6 +114,9 @@ private:
   bool inMask(int i, int j, int k) const;
   bool inMask(const Eigen::Vector3d& index) const;      ///< the nearest voxel
   bool maskTouches(const Eigen::Vector3d& index) const; ///< any voxel of the trilinear cell
+  /// Whether a line along @a direction at @a world heads into the bone:
+  /// within 60 degrees of the HU's gradient.
+  bool goesIntoBone(const Eigen::Vector3d& world, const Eigen::Vector3d& direction) const;
   double huAtIndex(const Eigen::Vector3d& index) const;
 
   vtkImageData* ct_;
