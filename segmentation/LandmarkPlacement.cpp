@@ -1,5 +1,7 @@
 #include "segmentation/LandmarkPlacement.h"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -35,6 +37,57 @@ int extremum(const std::vector<double>& p, const CylindricalFrame& frame, double
     if (std::isfinite(p[j]) && (best < 0 || sign * p[j] > sign * p[best]))
       best = j;
   return best;
+}
+
+/// z of the apex of the profile @a p near row @a j: the vertex of the
+/// parabola fitted by least squares to the raw profile over rows j - 2 ..
+/// j + 2 (a row more than 1 mm off the fit, a glitch, left out once), where
+/// it bends the right way (@a sign +1 a maximum) and lies within two rows of
+/// j; else z_j. Rows are 0.8 mm apart on a 256-row map, and the running
+/// median that finds a feature shifts it on uneven slopes: half a row off
+/// the apex of a lip, its skin normal leans by 10 degrees and its depth
+/// perpendicular to the skin changes by half a millimetre.
+double apexZ(const std::vector<double>& p, const CylindricalFrame& frame, int j, double sign)
+{
+  if (j < 0)
+    return nan;
+  std::vector<int> rows;
+  for (int k = j - 2; k <= j + 2; ++k)
+    if (k >= 0 && k < static_cast<int>(p.size()) && std::isfinite(p[k]))
+      rows.push_back(k);
+  for (int attempt = 0; attempt < 2 && rows.size() >= 4; ++attempt)
+  {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (int k : rows)
+    {
+      const Eigen::Vector3d basis(1.0, k - j, double(k - j) * (k - j));
+      normal += basis * basis.transpose();
+      rhs += basis * p[k];
+    }
+    const Eigen::Vector3d c = normal.ldlt().solve(rhs);
+    std::size_t worst = 0;
+    double worstResidual = 0.0;
+    for (std::size_t r = 0; r < rows.size(); ++r)
+    {
+      const double x = rows[r] - j;
+      const double residual = std::abs(p[rows[r]] - (c(0) + c(1) * x + c(2) * x * x));
+      if (residual > worstResidual)
+        worstResidual = residual, worst = r;
+    }
+    if (worstResidual > 1.0)
+    {
+      rows.erase(rows.begin() + static_cast<std::ptrdiff_t>(worst));
+      continue;
+    }
+    if (!(sign * c(2) < 0.0))
+      break;
+    const double vertex = -c(1) / (2.0 * c(2));
+    if (std::abs(vertex) <= 2.0)
+      return frame.indexToZ(j) + vertex * frame.zStep();
+    break;
+  }
+  return frame.indexToZ(j);
 }
 
 /// Running median of 2 · half + 1 rows (fewer at the ends; NaN ignored).
@@ -81,13 +134,16 @@ LateralPoint widest(const RangeMap& map, double zLow, double zHigh, double fromF
     const double theta = theta0 + side * s * frame.thetaStep();
     const int i = static_cast<int>(std::lround(frame.thetaToIndex(theta))) % frame.nTheta();
     const double t = frame.indexToTheta(i);
-    for (int j = jLow; j <= jHigh; ++j)
+    // Only where the width peaks along z inside the band: a widest point at
+    // the band's end is where the band cuts a bone that grows wider beyond
+    // it (the maxilla above the jaw), not the feature.
+    auto width = [&](int j) { return map.at(i, j) * std::abs(std::cos(t)); };
+    for (int j = jLow + 1; j < jHigh; ++j)
     {
-      const double r = map.at(i, j);
-      const double width = r * std::abs(std::cos(t));
-      if (std::isfinite(r) && width > bestWidth)
+      const double w = width(j);
+      if (std::isfinite(w) && w > bestWidth && w >= width(j - 1) && w >= width(j + 1))
       {
-        bestWidth = width;
+        bestWidth = w;
         best = {t, frame.indexToZ(j)};
       }
     }
@@ -170,12 +226,31 @@ double besideTheMidline(const RangeMap& skin, double z, double offset, int side)
   return nan;
 }
 
+/// z of the rhinion, the lower end of the nasal bones, on the bone map's
+/// midline: walking down from the nasion's height towards the nose tip's,
+/// the last row before the bone falls back by more than 5 mm (the ray
+/// passes the bones' end into the nasal cavity and meets the maxilla or
+/// nothing). NaN where the bone does not end between them.
+double rhinionZ(const RangeMap& bone, double zNasion, double zTip)
+{
+  if (bone.empty() || !(zNasion > zTip))
+    return nan;
+  constexpr double kFallsBack = 5.0; // mm
+  const CylindricalFrame& frame = bone.frame();
+  const std::vector<double> b = midlineProfile(bone, kFrontTheta, 1);
+  const int top = rowOf(frame, zNasion), bottom = rowOf(frame, zTip);
+  for (int j = top; j > bottom; --j)
+    if (std::isfinite(b[j]) && !(b[j - 1] >= b[j] - kFallsBack))
+      return j == top ? nan : frame.indexToZ(j);
+  return nan;
+}
+
 /// How far a landmark's rule can be trusted (this file's header comment).
 const char* confidenceOf(std::string_view name)
 {
   if (name == "pronasale" || name == "pogonion" || name == "nasion" || name == "glabella" || name == "forehead")
     return "reliable";
-  if (name.starts_with("zygion") || name.starts_with("gonion"))
+  if (name.starts_with("zygion") || name.starts_with("gonion") || name == "rhinion" || name == "mid_nasal")
     return "approximate";
   return "fair";
 }
@@ -261,6 +336,27 @@ ProfileFeatures findProfileFeatures(const RangeMap& skin, int halfColumns)
     f.labraleSuperius = extremum(q, frame, zSn - 0.45 * d, zSn - frame.zStep(), +1.0);
     f.labraleInferius = extremum(q, frame, zPog + 0.25 * d, zSn - 0.45 * d, +1.0);
   }
+  // Supraglabella: the deepest point of the concavity above the glabella,
+  // where the forehead comes forward again (at least 0.5 mm) above it
+  // within 25 mm; a forehead that only recedes has none.
+  if (f.glabella >= 0)
+  {
+    const int top = rowOf(frame, z(f.glabella) + 25.0);
+    const int j = extremum(q, frame, z(f.glabella) + frame.zStep(), z(top), -1.0);
+    double above = -std::numeric_limits<double>::infinity();
+    for (int k = j + 1; j >= 0 && k <= top; ++k)
+      if (std::isfinite(q[k]))
+        above = std::max(above, q[k]);
+    if (j >= 0 && above - q[j] >= 0.5)
+      f.supraglabella = j;
+  }
+  // Sublabiale: the deepest point of the fold between the lower lip and the chin.
+  if (f.labraleInferius >= 0 && f.pogonion >= 0)
+  {
+    const int j = extremum(q, frame, z(f.pogonion) + frame.zStep(), z(f.labraleInferius) - frame.zStep(), -1.0);
+    if (j >= 0 && q[j] < q[f.labraleInferius] && q[j] < q[f.pogonion])
+      f.sublabiale = j;
+  }
   // Menton: walking down from the pogonion, where p crosses half-way to the jaw underside.
   if (f.pogonion >= 0)
   {
@@ -293,8 +389,11 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   const ProfileFeatures& f = result.features;
   const CylindricalFrame& frame = skin.frame();
   auto z = [&frame](int j) { return j >= 0 ? frame.indexToZ(j) : nan; };
-  const double zPrn = z(f.pronasale), zN = z(f.nasion), zSn = z(f.subnasale);
-  const double zLs = z(f.labraleSuperius);
+  // The profile's features at their apexes, between rows.
+  const auto apex = [&](int j, double sign) { return apexZ(f.profile, frame, j, sign); };
+  const double zPrn = apex(f.pronasale, +1), zN = apex(f.nasion, -1), zSn = apex(f.subnasale, -1);
+  const double zLs = apex(f.labraleSuperius, +1), zLi = apex(f.labraleInferius, +1);
+  const double zG = apex(f.glabella, +1), zPog = apex(f.pogonion, +1);
 
   // Lateral landmarks: on the bone map when there is one.
   const RangeMap& lateral = bone.empty() ? skin : bone;
@@ -318,15 +417,24 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   const double cheekLeft = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, +1) : nan;
   const double cheekRight = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, -1) : nan;
   const char* noJaw = "no jaw underside (profile below 60 % of the nose tip) below the nose tip";
+  const double zRhinion = rhinionZ(bone, zN, zPrn);
+  const char* noRhinion = bone.empty() ? "the nasal bones are read on the bone range map, and there is none"
+                                       : "the bone on the midline does not end between the nasion and the nose tip "
+                                         "(no nasal bones on the bone map, or a bone map with a hole at the nasion)";
   const Candidate candidates[] = {
-    {front, z(f.glabella), "no nasion 10-50 mm above the nose tip"},
+    {front, apex(f.supraglabella, -1),
+     "the forehead does not come forward again within 25 mm above the glabella: no concavity above it"},
+    {front, zG, "no nasion 10-50 mm above the nose tip"},
     {front, zN, "no finite profile 10-50 mm above the nose tip"},
+    {front, 0.5 * (zN + zRhinion), noRhinion},
+    {front, zRhinion, noRhinion},
     {front, zPrn, ""},
     {front, zSn, "no local minimum of the profile 5 mm behind and below the nose tip"},
     {front, 0.5 * (zSn + zLs), "no subnasale or labrale superius"},
     {front, zLs, "no subnasale or pogonion"},
-    {front, z(f.labraleInferius), "no subnasale or pogonion"},
-    {front, z(f.pogonion), noJaw},
+    {front, zLi, "no subnasale or pogonion"},
+    {front, apex(f.sublabiale, -1), "no fold between the lower lip and the chin on the profile"},
+    {front, zPog, noJaw},
     {front, f.mentonZ, "no pogonion, or the profile does not cross half-way from it to the jaw underside"},
     {zyL.theta, zyL.z, "no finite sample beside the face between the nose tip and the nasion"},
     {zyR.theta, zyR.z, "no finite sample beside the face between the nose tip and the nasion"},

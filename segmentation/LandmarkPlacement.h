@@ -28,6 +28,18 @@
 ///   r, so "the local maximum below the lips" is not stable; the jaw is.)
 /// - nasion (reliable): the smallest p 10 to 50 mm above the pronasale.
 /// - glabella (reliable): the largest p up to 25 mm above the nasion.
+/// - supraglabella (fair): the smallest p up to 25 mm above the glabella,
+///   where the profile comes forward again by 0.5 mm above it (the deepest
+///   point of the concavity above the glabella; Rhine and Campbell 1980).
+///   A forehead that only recedes has none: not found.
+/// - rhinion (approximate; needs the bone map): the lower end of the nasal
+///   bones. On the bone map's midline, walking down from the nasion's height
+///   to the nose tip's, the last row before the bone falls back by more than
+///   5 mm (the ray then passes into the nasal cavity); placed on the skin at
+///   that height. Thin nasal bones the segmentation loses put it too high.
+/// - mid-nasal (approximate): half-way in z from the nasion to the rhinion.
+/// - sublabiale (fair): the smallest p between the labrale inferius and the
+///   pogonion (the labiomental fold: the tables' chin-lip fold).
 /// - forehead (reliable as a place; not anatomical): 75 mm above the
 ///   pronasale, above the glabella and below the hairline.
 /// - menton (fair): where p, walking down from the pogonion to the jaw
@@ -55,6 +67,9 @@
 ///   the bone map (the skin map without one) for z from the menton up to the
 ///   subnasale (menton + 40 mm without one) and θ 30° to 95° from the front:
 ///   the mandible's angle is its widest part below the condyles.
+/// The midline features found on rows (pronasale, nasion, glabella,
+/// supraglabella, subnasale, the lips, sublabiale, pogonion) are placed at their apexes between rows:
+/// the vertex of a parabola fitted to the raw profile over five rows.
 /// Left is patient left: θ > -π/2 (towards θ = 0).
 
 #include <string>
@@ -84,6 +99,8 @@ struct ProfileFeatures
   int subnasale = -1;
   int labraleSuperius = -1;
   int labraleInferius = -1;
+  int supraglabella = -1;
+  int sublabiale = -1;
   /// z of the menton (mm, between rows); NaN where not found.
   double mentonZ = RangeMap::quietNaN();
   /// Why the profile's most prominent point is not a nose tip (at the edge

@@ -64,13 +64,17 @@ std::string trim(const std::string& s)
 const std::vector<LandmarkDefinition>& standardLandmarks()
 {
   static const std::vector<LandmarkDefinition> definitions = {
+    {"supraglabella", "Deepest point of the concavity of the forehead above the glabella, on the midline."},
     {"glabella", "Most prominent point of the forehead between the eyebrows, on the midline."},
     {"nasion", "Deepest point of the soft-tissue profile between the forehead and the nose."},
+    {"mid_nasal", "On the nasal dorsum half-way from the nasion to the rhinion, on the midline."},
+    {"rhinion", "Skin over the lower end of the nasal bones (the bony rhinion), on the midline."},
     {"pronasale", "Nose tip: the most anterior point of the nose."},
     {"subnasale", "Where the columella of the nose meets the upper lip, on the midline."},
     {"mid_philtrum", "Middle of the philtrum, half-way from the subnasale to the upper lip."},
     {"labrale_superius", "Most anterior point of the upper lip on the midline."},
     {"labrale_inferius", "Most anterior point of the lower lip on the midline."},
+    {"sublabiale", "Deepest point of the fold between the lower lip and the chin (the tables' chin-lip fold)."},
     {"pogonion", "Chin: the most anterior point of the soft-tissue chin."},
     {"menton", "Lowest point of the soft-tissue chin on the midline."},
     {"zygion_left", "Most lateral point of the skin over the left zygomatic arch."},

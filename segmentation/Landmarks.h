@@ -33,9 +33,10 @@ struct LandmarkDefinition
 };
 
 /// The standard landmarks, in the order placeLandmarks() returns them:
-/// glabella, nasion, pronasale, subnasale, mid_philtrum, labrale_superius,
-/// labrale_inferius, pogonion, menton, zygion_left/right, gonion_left/right,
-/// mid_cheek_left/right, forehead.
+/// supraglabella, glabella, nasion, mid_nasal, rhinion, pronasale, subnasale,
+/// mid_philtrum, labrale_superius, labrale_inferius, sublabiale, pogonion,
+/// menton, zygion_left/right, gonion_left/right, mid_cheek_left/right,
+/// forehead.
 const std::vector<LandmarkDefinition>& standardLandmarks();
 
 /// The description of a standard landmark, or "" for a name that is not one.

@@ -39,15 +39,20 @@ inline RangeMap fillMap(const CylindricalFrame& frame, const std::function<doubl
 /// head r = 80, neck r = 50 below a sharp step at z = -72 (the underside of
 /// the chin: menton); on the front (weight falling off with σ = 12° from
 /// θ = -90°) Gaussian bumps and dips: nose tip +22 at z = 0, nasion -6 at 30,
-/// glabella +4 at 42, subnasale -4 at -16, upper lip +6 at -24, stomion -3 at
-/// -32, lower lip +5 at -40, chin +8 at -62.
+/// glabella +4 at 42, a concavity -2 above it at 56 (supraglabella),
+/// subnasale -4 at -16, upper lip +6 at -24, stomion -3 at -32, lower lip +5
+/// at -40, chin +8 at -62.
 struct StylisedHead
 {
-  static constexpr double zNasion = 30, zGlabella = 42, zSubnasale = -16, zLabraleSuperius = -24,
+  static constexpr double zNasion = 30, zGlabella = 42, zSupraglabella = 56, zSubnasale = -16, zLabraleSuperius = -24,
                           zLabraleInferius = -40, zPogonion = -62, zMenton = -72;
+  /// The nasal bones: a ridge on the front of the skull from the nasion's
+  /// height down to their end (the rhinion), standing out more the lower.
+  static constexpr double zRhinion = 12, nasalBone = 8;
   /// Bone: an ellipse (60 mm lateral, 70 mm front-back) with zygomatic arches
-  /// (+10 mm at 65° from the front, z = 15) and mandible angles (+10 mm at
-  /// 75° from the front, z = -55), none below z = -68 (the neck).
+  /// (+10 mm at 65° from the front, z = 15), mandible angles (+10 mm at 75°
+  /// from the front, z = -55) and the nasal bones (up to +8 mm on the front,
+  /// ending at z = 12), none below z = -68 (the neck).
   static constexpr double zygionFromFront = 65 * kDeg, zZygion = 15;
   static constexpr double gonionFromFront = 75 * kDeg, zGonion = -55;
 
@@ -56,8 +61,9 @@ struct StylisedHead
     const double base = 50.0 + 30.0 / (1.0 + std::exp(-(z - zMenton) / 1.0));
     const double w = gauss(angleFrom(theta, -kPi / 2), 0.0, 12 * kDeg);
     const double face = 22 * gauss(z, 0, 6) - 6 * gauss(z, zNasion, 4) + 4 * gauss(z, zGlabella, 5) -
-                        4 * gauss(z, zSubnasale, 3) + 6 * gauss(z, zLabraleSuperius, 3) - 3 * gauss(z, -32, 2) +
-                        5 * gauss(z, zLabraleInferius, 3) + 8 * gauss(z, zPogonion, 5);
+                        2 * gauss(z, zSupraglabella, 5) - 4 * gauss(z, zSubnasale, 3) +
+                        6 * gauss(z, zLabraleSuperius, 3) - 3 * gauss(z, -32, 2) + 5 * gauss(z, zLabraleInferius, 3) +
+                        8 * gauss(z, zPogonion, 5);
     return base + w * face;
   }
 
@@ -67,6 +73,8 @@ struct StylisedHead
       return std::nan("");
     const double c = std::cos(theta), s = std::sin(theta);
     double r = 1.0 / std::sqrt(c * c / (60.0 * 60.0) + s * s / (70.0 * 70.0));
+    if (z >= zRhinion && z <= zNasion)
+      r += nasalBone * gauss(angleFrom(theta, -kPi / 2), 0, 8 * kDeg) * (zNasion - z) / (zNasion - zRhinion);
     for (int side : {-1, 1})
     {
       r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * zygionFromFront), 0, 8 * kDeg) * gauss(z, zZygion, 5);

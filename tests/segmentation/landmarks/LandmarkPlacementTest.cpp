@@ -36,6 +36,16 @@ std::pair<double, double> analyticWidest(double zLow, double zHigh, double fromF
   return {bestTheta, bestZ};
 }
 
+// The z of the smallest skin radius on the front in [lo, hi], densely.
+double analyticProfileMinimum(double lo, double hi)
+{
+  double best = lo;
+  for (double z = lo; z <= hi; z += 0.01)
+    if (StylisedHead::skin(-kPi / 2, z) < StylisedHead::skin(-kPi / 2, best))
+      best = z;
+  return best;
+}
+
 class StylisedHeadPlacement : public ::testing::Test
 {
 protected:
@@ -58,7 +68,7 @@ RangeMap* StylisedHeadPlacement::bone_ = nullptr;
 TEST(StandardLandmarks, HaveUniqueNamesAndDescriptions)
 {
   const auto& all = standardLandmarks();
-  EXPECT_EQ(all.size(), 16u);
+  EXPECT_EQ(all.size(), 20u);
   for (std::size_t a = 0; a < all.size(); ++a)
   {
     EXPECT_FALSE(std::string(all[a].description).empty());
@@ -92,6 +102,14 @@ TEST_F(StylisedHeadPlacement, MidlineLandmarksAreWithinToleranceOfTheirFeatures)
     // lands within ~1 mm of its centre.
     {"menton", StylisedHead::zMenton, 2.0},
     {"forehead", 75.0, 1.0},
+    // The concavity above the glabella: the dip at 56 pulled up a little by
+    // the glabella's flank.
+    {"supraglabella", StylisedHead::zSupraglabella, 1.5},
+    // The last row of nasal bone, at or above its end (0.90 mm rows).
+    {"rhinion", StylisedHead::zRhinion + 0.45, 0.5},
+    {"mid_nasal", 0.5 * (StylisedHead::zNasion + StylisedHead::zRhinion), 1.5},
+    // Between the lower lip (-40) and the chin (-62).
+    {"sublabiale", analyticProfileMinimum(-58.0, -44.0), 1.0},
   };
   for (const Expected& e : expected)
   {
@@ -162,6 +180,16 @@ TEST_F(StylisedHeadPlacement, WithoutABoneMapTheMidlineIsTheSame)
   ASSERT_NE(skinOnly.find("zygion_left"), nullptr);
   EXPECT_GT(skinOnly.find("zygion_left")->theta, -kPi / 2);
   EXPECT_LT(skinOnly.find("gonion_right")->theta, -kPi / 2);
+  // The rhinion is the nasal bones' end: read on the bone map only.
+  for (const char* name : {"rhinion", "mid_nasal"})
+  {
+    EXPECT_EQ(skinOnly.find(name), nullptr) << name;
+    bool said = false;
+    for (const auto& w : skinOnly.warnings)
+      said =
+        said || (w.rfind(std::string(name) + " not found", 0) == 0 && w.find("bone range map") != std::string::npos);
+    EXPECT_TRUE(said) << name;
+  }
 }
 
 TEST(LandmarkPlacement, AFaceWithoutAJawGivesWarningsNotGuesses)
@@ -270,9 +298,9 @@ TEST(LandmarkPlacement, ANoseOnAHeadTurnedALittleIsStillANose)
 
 TEST(LandmarkPlacement, ALandmarkBeyondTheScanIsListedAsNotInTheScan)
 {
-  // The scan ends 60 mm above the nose tip: the forehead landmark (75 mm
+  // The scan ends 70 mm above the nose tip: the forehead landmark (75 mm
   // above it) is not in the scan; the face below it all is.
-  const LandmarkPlacement placed = placeOnScanOf(-120.0, 60.0);
+  const LandmarkPlacement placed = placeOnScanOf(-120.0, 70.0);
   const LandmarkStatus& forehead = statusOf(placed, "forehead");
   EXPECT_EQ(forehead.state, LandmarkState::NotInScan);
   EXPECT_NE(forehead.reason.find("beyond the scan"), std::string::npos) << forehead.reason;
