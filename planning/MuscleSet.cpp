@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -601,6 +602,39 @@ double faceSize(const std::vector<seg::Landmark>& landmarks)
   return height / kMeanNasionSubnasale;
 }
 
+namespace {
+
+/// The median of the valid thicknesses (skin − bone) of the map samples
+/// within @a radius mm of (θ, z) on the skin (@a skinRadius there); NaN if none.
+template <class Valid>
+double medianThicknessNear(const seg::RangeMap& skin, const seg::RangeMap& bone, double theta, double z,
+                           double skinRadius, double radius, Valid valid)
+{
+  const seg::CylindricalFrame& frame = bone.frame();
+  const double u = frame.thetaToIndex(theta), v = frame.zToIndex(z);
+  const double du = skinRadius * frame.thetaStep(), dv = frame.zStep();
+  const int ni = int(std::ceil(radius / du)), nj = int(std::ceil(radius / dv));
+  std::vector<double> near;
+  for (int j = int(std::floor(v)) - nj; j <= int(std::ceil(v)) + nj; ++j)
+  {
+    if (j < 0 || j >= frame.nZ())
+      continue;
+    for (int k = int(std::floor(u)) - ni; k <= int(std::ceil(u)) + ni; ++k)
+    {
+      const int i = ((k % frame.nTheta()) + frame.nTheta()) % frame.nTheta();
+      const double t = double(skin.at(i, j)) - double(bone.at(i, j));
+      if (valid(t) && std::pow((k - u) * du, 2) + std::pow((j - v) * dv, 2) <= radius * radius)
+        near.push_back(t);
+    }
+  }
+  if (near.empty())
+    return std::numeric_limits<double>::quiet_NaN();
+  std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
+  return near[near.size() / 2];
+}
+
+} // namespace
+
 MuscleAnchors muscleAnchors(const std::vector<seg::Landmark>& landmarks, const seg::RangeMap& skin)
 {
   MuscleAnchors out;
@@ -677,48 +711,28 @@ AttachmentPlacement placeAttachment(const AttachmentDefinition& point, bool mirr
     throw std::invalid_argument(where.str());
   }
 
-  // Soft-tissue thickness: measured at the point, else the median of the
-  // measured samples close by (bridges small holes of the bone map), else
-  // the default.
+  // Soft-tissue thickness: measured at the point where it agrees with the
+  // median of the measured samples close by; else that median (it bridges
+  // small holes of the bone map, and a ray through a thin wall that found
+  // the bone behind it: the zygomatic bone's, 15 mm deeper on one side of
+  // the sample CT); else the default.
   auto valid = [&](double t) { return std::isfinite(t) && t > 0.0 && t <= options.maximumThickness; };
   p.source = ThicknessSource::Default;
   p.thickness = options.defaultThickness;
   if (!bone.empty())
   {
     const double here = p.skinRadius - bone.sample(theta, z);
-    if (valid(here))
+    const double nearby = medianThicknessNear(skin, bone, theta, z, p.skinRadius, options.boneSearch, valid);
+    constexpr double kAgrees = 3.0; // mm, or 30 % of the median
+    if (valid(here) && !(std::abs(here - nearby) > std::max(kAgrees, 0.3 * nearby)))
     {
       p.thickness = here;
       p.source = ThicknessSource::Measured;
     }
-    else
+    else if (std::isfinite(nearby))
     {
-      const seg::CylindricalFrame& frame = bone.frame();
-      const double u = frame.thetaToIndex(theta), v = frame.zToIndex(z);
-      const double du = p.skinRadius * frame.thetaStep(), dv = frame.zStep();
-      const int ni = int(std::ceil(options.boneSearch / du)), nj = int(std::ceil(options.boneSearch / dv));
-      std::vector<double> near;
-      for (int j = int(std::floor(v)) - nj; j <= int(std::ceil(v)) + nj; ++j)
-      {
-        if (j < 0 || j >= frame.nZ())
-          continue;
-        for (int k = int(std::floor(u)) - ni; k <= int(std::ceil(u)) + ni; ++k)
-        {
-          const int i = ((k % frame.nTheta()) + frame.nTheta()) % frame.nTheta();
-          const double t = double(skin.at(i, j)) - double(bone.at(i, j));
-          if (valid(t) &&
-              std::pow((k - u) * du, 2) + std::pow((j - v) * dv, 2) <= options.boneSearch * options.boneSearch)
-            near.push_back(t);
-        }
-      }
-      if (!near.empty())
-      {
-        // The median: a hole's rim often holds a stray sample (a ray through
-        // a thin wall that found the bone behind it).
-        std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
-        p.thickness = near[near.size() / 2];
-        p.source = ThicknessSource::Nearby;
-      }
+      p.thickness = nearby;
+      p.source = ThicknessSource::Nearby;
     }
   }
   p.r = p.skinRadius - (point.inBone ? 1.0 : point.depth) * p.thickness;

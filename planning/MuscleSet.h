@@ -182,8 +182,11 @@ struct MuscleFitOptions
 enum class ThicknessSource
 {
   Measured, ///< skin − bone at the point itself
-  Nearby,   ///< the median of the valid samples within MuscleFitOptions::boneSearch
-  Default   ///< MuscleFitOptions::defaultThickness
+  /// The median of the valid samples within MuscleFitOptions::boneSearch:
+  /// where the point has none, or one off that median by more than 3 mm and
+  /// 30 % (a ray through a thin wall that found the bone behind it).
+  Nearby,
+  Default ///< MuscleFitOptions::defaultThickness
 };
 
 /// One attachment placed on the patient.

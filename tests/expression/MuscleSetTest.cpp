@@ -268,7 +268,7 @@ TEST(MuscleSetFile, ErrorsNameTheLineAndTheFix)
   };
   const std::vector<Case> cases = {
     {"insertion = cheilion_left,", "insertion = cheilion_middle,",
-     ":13: insertion: unknown landmark 'cheilion_middle'; known: glabella"},
+     ":13: insertion: unknown landmark 'cheilion_middle'; known: supraglabella, glabella"},
     {"insertion = cheilion_left, across 10, up 3, depth 0.35, radius 6\n", "",
      ":11: function 'main' of muscle 'zygomaticus_major' has no insertion; add 'insertion = LANDMARK"},
     {"radius 6", "radius -6", ":13: insertion: radius -6 is negative"},
