@@ -73,6 +73,11 @@ struct FiniteStrainNodalField
   Eigen::VectorXd maxStretch() const { return principalStretches.row(0).transpose(); }
 };
 
+/// The Gauss rule the nodal stresses are recovered from (per direction):
+/// the 2 x 2 x 2 points, whose extrapolation to the nodes is the trilinear
+/// one (§4.7).
+inline constexpr int kStressRecoveryPointsPerDirection = 2;
+
 /**
  * @brief recoverFiniteStrainAtGaussPoints() in every element, extrapolated
  *        to the nodes and averaged within each region (as
@@ -84,7 +89,8 @@ struct FiniteStrainNodalField
  * for a wrong @a u size.
  */
 FiniteStrainNodalField recoverFiniteStrainNodalField(const Mesh& mesh, const HyperelasticTable& materials,
-                                                     const Eigen::VectorXd& u, int pointsPerDirection = 2);
+                                                     const Eigen::VectorXd& u,
+                                                     int pointsPerDirection = kStressRecoveryPointsPerDirection);
 
 /**
  * @brief det F and the principal stretches of x -> x + @a u at every point of

@@ -57,6 +57,14 @@ private:
 
 namespace {
 
+/// Whether a recorded prediction is shown deformed: every linear preview
+/// (under its warning), and a large-deformation prediction that passed its
+/// check.
+bool shownAsAFace(const planning::PredictionCheck& check)
+{
+  return check.model == planning::TissueModel::LinearElastic || check.admissible();
+}
+
 constexpr double kPlaySeconds = 2.0; // 0 → 100 % in this long
 const QColor kStressColour(200, 70, 20);
 const QColor kDisplacementColour(30, 90, 200);
@@ -568,13 +576,16 @@ void ResultsPanel::showPlan(const std::string& name, bool again)
     headCutId_ = scene.addNode(std::move(cut))->id();
     head->setVisible(false);
   }
-  // A large-deformation solve that stopped short of the closure is not a
-  // prediction: the face is shown before the operation, the deformation
-  // held there, and the summary says what failed and what to try.
+  // A large-deformation solve that stopped short of the closure, or whose
+  // deformed mesh is not a body (an element turned inside out, the skin
+  // through itself), is not a prediction: the face is shown before the
+  // operation, the deformation held there, and the summary says what failed
+  // and what to try. (A linear preview that is not a body is still shown,
+  // as the preview it is, under its warning.)
   const auto* planNode = scene.nodeAs<PlanNode>(shown_.plan);
   const std::optional<planning::PredictionCheck> check =
     planNode ? ResultsLogic::recordedCheck(*planNode) : std::nullopt;
-  const bool failed = check && !check->converged;
+  const bool failed = check && !shownAsAFace(*check);
   shownFailed_ = failed;
   for (QWidget* control : std::initializer_list<QWidget*>{deformation_, play_, prePost_})
     control->setEnabled(!failed);
@@ -677,7 +688,7 @@ void ResultsPanel::updateSummary()
     // Which model made it and how it checked out; a failed check first, in red.
     if (const std::string warning = planning::checkWarning(*check); !warning.empty())
       text += "<span style=\"color:#b00020\"><b>" + html(warning) + "</b>" +
-              (check->converged ? std::string() : std::string(" The face is shown before the operation.")) +
+              (shownAsAFace(*check) ? std::string() : std::string(" The face is shown before the operation.")) +
               "</span><br>";
     text += "Model: " + html(planning::tissueModelDescription(check->model)) + "; " +
             html(planning::checkSummary(*check)) + "<br>";

@@ -546,8 +546,10 @@ namespace {
 // A prediction whose solve fails is shown as failed, not as a face: the
 // demo's Z-plasty re-run in the Simulate module cut through every layer and
 // held to the bone (no undermining), which the large-deformation solve
-// cannot close; the Results panel then says NOT A PREDICTION with what to
-// try, keeps the face before the operation and the deformation controls off.
+// cannot close, or closes only by folding elements over (between its own
+// integration points); the Results panel then says NOT A PREDICTION with
+// what to try, keeps the face before the operation and the deformation
+// controls off.
 TEST(ResultsPanel, AFailedSolveIsShownAsAFailureNotAsAFace)
 {
   const std::filesystem::path bundle = test::reportDemoFolder() / "sample.caps";
@@ -578,8 +580,8 @@ TEST(ResultsPanel, AFailedSolveIsShownAsAFailureNotAsAFace)
   ASSERT_NE(node, nullptr);
   const std::optional<planning::PredictionCheck> check = ResultsLogic::recordedCheck(*node);
   ASSERT_TRUE(check.has_value()) << "the run keeps its check with the plan";
-  EXPECT_FALSE(check->converged);
-  EXPECT_LT(check->closureFraction, 1.0);
+  EXPECT_FALSE(check->admissible()) << "converged " << check->converged << ", closure " << check->closureFraction;
+  EXPECT_FALSE(check->problem.empty());
 
   workstation.selectModule("results");
   auto* plan = workstation.widget<QComboBox>("results.plan");
@@ -594,7 +596,8 @@ TEST(ResultsPanel, AFailedSolveIsShownAsAFailureNotAsAFace)
   std::cout << "Results summary: " << text << "\n";
   EXPECT_NE(text.find("NOT A PREDICTION"), std::string::npos) << text;
   EXPECT_NE(text.find("The face is shown before the operation"), std::string::npos) << text;
-  EXPECT_NE(text.find("Try "), std::string::npos) << "what to try: " << text;
+  EXPECT_TRUE(text.find("Try ") != std::string::npos || text.find("try ") != std::string::npos)
+    << "what to try: " << text;
   EXPECT_EQ(text.find("Closure force"), std::string::npos) << "no numbers of a state short of the closure: " << text;
   EXPECT_EQ(slider->value(), 0);
   EXPECT_FALSE(slider->isEnabled());
