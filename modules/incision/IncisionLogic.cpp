@@ -1,5 +1,10 @@
 #include "modules/incision/IncisionLogic.h"
 
+#include "modules/rangemap/RangeMapLogic.h"
+#include "planning/CutOnSoundSkin.h"
+#include "scene/RangeMapNode.h"
+#include "scene/VolumeNode.h"
+
 #include "fem/VtuWriter.h"
 #include "scene/FeMeshNode.h"
 #include "scene/PlanNode.h"
@@ -38,6 +43,16 @@ planning::IncisionPlan IncisionLogic::placeProcedure(const std::string& id, cons
 planning::IncisionPlan IncisionLogic::applyRecipe(const planning::PlanRecipe& recipe, const seg::RangeMap& skin)
 {
   return planning::applyRecipe(recipe, skin, procedures());
+}
+
+std::string IncisionLogic::cutInMetalStreaks(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
+                                             const RangeMapNode& skinNode) const
+{
+  const auto* volume = scene().nodeAs<VolumeNode>(skinNode.sourceVolumeId());
+  if (!volume || !volume->image())
+    return {};
+  const RangeMapLogic rangeMaps(scene());
+  return planning::cutInMetalStreaks(plan, skin, rangeMaps.metalOf(*volume), volume->image());
 }
 
 void IncisionLogic::writePlan(const planning::IncisionPlan& plan, PlanNode& node)

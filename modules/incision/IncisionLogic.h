@@ -22,6 +22,7 @@
 namespace caps {
 
 class PlanNode;
+class RangeMapNode;
 
 /// @class IncisionLogic
 /// @brief The procedures of data/procedures/ (§4.1) and plans made from them.
@@ -103,6 +104,13 @@ public:
   /// The plan a recipe makes on @a skin with this logic's procedures
   /// (planning::applyRecipe()).
   planning::IncisionPlan applyRecipe(const planning::PlanRecipe& recipe, const seg::RangeMap& skin);
+
+  /// Why @a plan, drawn on @a skin (the map of @a skinNode), cannot be cut:
+  /// its cut runs through skin in the slices that metal's streaks spoil in
+  /// the CT the map was made from (planning::cutInMetalStreaks); "" when it
+  /// does not, or when that CT is not in the scene.
+  std::string cutInMetalStreaks(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
+                                const RangeMapNode& skinNode) const;
 
 private:
   std::optional<planning::ProcedureLibrary> library_;

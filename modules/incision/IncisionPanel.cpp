@@ -471,6 +471,11 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
                                            "\nClick nearer the middle of the measured skin, or make the cut smaller.");
     return;
   }
+  if (const std::string spoiled = logic_.cutInMetalStreaks(plan, skin, *skinNode); !spoiled.empty())
+  {
+    host_.showError("Place on the skin", "The " + procedure->title() + " cannot be placed there: " + spoiled + ".");
+    return;
+  }
   const std::string name = addPlan(procedure->title(), plan, recipe, skinId);
   host_.showStatus(name + " placed at θ " + std::to_string(int(std::lround(at.theta / kDegree))) + "°, z " +
                    std::to_string(int(std::lround(at.z))) + " mm");

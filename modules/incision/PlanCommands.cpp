@@ -23,6 +23,7 @@
 #include "fem/ElementGeometry.h"
 #include "fem/ElementQuality.h"
 #include "fem/FiniteStrainStress.h"
+#include "planning/CutOnSoundSkin.h"
 #include "fem/NodalStress.h"
 #include "fem/VtuWriter.h"
 #include "modules/incision/IncisionLogic.h"
@@ -551,6 +552,7 @@ public:
     readTheCt();
     takeTheRangeMaps();
     recordThePlan();
+    refuseACutInMetalStreaks();
     saveTheRecipe(); // before the long solve: the plan is kept even if the prediction fails
     predict();
     printThePrediction();
@@ -670,6 +672,17 @@ private:
         region.region.push_back(planning::normalizedFromSkinPoint(skin.frame(), {theta * kDegree, z}));
       recorded_->apply(region, skin, logic_.procedures());
     }
+  }
+
+  /// No cut through skin the CT's metal streaks spoil: its skin and bone
+  /// there are artefacts (planning::cutInMetalStreaks).
+  void refuseACutInMetalStreaks()
+  {
+    const RangeMapLogic rangeMaps(logic_.scene());
+    const std::string why =
+      planning::cutInMetalStreaks(recorded_->plan(), maps_.skin, rangeMaps.metalOf(*volume_), volume_->image());
+    if (!why.empty())
+      throw std::invalid_argument("The plan cannot be cut where it is: " + why + ".");
   }
 
   /// plan.json: the operations, with the prediction's element size and cut

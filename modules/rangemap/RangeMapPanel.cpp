@@ -25,6 +25,7 @@
 #include "modules/segment/SegmentLogic.h"
 #include "scene/LabelMapNode.h"
 #include "scene/LandmarksNode.h"
+#include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
@@ -267,6 +268,9 @@ void RangeMapPanel::reloadMaps()
 {
   review_ = ThicknessReview::fromScene(logic_.scene());
   depths_.clear(); // new maps may come with a new CT or label map
+  if (const RangeMapNode* skin = RangeMapLogic::newestMaps(logic_.scene()).skin; review_ && skin)
+    if (const auto* source = logic_.scene().nodeAs<VolumeNode>(skin->sourceVolumeId()); source && source->image())
+      review_->setSpoiled(ThicknessReview::spoiledBy(logic_.metalOf(*source), source->image()));
   const bool ready = review_.has_value();
   for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, place_landmarks_, locate_,
                                                     remove_landmark_, export_landmarks_})

@@ -8,8 +8,10 @@
 #include <sstream>
 
 #include <vtkDoubleArray.h>
+#include <vtkImageData.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
+#include <vtkUnsignedCharArray.h>
 
 #include "modules/rangemap/RangeMapLogic.h"
 #include "scene/RangeMapNode.h"
@@ -122,15 +124,30 @@ vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surfac
   auto values = vtkSmartPointer<vtkDoubleArray>::New();
   values->SetName("thickness_mm");
   values->SetNumberOfTuples(surface->GetNumberOfPoints());
+  auto streaks = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  streaks->SetName("metal_streaks");
+  streaks->SetNumberOfTuples(surface->GetNumberOfPoints());
   for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i)
   {
     double p[3];
     surface->GetPoint(i, p);
     const auto [theta, z] = chartOf({p[0], p[1], p[2]});
-    values->SetValue(i, map.sample(theta, z));
+    const bool spoiled = spoiled_ && spoiled_(Eigen::Vector3d(p[0], p[1], p[2]));
+    values->SetValue(i, spoiled ? std::numeric_limits<double>::quiet_NaN() : map.sample(theta, z));
+    streaks->SetValue(i, spoiled ? 1 : 0);
   }
   painted->GetPointData()->AddArray(values);
+  if (spoiled_)
+    painted->GetPointData()->AddArray(streaks);
   return painted;
+}
+
+ThicknessReview::SpoiledTest ThicknessReview::spoiledBy(const std::vector<seg::MetalPiece>& metal, vtkImageData* ct)
+{
+  if (metal.empty() || !ct)
+    return {};
+  vtkSmartPointer<vtkImageData> image(ct);
+  return [metal, image](const Eigen::Vector3d& p) { return seg::streaksAt(metal, image, p) != nullptr; };
 }
 
 std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins, ThicknessMeasure measure) const
@@ -151,6 +168,8 @@ std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins, Thick
       const double fromFront = std::abs(seg::CylindricalFrame::wrapTheta(frame.indexToTheta(i) + std::numbers::pi / 2));
       const float t = map.at(i, j);
       if (fromFront > kHalfWidth || !std::isfinite(t) || t < 0.0f)
+        continue;
+      if (spoiled_ && spoiled_(frame.toWorld(skin_.at(i, j), frame.indexToTheta(i), z)))
         continue;
       const auto bin = std::min(static_cast<std::size_t>(t / binWidth), counts.size() - 1);
       ++counts[bin];

@@ -6,15 +6,19 @@
 /// histogram over the face, and landmarks with their thickness. No widgets.
 
 #include <array>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <vtkSmartPointer.h>
 
 #include "scene/LandmarksNode.h"
+#include "segmentation/MetalArtefacts.h"
 #include "segmentation/RangeMap.h"
 
+class vtkImageData;
 class vtkPolyData;
 
 namespace caps {
@@ -73,6 +77,16 @@ public:
   vtkSmartPointer<vtkPolyData> paintThickness(vtkPolyData* surface,
                                               ThicknessMeasure measure = ThicknessMeasure::Radial) const;
 
+  /// Where the CT's metal streaks spoil the skin: true for a world point
+  /// (LPS mm) in the slices a piece of metal's streaks spoil
+  /// (RangeMapLogic::metalOf, seg::streaksAt). Those samples are left out of
+  /// faceHistogram(), and paintThickness() paints no thickness there (NaN)
+  /// and marks them 1 in the point array "metal_streaks". Unset: no metal.
+  using SpoiledTest = std::function<bool(const Eigen::Vector3d&)>;
+  void setSpoiled(SpoiledTest spoiled) { spoiled_ = std::move(spoiled); }
+  /// The test for @a volume's CT, from its metal (none: an empty test).
+  static SpoiledTest spoiledBy(const std::vector<seg::MetalPiece>& metal, vtkImageData* ct);
+
   /// The face's rows of the maps: from 10 mm below the lowest standard
   /// landmark placed on them to 10 mm above the highest (fromScene() finds
   /// them with seg::placeLandmarks); unset: every row.
@@ -93,6 +107,7 @@ public:
 private:
   seg::RangeMap skin_, bone_, thickness_, thickness_normal_;
   std::optional<std::array<double, 2>> face_rows_;
+  SpoiledTest spoiled_;
 };
 
 } // namespace caps

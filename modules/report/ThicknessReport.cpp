@@ -91,7 +91,8 @@ struct Review
   std::string notPlacedAtAll; ///< why no landmark could be placed (the profile has no face)
   std::vector<seg::LandmarkThickness> rows;
   std::optional<LabelMapNode::Thresholds> thresholds;
-  std::vector<std::string> metal; ///< each piece of metal (or undiluted contrast) and the slices it spoils
+  std::vector<std::string> metal;       ///< each piece of metal (or undiluted contrast) and the slices it spoils
+  ThicknessReview::SpoiledTest spoiled; ///< where those slices hold the skin
 };
 
 /// 1. The CT, the newest maps, the landmarks and their depths.
@@ -128,6 +129,7 @@ Review gather(Scene& scene)
   logic.measureLandmarkDepths(*r.volume, r.rows);
   for (const seg::MetalPiece& piece : logic.metalOf(*r.volume))
     r.metal.push_back(seg::describe(piece, r.volume->image()));
+  r.spoiled = ThicknessReview::spoiledBy(logic.metalOf(*r.volume), r.volume->image());
   if (const LabelMapNode* labels = SegmentLogic(scene).findLabelMap(*r.volume))
     r.thresholds = labels->thresholds();
   return r;
@@ -310,8 +312,9 @@ std::optional<QImage> paintedFace(Scene& scene, const Review& r, double dpi)
     return std::nullopt;
   const seg::CylindricalFrame& frame = r.radial.frame();
   // The Range maps panel's painting (its "thickness_mm"), radial.
-  const vtkSmartPointer<vtkPolyData> painted =
-    ThicknessReview(r.skin, r.bone, r.radial, r.normal).paintThickness(head, ThicknessMeasure::Radial);
+  ThicknessReview review(r.skin, r.bone, r.radial, r.normal);
+  review.setSpoiled(r.spoiled); // no thickness painted in the metal's streaks
+  const vtkSmartPointer<vtkPolyData> painted = review.paintThickness(head, ThicknessMeasure::Radial);
   render::Figure figure;
   figure.printWidthMm = 120.0;
   figure.width = pixels(figure.printWidthMm, dpi);

@@ -17,6 +17,7 @@
 #include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkDataArray.h>
+#include <vtkImageData.h>
 #include <vtkMath.h>
 #include <vtkPNGReader.h>
 #include <vtkPointData.h>
@@ -510,6 +511,38 @@ TEST(ModuleCommands, BadInputAndUsage)
 // A plan saved as the operations that made it, replayed on
 // the same CT, predicts the same displacements bit for bit; on a CT that
 // differs by one voxel it is refused.
+// A cut through the CT slices that a filling's streaks spoil is refused
+// before anything is solved or saved, saying where and what to do. (The
+// same Z-plasty at the same place on the phantom without the filling is
+// PlanRefusesBadPlansAndBadReplayFiles's accepted one.)
+TEST(ModuleCommands, PlanRefusesACutThroughMetalStreaks)
+{
+  const fs::path folder = caps::test::scratchFolder();
+  const caps::test::HeadPhantom& phantom = caps::test::HeadPhantom::instance();
+  auto withMetal = vtkSmartPointer<vtkImageData>::New();
+  withMetal->DeepCopy(phantom.images.ct);
+  int ijk[3];
+  double pcoords[3];
+  const Eigen::Vector3d filling = phantom.centre + Eigen::Vector3d(0.0, -40.0, 0.0);
+  ASSERT_TRUE(withMetal->ComputeStructuredCoordinates(filling.data(), ijk, pcoords));
+  for (int dk = 0; dk <= 1; ++dk)
+    for (int dj = 0; dj <= 1; ++dj)
+      for (int di = 0; di <= 1; ++di)
+        withMetal->SetScalarComponentFromDouble(ijk[0] + di, ijk[1] + dj, ijk[2] + dk, 0, 3071.0);
+  const fs::path ct = folder / "phantom-with-metal.nrrd";
+  caps::NrrdIO::writeImage(withMetal, ct);
+  const fs::path out = folder / "out";
+  const auto r = runCaps("plan " + quoted(ct.string()) + " --procedure z-plasty --at -90,0 --param central_length=16 " +
+                         "--out " + quoted(out.string()));
+  EXPECT_EQ(r.exitCode, 1) << r.output;
+  EXPECT_NE(r.output.find("The plan cannot be cut where it is: the cut runs through skin"), std::string::npos)
+    << r.output;
+  EXPECT_NE(r.output.find("in CT slices that streaks spoil: metal"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("Place the plan away from those slices"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(out / "plan.json"));
+  EXPECT_FALSE(fs::exists(out / "model.vtu"));
+}
+
 TEST(ModuleCommands, PlanReplaysToTheSamePredictionBitForBit)
 {
   const fs::path folder = caps::test::scratchFolder();

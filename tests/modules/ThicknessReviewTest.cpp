@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <vtkDoubleArray.h>
+#include <vtkImageData.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -125,6 +126,71 @@ TEST(ThicknessReview, FaceHistogramCountsTheFaceByTheMeasureShown)
   // Only the face's rows once they are known (the landmarks' span).
   review.setFaceRows(-20.0, 30.0);
   EXPECT_EQ(review.faceHistogram(1.0, 12), expected(1.0, -20.0, 30.0));
+}
+
+// Skin in the slices metal's streaks spoil is no measurement: it is left out
+// of the histogram and painted with no thickness, marked as such.
+TEST(ThicknessReview, SkinInMetalStreaksIsLeftOutOfTheHistogramAndThePaint)
+{
+  caps::seg::CylindricalFrame frame;
+  caps::ThicknessReview review = makeReview(frame);
+  const std::vector<int> whole = review.faceHistogram(1.0, 12);
+  // Spoiled: the skin from z = 10 to 20 along the axis (rows 30 to 35).
+  review.setSpoiled([&frame](const Eigen::Vector3d& p) {
+    const double z = frame.toCylindrical(p).z;
+    return z >= 9.999 && z <= 20.001;
+  });
+  const std::vector<int> sound = review.faceHistogram(1.0, 12);
+  // Thickness 10 + 0.1 z: rows z = 10 .. 20 hold 11 to 12 mm (bins 11 and 12's).
+  int faceColumns = 0;
+  for (int i = 0; i < frame.nTheta(); ++i)
+    faceColumns += std::abs(std::remainder(frame.indexToTheta(i) + kPi / 2, 2 * kPi)) <= 75.0 * kPi / 180.0;
+  std::vector<int> expected = whole;
+  for (double z = 10.0; z <= 20.0; z += 2.0)
+    expected[std::min<size_t>(size_t(std::floor(float(10.0 + 0.1 * z) + 1e-6)), expected.size() - 1)] -= faceColumns;
+  EXPECT_EQ(sound, expected);
+
+  auto points = vtkSmartPointer<vtkPoints>::New();
+  for (double z : {0.0, 15.0, 30.0})
+    points->InsertNextPoint(frame.toWorld(skinRadius(z), -kPi / 2, z).data());
+  auto surface = vtkSmartPointer<vtkPolyData>::New();
+  surface->SetPoints(points);
+  const auto painted = review.paintThickness(surface);
+  auto* values = vtkDoubleArray::SafeDownCast(painted->GetPointData()->GetArray("thickness_mm"));
+  auto* streaks = painted->GetPointData()->GetArray("metal_streaks");
+  ASSERT_TRUE(values && streaks);
+  EXPECT_NEAR(values->GetValue(0), skinRadius(0.0) - kBoneRadius, 1e-4);
+  EXPECT_TRUE(std::isnan(values->GetValue(1)));
+  EXPECT_NEAR(values->GetValue(2), skinRadius(30.0) - kBoneRadius, 1e-4);
+  EXPECT_EQ(streaks->GetTuple1(0), 0.0);
+  EXPECT_EQ(streaks->GetTuple1(1), 1.0);
+  EXPECT_EQ(streaks->GetTuple1(2), 0.0);
+}
+
+// The test made from a CT's metal: true in the slices a piece's streaks
+// spoil (5 mm either side of its own), false elsewhere; none without metal.
+TEST(ThicknessReview, SpoiledByTheMetalOfACt)
+{
+  auto ct = vtkSmartPointer<vtkImageData>::New();
+  ct->SetDimensions(20, 20, 60);
+  ct->SetSpacing(1.0, 1.0, 1.0);
+  ct->SetOrigin(0.0, 0.0, 0.0);
+  ct->AllocateScalars(VTK_SHORT, 1);
+  auto* v = static_cast<short*>(ct->GetScalarPointer());
+  for (int k = 0; k < 60; ++k)
+    for (int j = 0; j < 20; ++j)
+      for (int i = 0; i < 20; ++i)
+        v[i + 20 * (j + 20 * k)] =
+          (std::abs(i - 10) <= 1 && std::abs(j - 10) <= 1 && std::abs(k - 30) <= 1) ? 3071 : 40;
+  const auto metal = caps::seg::findMetal(ct);
+  ASSERT_EQ(metal.size(), 1u);
+  const auto spoiled = caps::ThicknessReview::spoiledBy(metal, ct);
+  ASSERT_TRUE(bool(spoiled));
+  EXPECT_TRUE(spoiled(Eigen::Vector3d(2.0, 3.0, 30.0)));
+  EXPECT_TRUE(spoiled(Eigen::Vector3d(2.0, 3.0, 34.0)));
+  EXPECT_FALSE(spoiled(Eigen::Vector3d(2.0, 3.0, 40.0)));
+  EXPECT_FALSE(spoiled(Eigen::Vector3d(2.0, 3.0, 10.0)));
+  EXPECT_FALSE(bool(caps::ThicknessReview::spoiledBy({}, ct)));
 }
 
 TEST(ThicknessReview, TheSkinIsPaintedWithTheMeasureShown)

@@ -1,0 +1,27 @@
+#pragma once
+/// @file CutOnSoundSkin.h
+/// @brief Whether a plan's cut lies on skin the CT measured soundly: not in
+/// the slices that metal's streaks spoil (seg::findMetal), where the skin and
+/// bone the range maps hold are artefacts, not the patient (issue: dental
+/// metal made spikes in the skin and holes in the jaw of a cadaver's CT).
+
+#include <string>
+#include <vector>
+
+#include "planning/IncisionPlan.h"
+#include "segmentation/MetalArtefacts.h"
+#include "segmentation/RangeMap.h"
+
+class vtkImageData;
+
+namespace caps::planning {
+
+/// Why @a plan cannot be cut on @a skin as the CT @a ct shows it: the first
+/// point of its cut (every millimetre along each segment, on the plan's
+/// chart) whose skin lies in the slices the streaks of a piece of @a metal
+/// spoil (seg::streaksAt), with where, which metal, and what to do; "" when
+/// the whole cut lies on skin the CT measured soundly (or there is no metal).
+std::string cutInMetalStreaks(const IncisionPlan& plan, const seg::RangeMap& skin,
+                              const std::vector<seg::MetalPiece>& metal, vtkImageData* ct);
+
+} // namespace caps::planning
