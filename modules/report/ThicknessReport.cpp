@@ -381,12 +381,13 @@ void addMethod(ReportDocument& doc, const Review& r)
               {"Range maps", std::to_string(f.nTheta()) + " × " + std::to_string(f.nZ()) + " samples, z " +
                                fixed(f.zMin(), 0) + " to " + fixed(f.zMax(), 0) + " mm (thesis §4.2)"}});
   doc.paragraph(
-    "Depth conventions. Perpendicular to the skin: from the skin point along the skin's own normal (the plane "
-    "through the skin's CT crossings within 2 mm) to where the line first enters bone (the CT's HU crossing "
+    "Depth conventions. Perpendicular to the skin: from the skin point along the skin's own normal (the cubic "
+    "surface fitted to the skin's CT crossings within 3 mm) to where the line first enters bone (the CT's HU crossing "
     "next to the bone mask), as an ultrasound probe held perpendicular to the skin measures (De Greef et al. "
     "2006, Forensic Sci Int 159S:S126-S146, 967 adults). To the nearest bone: the shortest distance from the "
-    "skin point to the bone surface, perpendicular to the bone, as the CT studies measure under the chin and at "
-    "the jaw's angle (Stephan and Simpson 2008, J Forensic Sci 53:1257-1272, review the conventions). Where "
+    "skin point to the bone surface, perpendicular to the bone, as the CT studies measure under the chin, at "
+    "the jaw's angle and at the nasal bones' end (Stephan and Simpson 2008, J Forensic Sci 53:1257-1272, review "
+    "the conventions). Where "
     "no bone lies perpendicular to the skin within 60 mm the nearest bone is given, and the table says so. "
     "The nose tip has cartilage beneath it: it has no bone depth.");
   doc.paragraph("Landmarks are placed from the midline profile of the skin's range map and the bone map (the "
@@ -395,7 +396,8 @@ void addMethod(ReportDocument& doc, const Review& r)
                 "than 8 mm in front of the skin beside it or above it, or lies at the edge of the scan) no "
                 "landmark is placed, since every rule starts from the nose tip. Metal and undiluted contrast: "
                 "connected voxels at 3000 HU and above (4 or more); the slices within 5 mm of them are spoiled "
-                "by their streaks, and a landmark there is listed to be checked on the slices.");
+                "by their streaks, a landmark there is listed to be checked on the slices, the skin there is "
+                "left out of the statistics and unpainted on the face, and no plan may be cut there.");
 }
 
 } // namespace
