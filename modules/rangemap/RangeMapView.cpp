@@ -1,5 +1,7 @@
 #include "modules/rangemap/RangeMapView.h"
 
+#include "modules/rangemap/LabelLayout.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -171,15 +173,25 @@ void RangeMapView::paintEvent(QPaintEvent*)
 
   // Landmarks and the marker.
   painter.setRenderHint(QPainter::Antialiasing);
+  // The dots, then each name beside its dot where it covers no other name
+  // or dot (LabelLayout.h); a name with no room is left to the table.
+  std::vector<std::array<double, 2>> anchors, sizes;
   for (const auto& [name, point] : landmarks_)
   {
     const QPointF p = widgetPointOf(point[0], point[1]);
     painter.setPen(QPen(Qt::white, 1.5));
     painter.setBrush(QColor(220, 30, 30));
     painter.drawEllipse(p, 3.5, 3.5);
-    painter.setPen(Qt::white);
-    painter.drawText(p + QPointF(5, -4), name);
+    anchors.push_back({p.x(), p.y()});
+    sizes.push_back({double(metrics.horizontalAdvance(name)), double(metrics.height())});
   }
+  const std::vector<std::optional<LabelBox>> labels =
+    layOutLabels(anchors, sizes, {0.0, 0.0, double(width()), double(height())});
+  painter.setPen(Qt::white);
+  for (std::size_t k = 0; k < labels.size(); ++k)
+    if (labels[k])
+      painter.drawText(QRectF(labels[k]->x, labels[k]->y, labels[k]->width, labels[k]->height),
+                       Qt::AlignLeft | Qt::AlignVCenter, landmarks_[k].first);
   if (marker_)
   {
     const QPointF p = widgetPointOf((*marker_)[0], (*marker_)[1]);
