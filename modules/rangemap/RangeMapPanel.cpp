@@ -271,6 +271,7 @@ void RangeMapPanel::reloadMaps()
   if (const RangeMapNode* skin = RangeMapLogic::newestMaps(logic_.scene()).skin; review_ && skin)
     if (const auto* source = logic_.scene().nodeAs<VolumeNode>(skin->sourceVolumeId()); source && source->image())
       review_->setSpoiled(ThicknessReview::spoiledBy(logic_.metalOf(*source), source->image()));
+  map_view_->setSpoiled(review_ ? review_->spoiledSamples() : std::vector<unsigned char>());
   const bool ready = review_.has_value();
   for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, place_landmarks_, locate_,
                                                     remove_landmark_, export_landmarks_})

@@ -60,8 +60,11 @@ void RangeMapView::setMap(const seg::RangeMap& map, render::ColourMap colourMap,
     for (int j = 0; j < nZ; ++j)
     {
       const float v = map_.at(i, j);
-      const QColor c = std::isfinite(v) ? qColour(render::colourMapColour(colour_map_, (v - low_) / (high_ - low_)))
-                                        : QColor(158, 158, 158);
+      QColor c = std::isfinite(v) ? qColour(render::colourMapColour(colour_map_, (v - low_) / (high_ - low_)))
+                                  : QColor(158, 158, 158);
+      const std::size_t k = std::size_t(i) + std::size_t(nTheta) * std::size_t(j);
+      if (k < spoiled_.size() && spoiled_[k] && (x + nZ - 1 - j) % 6 < 2) // diagonal hatching
+        c = QColor(50, 50, 50);
       image_.setPixel(x, nZ - 1 - j, c.rgb());
     }
   }

@@ -8,6 +8,7 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <QImage>
@@ -27,6 +28,10 @@ public:
   /// Shows @a map through @a colourMap over [low, high] (mm); the bar is titled @a title.
   void setMap(const seg::RangeMap& map, render::ColourMap colourMap, double low, double high, const QString& title);
   void clear();
+  /// Samples of the maps (index i + nθ j, the maps' grid) that metal's
+  /// streaks spoil: hatched in dark grey over their colour from the next
+  /// setMap() on. Empty: none.
+  void setSpoiled(std::vector<unsigned char> spoiled) { spoiled_ = std::move(spoiled); }
   bool hasMap() const { return !map_.empty(); }
 
   /// A crosshair at chart point (θ, z) (radians, mm); none with std::nullopt.
@@ -59,6 +64,7 @@ private:
 
   seg::RangeMap map_;
   QImage image_;
+  std::vector<unsigned char> spoiled_;
   render::ColourMap colour_map_ = render::ColourMap::Viridis;
   double low_ = 0.0, high_ = 1.0;
   QString title_;

@@ -142,6 +142,19 @@ vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surfac
   return painted;
 }
 
+std::vector<unsigned char> ThicknessReview::spoiledSamples() const
+{
+  std::vector<unsigned char> out(static_cast<std::size_t>(skin_.nTheta()) * skin_.nZ(), 0);
+  if (!spoiled_)
+    return out;
+  const seg::CylindricalFrame& frame = skin_.frame();
+  for (int j = 0; j < skin_.nZ(); ++j)
+    for (int i = 0; i < skin_.nTheta(); ++i)
+      out[std::size_t(i) + std::size_t(skin_.nTheta()) * j] =
+        spoiled_(frame.toWorld(skin_.at(i, j), frame.indexToTheta(i), frame.indexToZ(j))) ? 1 : 0;
+  return out;
+}
+
 ThicknessReview::SpoiledTest ThicknessReview::spoiledBy(const std::vector<seg::MetalPiece>& metal, vtkImageData* ct)
 {
   if (metal.empty() || !ct)

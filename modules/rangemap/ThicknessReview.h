@@ -84,6 +84,9 @@ public:
   /// and marks them 1 in the point array "metal_streaks". Unset: no metal.
   using SpoiledTest = std::function<bool(const Eigen::Vector3d&)>;
   void setSpoiled(SpoiledTest spoiled) { spoiled_ = std::move(spoiled); }
+  /// 1 for each sample of the skin map (index i + nθ j) whose skin lies in
+  /// the spoiled slices, else 0; all 0 without a test.
+  std::vector<unsigned char> spoiledSamples() const;
   /// The test for @a volume's CT, from its metal (none: an empty test).
   static SpoiledTest spoiledBy(const std::vector<seg::MetalPiece>& metal, vtkImageData* ct);
 

@@ -3,6 +3,7 @@
 // around a bone cylinder, so the radial thickness is 10 + 0.1 z mm and
 // bilinear reading (eq. 4.9) is exact.
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -149,6 +150,12 @@ TEST(ThicknessReview, SkinInMetalStreaksIsLeftOutOfTheHistogramAndThePaint)
   for (double z = 10.0; z <= 20.0; z += 2.0)
     expected[std::min<size_t>(size_t(std::floor(float(10.0 + 0.1 * z) + 1e-6)), expected.size() - 1)] -= faceColumns;
   EXPECT_EQ(sound, expected);
+  // The map's samples in the band: 6 rows all round (the map view hatches them).
+  const std::vector<unsigned char> spoiled = review.spoiledSamples();
+  ASSERT_EQ(spoiled.size(), std::size_t(frame.nTheta() * frame.nZ()));
+  EXPECT_EQ(std::count(spoiled.begin(), spoiled.end(), 1), 6 * frame.nTheta());
+  for (int i = 0; i < frame.nTheta(); ++i)
+    EXPECT_EQ(spoiled[std::size_t(i + frame.nTheta() * 30)], 1);
 
   auto points = vtkSmartPointer<vtkPoints>::New();
   for (double z : {0.0, 15.0, 30.0})
