@@ -120,18 +120,28 @@ std::map<std::string, std::pair<double, double>> trueLandmarks()
   return truth;
 }
 
+/// The Range maps module's run on @a ct in @a scene, at the phantom's
+/// mid-level thresholds; the axis fitted, not given.
+caps::RangeMapOutput runTheMaps(caps::Scene& scene, caps::RangeMapLogic& logic, vtkImageData* ct,
+                                caps::VolumeNode*& volume)
+{
+  volume = scene.add<caps::VolumeNode>();
+  volume->setImage(ct);
+  caps::RangeMapLogic::Parameters parameters;
+  parameters.skinThresholdHu = st::skinMidHu;
+  parameters.boneThresholdHu = st::boneMidHu;
+  caps::RangeMapOutput maps;
+  logic.run(*volume, parameters, {}, &maps);
+  return maps;
+}
+
 TEST(FaceLandmarks, EachIsPlacedWithin2MmOfItsPlaceAndItsDepthInTheCtIsWithin0p3Mm)
 {
   const FacePhantom& phantom = FacePhantom::instance();
   caps::Scene scene;
   caps::RangeMapLogic logic(scene);
-  auto* volume = scene.add<caps::VolumeNode>();
-  volume->setImage(phantom.images.ct);
-  caps::RangeMapLogic::Parameters parameters;
-  parameters.skinThresholdHu = st::skinMidHu;
-  parameters.boneThresholdHu = st::boneMidHu;
-  caps::RangeMapOutput maps;
-  logic.run(*volume, parameters, {}, &maps); // the axis is fitted, not given
+  caps::VolumeNode* volume = nullptr;
+  const caps::RangeMapOutput maps = runTheMaps(scene, logic, phantom.images.ct, volume);
 
   const caps::seg::LandmarkPlacement placed = caps::seg::placeLandmarks(maps.skin, maps.bone);
   for (const std::string& warning : placed.warnings)
@@ -205,13 +215,8 @@ TEST(FaceLandmarks, ACtCutAboveTheNosePlacesNoFaceLandmark)
 
   caps::Scene scene;
   caps::RangeMapLogic logic(scene);
-  auto* volume = scene.add<caps::VolumeNode>();
-  volume->setImage(cranium);
-  caps::RangeMapLogic::Parameters parameters;
-  parameters.skinThresholdHu = st::skinMidHu;
-  parameters.boneThresholdHu = st::boneMidHu;
-  caps::RangeMapOutput maps;
-  logic.run(*volume, parameters, {}, &maps);
+  caps::VolumeNode* volume = nullptr;
+  const caps::RangeMapOutput maps = runTheMaps(scene, logic, cranium, volume);
   const caps::seg::LandmarkPlacement placed = caps::seg::placeLandmarks(maps.skin, maps.bone);
   std::printf("[ face     ] cut above the nose: %s\n", placed.features.noseMissing.c_str());
   for (const char* name : {"pronasale", "subnasale", "mid_philtrum", "labrale_superius", "labrale_inferius", "pogonion",

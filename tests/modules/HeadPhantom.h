@@ -7,8 +7,11 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 
 #include <Eigen/Core>
+#include <vtkImageData.h>
+#include <vtkSmartPointer.h>
 
 #include "segmentation/rangemaps/RangeMapPhantom.h"
 
@@ -91,6 +94,24 @@ struct HeadPhantom
     if (disc < 0)
       return std::numeric_limits<double>::quiet_NaN();
     return (-b - std::sqrt(disc)) / (2 * a);
+  }
+
+  /// A copy of the CT with a filling: 2 x 2 x 2 voxels of 3071 HU (metal at
+  /// the top of a 12-bit scanner's scale) at the voxel cell holding @a at.
+  vtkSmartPointer<vtkImageData> withFilling(const Eigen::Vector3d& at) const
+  {
+    auto ct = vtkSmartPointer<vtkImageData>::New();
+    ct->DeepCopy(images.ct);
+    int ijk[3];
+    double pcoords[3];
+    Eigen::Vector3d point = at;
+    if (!ct->ComputeStructuredCoordinates(point.data(), ijk, pcoords))
+      throw std::invalid_argument("withFilling: the point is outside the phantom's CT");
+    for (int dk = 0; dk <= 1; ++dk)
+      for (int dj = 0; dj <= 1; ++dj)
+        for (int di = 0; di <= 1; ++di)
+          ct->SetScalarComponentFromDouble(ijk[0] + di, ijk[1] + dj, ijk[2] + dk, 0, 3071.0);
+    return ct;
   }
 
   static double ellipsoidVolume(double a, double b, double c) { return 4.0 / 3.0 * std::numbers::pi * a * b * c; }

@@ -519,18 +519,8 @@ TEST(ModuleCommands, PlanRefusesACutThroughMetalStreaks)
 {
   const fs::path folder = caps::test::scratchFolder();
   const caps::test::HeadPhantom& phantom = caps::test::HeadPhantom::instance();
-  auto withMetal = vtkSmartPointer<vtkImageData>::New();
-  withMetal->DeepCopy(phantom.images.ct);
-  int ijk[3];
-  double pcoords[3];
-  const Eigen::Vector3d filling = phantom.centre + Eigen::Vector3d(0.0, -40.0, 0.0);
-  ASSERT_TRUE(withMetal->ComputeStructuredCoordinates(filling.data(), ijk, pcoords));
-  for (int dk = 0; dk <= 1; ++dk)
-    for (int dj = 0; dj <= 1; ++dj)
-      for (int di = 0; di <= 1; ++di)
-        withMetal->SetScalarComponentFromDouble(ijk[0] + di, ijk[1] + dj, ijk[2] + dk, 0, 3071.0);
   const fs::path ct = folder / "phantom-with-metal.nrrd";
-  caps::NrrdIO::writeImage(withMetal, ct);
+  caps::NrrdIO::writeImage(phantom.withFilling(phantom.centre + Eigen::Vector3d(0.0, -40.0, 0.0)), ct);
   const fs::path out = folder / "out";
   const auto r = runCaps("plan " + quoted(ct.string()) + " --procedure z-plasty --at -90,0 --param central_length=16 " +
                          "--out " + quoted(out.string()));

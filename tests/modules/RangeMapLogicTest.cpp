@@ -215,17 +215,8 @@ TEST(RangeMapLogic, LandmarkDepthsInTheCtMatchTheEllipsoidsAlongTheNormal)
 
   // A filling (3071 HU) in the head at the centre's height: the landmarks of
   // its slices are flagged, the others not.
-  auto withMetal = vtkSmartPointer<vtkImageData>::New();
-  withMetal->DeepCopy(phantom.images.ct);
-  int ijk[3];
-  double pcoords[3];
   const Eigen::Vector3d filling = phantom.centre + Eigen::Vector3d(0.0, -40.0, 0.0);
-  ASSERT_TRUE(withMetal->ComputeStructuredCoordinates(filling.data(), ijk, pcoords));
-  for (int dk = 0; dk <= 1; ++dk)
-    for (int dj = 0; dj <= 1; ++dj)
-      for (int di = 0; di <= 1; ++di)
-        withMetal->SetScalarComponentFromDouble(ijk[0] + di, ijk[1] + dj, ijk[2] + dk, 0, 3071.0);
-  volume->setImage(withMetal);
+  volume->setImage(phantom.withFilling(filling));
   ASSERT_TRUE(logic.measureLandmarkDepths(*volume, rows));
   ASSERT_EQ(logic.metalOf(*volume).size(), 1u);
   for (const auto& row : rows)
