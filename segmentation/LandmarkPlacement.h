@@ -67,9 +67,13 @@
 ///   the bone map (the skin map without one) for z from the menton up to the
 ///   subnasale (menton + 40 mm without one) and θ 30° to 95° from the front:
 ///   the mandible's angle is its widest part below the condyles.
+///   For both, only widths that peak along z inside the band count: a
+///   widest point on the band's end is where the band cuts a bone growing
+///   wider beyond it (the maxilla above the jaw), not the feature.
 /// The midline features found on rows (pronasale, nasion, glabella,
-/// supraglabella, subnasale, the lips, sublabiale, pogonion) are placed at their apexes between rows:
-/// the vertex of a parabola fitted to the raw profile over five rows.
+/// supraglabella, subnasale, the lips, sublabiale, pogonion) are placed at
+/// their apexes between rows: the vertex of a parabola fitted to the raw
+/// profile over five rows.
 /// Left is patient left: θ > -π/2 (towards θ = 0).
 
 #include <string>
