@@ -1,5 +1,6 @@
 #include "modules/report/ReportDocument.h"
 
+#include <sstream>
 #include <cmath>
 #include <stdexcept>
 
@@ -294,6 +295,16 @@ int ReportDocument::writePdf(const std::filesystem::path& file, PaperSize paper,
     throw std::runtime_error("cannot write the report " + file.string() + ": " + error.message());
   }
   return pages;
+}
+
+std::string fixed(double value, int decimals, const std::string& missing)
+{
+  if (!std::isfinite(value))
+    return missing;
+  std::ostringstream s;
+  s.precision(decimals);
+  s << std::fixed << value;
+  return s.str();
 }
 
 } // namespace caps::report

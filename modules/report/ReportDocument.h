@@ -22,6 +22,10 @@ enum class PaperSize
   Letter
 };
 
+/// @a value with @a decimals digits after the point, as the reports print
+/// numbers; @a missing for NaN or infinity (a measure with no value).
+std::string fixed(double value, int decimals, const std::string& missing = "n/a");
+
 /// What a PDF file says about itself (its document information).
 struct PdfMetadata
 {

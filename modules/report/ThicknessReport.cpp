@@ -1,4 +1,5 @@
 #include "modules/report/ThicknessReport.h"
+#include "modules/report/ReportDocument.h"
 
 #include <algorithm>
 #include <cmath>
@@ -40,14 +41,10 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 /// Every thickness picture of the report uses the same colours for the same mm.
 constexpr double kThicknessHigh = 30.0;
 
+/// Numbers as this report prints them: a dash where there is none.
 std::string fixed(double value, int decimals)
 {
-  if (!std::isfinite(value))
-    return "—";
-  std::ostringstream s;
-  s.precision(decimals);
-  s << std::fixed << value;
-  return s.str();
+  return report::fixed(value, decimals, "—");
 }
 
 std::string orDash(const std::string& s)

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <unistd.h>
 
@@ -31,6 +32,16 @@ inline std::string fileText(const std::filesystem::path& file)
 }
 
 /// A PDF's text as poppler's pdftotext lays it out (pages separated by form feeds).
+/// @a value with @a decimals digits after the point, as the reports print it.
+inline std::string fixed(double value, int decimals)
+{
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(decimals);
+  s << value;
+  return s.str();
+}
+
 inline std::string pdfText(const std::filesystem::path& pdf)
 {
   const std::filesystem::path text = pdf.string() + ".txt";
