@@ -10,6 +10,8 @@
 #include <iterator>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -40,6 +42,23 @@ inline std::string fixed(double value, int decimals)
   s.precision(decimals);
   s << value;
   return s.str();
+}
+
+/// The pages of pdftotext's output (form feeds between them) that hold
+/// any text.
+inline std::vector<std::string> pdfPages(const std::string& text)
+{
+  std::vector<std::string> pages;
+  for (std::size_t start = 0, end; start < text.size(); start = end + 1)
+  {
+    end = text.find('\f', start);
+    if (end == std::string::npos)
+      end = text.size();
+    std::string page = text.substr(start, end - start);
+    if (page.find_first_not_of(" \n") != std::string::npos)
+      pages.push_back(std::move(page));
+  }
+  return pages;
 }
 
 inline std::string pdfText(const std::filesystem::path& pdf)
