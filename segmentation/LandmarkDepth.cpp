@@ -475,6 +475,20 @@ double LandmarkDepth::depth() const
   return RangeMap::quietNaN();
 }
 
+Eigen::Vector3d LandmarkDepth::boneEnd() const
+{
+  switch (measuredBy())
+  {
+  case DepthConvention::SkinNormal:
+    return bone.boneAlongNormal;
+  case DepthConvention::NearestBone:
+    return bone.nearestBone;
+  case DepthConvention::NotADepth:
+    break;
+  }
+  return Eigen::Vector3d::Constant(RangeMap::quietNaN());
+}
+
 std::string LandmarkDepth::describeConvention() const
 {
   std::string name = conventionName(measuredBy());

@@ -141,6 +141,9 @@ struct LandmarkDepth
   DepthConvention measuredBy() const;
   /// The depth by measuredBy() (mm); NaN where there is none.
   double depth() const;
+  /// The deep end of the depth by measuredBy(): where the line from
+  /// bone.skinPoint meets the bone; NaN where there is no depth.
+  Eigen::Vector3d boneEnd() const;
   /// measuredBy()'s name, with why when it is not the landmark's own.
   std::string describeConvention() const;
 };

@@ -388,7 +388,6 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   result.features = findProfileFeatures(skin);
   const ProfileFeatures& f = result.features;
   const CylindricalFrame& frame = skin.frame();
-  auto z = [&frame](int j) { return j >= 0 ? frame.indexToZ(j) : nan; };
   // The profile's features at their apexes, between rows.
   const auto apex = [&](int j, double sign) { return apexZ(f.profile, frame, j, sign); };
   const double zPrn = apex(f.pronasale, +1), zN = apex(f.nasion, -1), zSn = apex(f.subnasale, -1);

@@ -60,6 +60,10 @@ struct LandmarkThickness
   double ctNearestBone = RangeMap::quietNaN();
   double depth = RangeMap::quietNaN();
   std::string convention;
+  /// The measured segment: from the skin (the point moved onto the CT's
+  /// skin) to the bone end of the depth; NaN where there is no depth.
+  Eigen::Vector3d depthSkinEnd = Eigen::Vector3d::Constant(RangeMap::quietNaN());
+  Eigen::Vector3d depthBoneEnd = Eigen::Vector3d::Constant(RangeMap::quietNaN());
   /// What spoils the measure, if anything (metal streaks in its slices).
   std::string note;
 };

@@ -227,6 +227,8 @@ bool RangeMapLogic::measureLandmarkDepths(const VolumeNode& volume, std::vector<
     row.ctNearestBone = d.bone.toNearestBone;
     row.depth = d.depth();
     row.convention = d.describeConvention();
+    row.depthSkinEnd = d.bone.skinPoint;
+    row.depthBoneEnd = d.boneEnd();
     row.note.clear();
     if (const seg::MetalPiece* piece = seg::streaksAt(metal, volume.image(), row.position))
     {
