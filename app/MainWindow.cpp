@@ -111,6 +111,9 @@ void MainWindow::buildViews()
     connect(view, &ui::SliceView::clicked, this, [this](double x, double y, double z) { moveCursor({x, y, z}); });
     connect(view, &ui::SliceView::hovered, this, &MainWindow::showCursorInfo);
     connect(view, &ui::SliceView::windowLevelChanged, this, &MainWindow::applyWindowLevel);
+    connect(view, &ui::SliceView::rulerMeasured, this, [this](double mm) {
+      statusBar()->showMessage(tr("Ruler: %1 mm (click again for another; Ctrl+M ends the ruler)").arg(mm, 0, 'f', 1));
+    });
     connect(view, &ui::SliceView::sliceChanged, this,
             [this, view](int) { view3d_->setCursorPosition(view->cursorPosition()); });
   }
@@ -237,6 +240,7 @@ void MainWindow::buildModulePanels()
     // A pick or a marker belongs to the panel that asked for it.
     cancelPick();
     setThreeDViewHandles({}, nullptr);
+    showMeasuredSegment(std::nullopt);
     view3d_->hideMarker();
     panels_->setCurrentIndex(index);
   });
@@ -315,6 +319,17 @@ void MainWindow::buildMenus()
   overlay_action_->setChecked(true);
   overlay_action_->setShortcut(QKeySequence(tr("Ctrl+L")));
   connect(overlay_action_, &QAction::toggled, this, [this](bool) { updateOverlay(); });
+  // A ruler on the slice views, as on a radiology viewer: two clicks, mm.
+  ruler_action_ = view->addAction(tr("&Ruler on the slices"));
+  ruler_action_->setObjectName("view.ruler");
+  ruler_action_->setCheckable(true);
+  ruler_action_->setShortcut(QKeySequence(tr("Ctrl+M")));
+  ruler_action_->setToolTip(tr("Click two points on a slice to measure between them (mm)"));
+  connect(ruler_action_, &QAction::toggled, this, [this](bool on) {
+    for (ui::SliceView* view : slice_views_)
+      view->setRulerMode(on);
+    statusBar()->showMessage(on ? tr("Ruler: click the two ends on a slice") : QString());
+  });
   view->addAction(
     tr("&Reset 3D view"), this,
     [this]() {
@@ -750,8 +765,22 @@ void MainWindow::setThreeDViewCamera(const SnapshotNode::Camera& c)
 
 void MainWindow::setCursorPosition(const std::array<double, 3>& position)
 {
-  // The views work in image space (the volume's axes, origin kept): patient
-  // LPS goes there through the transposed direction matrix.
+  moveCursor(toImageSpace(position));
+  view3d_->setMarker(position);
+}
+
+void MainWindow::showMeasuredSegment(const std::optional<MeasuredSegment>& segment)
+{
+  std::optional<ui::SliceSegment> onSlices;
+  if (segment)
+    onSlices = ui::SliceSegment{toImageSpace(segment->from), toImageSpace(segment->to), segment->label};
+  for (ui::SliceView* view : slice_views_)
+    view->setMeasuredSegment(onSlices);
+}
+
+std::array<double, 3> MainWindow::toImageSpace(const std::array<double, 3>& position)
+{
+  // Patient LPS goes to image space through the transposed direction matrix.
   std::array<double, 3> inImage = position;
   auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
   if (volume && volume->image())
@@ -766,8 +795,7 @@ void MainWindow::setCursorPosition(const std::array<double, 3>& position)
         inImage[static_cast<size_t>(a)] += direction->GetElement(b, a) * (position[static_cast<size_t>(b)] - origin[b]);
     }
   }
-  moveCursor(inImage);
-  view3d_->setMarker(position);
+  return inImage;
 }
 
 void MainWindow::previewThresholds(const std::optional<std::array<double, 2>>& hu)

@@ -74,6 +74,7 @@ public:
   void setThreeDViewCamera(const SnapshotNode::Camera& camera) override;
   void setCursorPosition(const std::array<double, 3>& position) override;
   void previewThresholds(const std::optional<std::array<double, 2>>& hu) override;
+  void showMeasuredSegment(const std::optional<MeasuredSegment>& segment) override;
 
   /// The 3D view (tests click on it).
   ui::ThreeDView* threeDView() const { return view3d_; }
@@ -96,6 +97,8 @@ private:
   void updateOverlay();
   void applyWindowLevel(double window, double level);
   void moveCursor(const std::array<double, 3>& position);
+  /// Patient LPS to the slice views' image space (the volume's axes, origin kept).
+  std::array<double, 3> toImageSpace(const std::array<double, 3>& position);
   void showCursorInfo(double x, double y, double z, bool inside);
   void taskFinished(const std::string& title, std::function<void()> finish, const std::string& error, bool cancelled);
   void openScene(const std::filesystem::path& bundle);
@@ -119,6 +122,7 @@ private:
   QMenu* recent_menu_ = nullptr;
   QAction* slices_in_3d_ = nullptr;
   QAction* overlay_action_ = nullptr;
+  QAction* ruler_action_ = nullptr;
   std::optional<std::array<double, 2>> threshold_preview_;
   QThread* task_thread_ = nullptr;
   std::atomic<bool> cancel_requested_{false};

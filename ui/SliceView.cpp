@@ -89,18 +89,43 @@ const char* orientationName(SliceOrientation o)
   return "";
 }
 
-vtkSmartPointer<vtkActor> makeLineActor(vtkLineSource* source)
+vtkSmartPointer<vtkActor> makeLineActor(vtkLineSource* source, const std::array<double, 3>& rgb = {1.0, 0.85, 0.2},
+                                        double opacity = 0.7, double width = 1.0)
 {
   auto mapper = vtkSmartPointer<vtkPolyDataMapper>::New();
   mapper->SetInputConnection(source->GetOutputPort());
   auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
-  actor->GetProperty()->SetColor(1.0, 0.85, 0.2);
-  actor->GetProperty()->SetOpacity(0.7);
-  actor->GetProperty()->SetLineWidth(1.0);
+  actor->GetProperty()->SetColor(rgb[0], rgb[1], rgb[2]);
+  actor->GetProperty()->SetOpacity(opacity);
+  actor->GetProperty()->SetLineWidth(width);
   actor->PickableOff();
   return actor;
 }
+
+/// A label pinned to a point of the slice (world coordinates).
+vtkSmartPointer<vtkTextActor> makeLabel(const std::array<double, 3>& rgb)
+{
+  auto label = vtkSmartPointer<vtkTextActor>::New();
+  label->GetTextProperty()->SetFontSize(14);
+  label->GetTextProperty()->SetBold(true);
+  label->GetTextProperty()->SetColor(rgb[0], rgb[1], rgb[2]);
+  label->GetTextProperty()->SetShadow(true);
+  label->GetPositionCoordinate()->SetCoordinateSystemToWorld();
+  label->PickableOff();
+  label->VisibilityOff();
+  return label;
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b)
+{
+  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+}
+
+// The measured segment in green, the ruler in cyan: both stand out on grey
+// CT and on the segmentation's warm overlay.
+constexpr std::array<double, 3> kMeasuredColour{0.3, 1.0, 0.4};
+constexpr std::array<double, 3> kRulerColour{0.3, 0.9, 1.0};
 
 } // namespace
 
@@ -142,6 +167,20 @@ SliceView::SliceView(SliceOrientation orientation, QWidget* parent)
   line_b_ = vtkSmartPointer<vtkLineSource>::New();
   crosshair_a_ = makeLineActor(line_a_);
   crosshair_b_ = makeLineActor(line_b_);
+
+  measured_line_ = vtkSmartPointer<vtkLineSource>::New();
+  measured_actor_ = makeLineActor(measured_line_, kMeasuredColour, 1.0, 3.0);
+  measured_label_ = makeLabel(kMeasuredColour);
+  ruler_line_ = vtkSmartPointer<vtkLineSource>::New();
+  ruler_actor_ = makeLineActor(ruler_line_, kRulerColour, 1.0, 2.0);
+  ruler_label_ = makeLabel(kRulerColour);
+  for (vtkActor* actor : {measured_actor_.Get(), ruler_actor_.Get()})
+  {
+    actor->VisibilityOff();
+    renderer_->AddActor(actor);
+  }
+  renderer_->AddViewProp(measured_label_);
+  renderer_->AddViewProp(ruler_label_);
 
   corners_ = vtkSmartPointer<vtkCornerAnnotation>::New();
   corners_->SetMaximumFontSize(14);
@@ -197,6 +236,8 @@ void SliceView::setImage(vtkImageData* image)
     overlay_actor_->VisibilityOff();
     renderer_->RemoveActor(crosshair_a_);
     renderer_->RemoveActor(crosshair_b_);
+    ruler_ends_ = 0;
+    updateMeasurements();
     updateAnnotation();
     renderWindow()->Render();
     return;
@@ -213,6 +254,7 @@ void SliceView::setImage(vtkImageData* image)
   for (int a = 0; a < 3; ++a)
     cursor_[a] = origin[a] + spacing[a] * (dims[a] - 1) / 2.0;
   slice_ = (dims[sliceAxis()] - 1) / 2;
+  ruler_ends_ = 0; // a ruler belongs to the image it measured
   renderer_->AddViewProp(stack_);
   renderer_->AddActor(crosshair_a_);
   renderer_->AddActor(crosshair_b_);
@@ -324,6 +366,95 @@ std::array<double, 3> SliceView::pointAtDisplay(int x, int y) const
   return p;
 }
 
+void SliceView::setMeasuredSegment(const std::optional<SliceSegment>& segment)
+{
+  measured_ = segment;
+  updateMeasurements();
+  renderWindow()->Render();
+}
+
+void SliceView::setRulerMode(bool on)
+{
+  ruler_mode_ = on;
+  if (!on && ruler_ends_ == 1)
+    ruler_ends_ = 0; // a ruler with one end is no measurement
+  updateMeasurements();
+  renderWindow()->Render();
+}
+
+std::optional<SliceSegment> SliceView::ruler() const
+{
+  if (ruler_ends_ != 2)
+    return std::nullopt;
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f mm", distance(ruler_from_, ruler_to_));
+  return SliceSegment{ruler_from_, ruler_to_, text};
+}
+
+void SliceView::clearRuler()
+{
+  ruler_ends_ = 0;
+  updateMeasurements();
+  renderWindow()->Render();
+}
+
+void SliceView::placeRulerEnd(const std::array<double, 3>& point)
+{
+  if (ruler_ends_ == 1 && ruler_slice_ == slice_)
+  {
+    ruler_to_ = point;
+    ruler_ends_ = 2;
+    updateMeasurements();
+    renderWindow()->Render();
+    emit rulerMeasured(distance(ruler_from_, ruler_to_));
+    return;
+  }
+  // A new ruler (or its start again, on the slice now shown).
+  ruler_from_ = ruler_to_ = point;
+  ruler_slice_ = slice_;
+  ruler_ends_ = 1;
+  updateMeasurements();
+  renderWindow()->Render();
+}
+
+std::array<double, 3> SliceView::onTopOfSlice(std::array<double, 3> point, double lift) const
+{
+  // Lift the lines a little towards the camera so they draw over the slice.
+  lift = orientation_ == SliceOrientation::Sagittal ? lift : -lift;
+  const int axis = sliceAxis();
+  point[axis] = image_->GetOrigin()[axis] + image_->GetSpacing()[axis] * slice_ + lift;
+  return point;
+}
+
+void SliceView::updateMeasurements()
+{
+  const bool measured = image_ && measured_;
+  measured_actor_->SetVisibility(measured);
+  measured_label_->SetVisibility(measured);
+  if (measured)
+  {
+    // Over the crosshair, which often runs along it from the same skin point.
+    const auto from = onTopOfSlice(measured_->from, 1.0), to = onTopOfSlice(measured_->to, 1.0);
+    measured_line_->SetPoint1(from.data());
+    measured_line_->SetPoint2(to.data());
+    measured_label_->SetInput(measured_->label.c_str());
+    measured_label_->GetPositionCoordinate()->SetValue(to[0], to[1], to[2]);
+  }
+  const bool ruler = image_ && ruler_ends_ > 0 && ruler_slice_ == slice_;
+  ruler_actor_->SetVisibility(ruler);
+  ruler_label_->SetVisibility(ruler && ruler_ends_ == 2);
+  if (ruler)
+  {
+    const auto from = onTopOfSlice(ruler_from_, 1.0), to = onTopOfSlice(ruler_to_, 1.0);
+    ruler_line_->SetPoint1(from.data());
+    ruler_line_->SetPoint2(to.data());
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f mm", distance(ruler_from_, ruler_to_));
+    ruler_label_->SetInput(text);
+    ruler_label_->GetPositionCoordinate()->SetValue(to[0], to[1], to[2]);
+  }
+}
+
 void SliceView::handleWheel(int steps)
 {
   setSlice(slice_ + steps);
@@ -343,6 +474,12 @@ void SliceView::handleHover(int x, int y)
     const double index = (p[a] - image_->GetOrigin()[a]) / image_->GetSpacing()[a];
     inside = inside && index > -0.5 && index < dims[a] - 0.5;
   }
+  if (ruler_mode_ && ruler_ends_ == 1 && ruler_slice_ == slice_)
+  { // the ruler follows the mouse until its second end is placed
+    ruler_to_ = p;
+    updateMeasurements();
+    renderWindow()->Render();
+  }
   emit hovered(p[0], p[1], p[2], inside);
 }
 
@@ -351,7 +488,10 @@ void SliceView::handleClick(int x, int y)
   if (!image_)
     return;
   const auto p = pointAtDisplay(x, y);
-  emit clicked(p[0], p[1], p[2]);
+  if (ruler_mode_)
+    placeRulerEnd(p);
+  else
+    emit clicked(p[0], p[1], p[2]);
 }
 
 void SliceView::handleWindowLevelChanged()
@@ -402,6 +542,7 @@ void SliceView::updateSlicePlane()
   mapper_->SetSliceNumber(slice_);
   overlay_mapper_->SetSliceNumber(slice_);
   updateCrosshair();
+  updateMeasurements();
   updateAnnotation();
 }
 
@@ -410,10 +551,7 @@ void SliceView::updateCrosshair()
   double bounds[6];
   image_->GetBounds(bounds);
   const int axis = sliceAxis();
-  // Lift the lines a little towards the camera so they draw over the slice.
-  const double lift = orientation_ == SliceOrientation::Sagittal ? 0.5 : -0.5;
-  std::array<double, 3> p = cursor_;
-  p[axis] = image_->GetOrigin()[axis] + image_->GetSpacing()[axis] * slice_ + lift;
+  const std::array<double, 3> p = onTopOfSlice(cursor_);
   const int u = axis == 0 ? 1 : 0;
   const int v = axis == 2 ? 1 : 2;
   std::array<double, 3> a0 = p, a1 = p, b0 = p, b1 = p;

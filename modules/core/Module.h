@@ -36,7 +36,7 @@ class ModuleHost;
 
 /// Bumped whenever Module, ModuleLogic, ModuleCommand or ModuleHost change
 /// in a way that breaks plugins built against the old headers.
-inline constexpr int kModuleApiVersion = 5;
+inline constexpr int kModuleApiVersion = 6;
 
 /// The module's algorithmic side, bound to the scene. Subclasses add the
 /// module's operations; it never includes a widget header.
@@ -91,6 +91,15 @@ struct SurfacePick
 {
   std::array<double, 3> position{}; ///< patient LPS, mm, on the surface
   NodeId surface;                   ///< the Surface node clicked
+};
+
+/// A straight measurement to draw on the slice views: a landmark's depth from
+/// the skin to the bone.
+struct MeasuredSegment
+{
+  std::array<double, 3> from{}; ///< patient LPS, mm
+  std::array<double, 3> to{};   ///< patient LPS, mm
+  std::string label;            ///< "6.2 mm"
 };
 
 /// The 3D view as it is on screen: its pixels and the camera that made them.
@@ -149,6 +158,10 @@ public:
   /// bone from hu[1]; std::nullopt goes back to the segmentation's own
   /// overlay (its label map), if any.
   virtual void previewThresholds(const std::optional<std::array<double, 2>>& hu) = 0;
+  /// Draws @a segment on the slice views, projected onto the slice each
+  /// shows, its label at the @a segment.to end; std::nullopt (or choosing
+  /// another module) takes it away.
+  virtual void showMeasuredSegment(const std::optional<MeasuredSegment>& segment) = 0;
   ///@}
 };
 
