@@ -355,15 +355,24 @@ private:
 
 } // namespace
 
-XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file)
+QImage drawXyPlot(const XyPlot& plot, XyPlotGeometry* geometry)
 {
   validate(plot);
   const GuiForPainting gui;
   XyPlotPainter painter(plot);
-  const QImage image = painter.draw();
+  QImage image = painter.draw();
+  if (geometry)
+    *geometry = painter.geometry();
+  return image;
+}
+
+XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file)
+{
+  XyPlotGeometry geometry;
+  const QImage image = drawXyPlot(plot, &geometry);
   if (!image.save(QString::fromStdString(file.string()), "PNG"))
     throw std::runtime_error("cannot write " + file.string() + ": check the folder's permissions and space");
-  return painter.geometry();
+  return geometry;
 }
 
 } // namespace caps::render

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+class QImage;
+
 namespace caps::render {
 
 /// One curve: points joined in the order given, a marker at each.
@@ -65,6 +67,11 @@ struct XyPlotGeometry
 /// under 200 × 150 pixels; std::runtime_error when a non-GUI Qt
 /// application is running (text cannot be drawn) or the file cannot be written.
 XyPlotGeometry writeXyPlotPng(const XyPlot& plot, const std::filesystem::path& file);
+
+/// drawXyPlot()'s picture in memory (RGB32), for a widget to show; where
+/// the data went goes to @a geometry when given. The same requirements and
+/// exceptions as writeXyPlotPng (but no file).
+QImage drawXyPlot(const XyPlot& plot, XyPlotGeometry* geometry = nullptr);
 
 /// The tick values for data in [lo, hi]: equally spaced by 1, 2 or 5 × 10^k,
 /// about @a targetCount of them, the first ≤ lo and the last ≥ hi (the

@@ -1,6 +1,7 @@
 #include "modules/rangemap/RangeMapView.h"
 
 #include "modules/rangemap/LabelLayout.h"
+#include "segmentation/CylindricalFrame.h"
 
 #include <algorithm>
 #include <cmath>
@@ -82,6 +83,12 @@ void RangeMapView::clear()
 void RangeMapView::setMarker(std::optional<std::array<double, 2>> chartPoint)
 {
   marker_ = chartPoint;
+  update();
+}
+
+void RangeMapView::setProfileLine(std::optional<std::array<std::array<double, 2>, 2>> line)
+{
+  profile_line_ = line;
   update();
 }
 
@@ -195,6 +202,22 @@ void RangeMapView::paintEvent(QPaintEvent*)
     if (labels[k])
       painter.drawText(QRectF(labels[k]->x, labels[k]->y, labels[k]->width, labels[k]->height),
                        Qt::AlignLeft | Qt::AlignVCenter, landmarks_[k].first);
+  if (profile_line_)
+  { // the shorter way round in θ, as ThicknessReview::profile goes; broken at the seam
+    const auto& [from, to] = *profile_line_;
+    const double dTheta = std::remainder(to[0] - from[0], 2.0 * std::numbers::pi);
+    painter.setPen(QPen(QColor(255, 255, 255), 2.0));
+    QPointF last = widgetPointOf(from[0], from[1]);
+    for (int k = 1; k <= 64; ++k)
+    {
+      const double t = k / 64.0;
+      const QPointF p =
+        widgetPointOf(seg::CylindricalFrame::wrapTheta(from[0] + t * dTheta), from[1] + t * (to[1] - from[1]));
+      if (std::abs(p.x() - last.x()) < 0.5 * r.width())
+        painter.drawLine(last, p);
+      last = p;
+    }
+  }
   if (marker_)
   {
     const QPointF p = widgetPointOf((*marker_)[0], (*marker_)[1]);

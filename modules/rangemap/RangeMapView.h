@@ -36,6 +36,8 @@ public:
 
   /// A crosshair at chart point (θ, z) (radians, mm); none with std::nullopt.
   void setMarker(std::optional<std::array<double, 2>> chartPoint);
+  /// A line between two chart points (the thickness profile's); none with std::nullopt.
+  void setProfileLine(std::optional<std::array<std::array<double, 2>, 2>> line);
   /// Dots with labels at chart points (the landmarks).
   void setLandmarks(std::vector<std::pair<QString, std::array<double, 2>>> landmarks);
 
@@ -69,6 +71,7 @@ private:
   double low_ = 0.0, high_ = 1.0;
   QString title_;
   std::optional<std::array<double, 2>> marker_;
+  std::optional<std::array<std::array<double, 2>, 2>> profile_line_;
   std::vector<std::pair<QString, std::array<double, 2>>> landmarks_;
 };
 

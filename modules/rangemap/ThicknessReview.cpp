@@ -6,6 +6,7 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 
 #include <vtkDoubleArray.h>
 #include <vtkImageData.h>
@@ -104,6 +105,48 @@ ThicknessProbe ThicknessReview::probe(double theta, double z) const
   else
     p.skinPoint = {kNaN, kNaN, kNaN};
   return p;
+}
+
+ThicknessProfile ThicknessReview::profile(const std::array<double, 2>& from, const std::array<double, 2>& to,
+                                          ThicknessMeasure measure, double step) const
+{
+  if (!std::isfinite(probe(from[0], from[1]).skinRadius) && !std::isfinite(probe(to[0], to[1]).skinRadius))
+    throw std::invalid_argument("Neither end of the line is on the skin map: draw it on the face.");
+  const double dTheta = std::remainder(to[0] - from[0], 2.0 * std::numbers::pi); // the shorter way round
+  const double dZ = to[1] - from[1];
+  const auto chartAt = [&](double t) { return std::array<double, 2>{from[0] + t * dTheta, from[1] + t * dZ}; };
+  // Enough samples for the step on the skin: the line's length on the
+  // cylinder through the widest skin along it bounds the skin's.
+  double widest = 0.0;
+  for (int k = 0; k <= 64; ++k)
+  {
+    const auto c = chartAt(k / 64.0);
+    if (const double r = probe(c[0], c[1]).skinRadius; std::isfinite(r))
+      widest = std::max(widest, r);
+  }
+  const double length = std::hypot(widest * dTheta, dZ);
+  const int n = std::max(2, static_cast<int>(std::ceil(2.0 * length / std::max(step, 1e-3))));
+  const seg::RangeMap& map = thicknessMap(measure);
+  ThicknessProfile profile;
+  std::optional<Eigen::Vector3d> last;
+  double along = 0.0;
+  for (int k = 0; k <= n; ++k)
+  {
+    const auto c = chartAt(static_cast<double>(k) / n);
+    const ThicknessProbe p = probe(c[0], c[1]);
+    const Eigen::Vector3d skin(p.skinPoint[0], p.skinPoint[1], p.skinPoint[2]);
+    if (skin.allFinite())
+    {
+      if (last)
+        along += (skin - *last).norm();
+      last = skin;
+    }
+    profile.along.push_back(along);
+    profile.thickness.push_back(skin.allFinite() ? map.sample(p.theta, c[1]) : kNaN);
+    profile.skin.push_back(p.skinPoint);
+    profile.chart.push_back({p.theta, c[1]});
+  }
+  return profile;
 }
 
 std::array<double, 2> ThicknessReview::chartOf(const std::array<double, 3>& world) const

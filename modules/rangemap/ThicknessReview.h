@@ -37,6 +37,16 @@ struct ThicknessProbe
   std::array<double, 3> skinPoint{}; ///< the skin there (patient LPS); NaN without skin
 };
 
+/// The thickness along a line drawn on the skin, sampled about every
+/// half millimetre of skin.
+struct ThicknessProfile
+{
+  std::vector<double> along;                ///< mm of skin from the line's start
+  std::vector<double> thickness;            ///< mm by the measure asked for; NaN over holes
+  std::vector<std::array<double, 3>> skin;  ///< the skin points (patient LPS); NaN over holes
+  std::vector<std::array<double, 2>> chart; ///< their (θ, z)
+};
+
 /// Which thickness a view shows.
 enum class ThicknessMeasure
 {
@@ -68,6 +78,16 @@ public:
   ThicknessProbe probe(double theta, double z) const;
   /// The chart point (θ, z) of a world point, as the maps' frame sees it.
   std::array<double, 2> chartOf(const std::array<double, 3>& world) const;
+
+  /// The thickness by @a measure along the line on the skin from chart
+  /// point @a from to @a to (θ radians, z mm): the straight line of the
+  /// unwrapped chart (the shorter way round in θ), which on the skin is the
+  /// curve the map view shows. Distances are measured along the skin (the
+  /// polyline through the skin points); over a hole in the skin map the
+  /// distance bridges it straight. Sampled every @a step mm of skin or finer.
+  /// @throws std::invalid_argument when neither end lies on the skin map.
+  ThicknessProfile profile(const std::array<double, 2>& from, const std::array<double, 2>& to, ThicknessMeasure measure,
+                           double step = 0.5) const;
 
   /// The map of @a measure (the radial one when the normal map is missing).
   const seg::RangeMap& thicknessMap(ThicknessMeasure measure) const;

@@ -243,4 +243,43 @@ TEST(ThicknessReview, LandmarksCsvHasOneRowPerLandmarkWithItsThickness)
   EXPECT_EQ(second.substr(second.size() - 4), ",,,,") << second;
 }
 
+// The profile along a line on the skin, against the cylinder's closed form:
+// up the axis the skin is a straight line of slope 0.1 (r = 80 + 0.1 z), so
+// its length is dz·√1.01 and the thickness grows by 0.1 mm per mm of z;
+// round the axis it is an arc r·dθ of constant thickness.
+TEST(ThicknessReview, ProfileAlongALineOnTheSkinFollowsTheClosedForm)
+{
+  caps::seg::CylindricalFrame frame;
+  const caps::ThicknessReview review = makeReview(frame);
+  const auto up = review.profile({0.4, -30.0}, {0.4, 40.0}, caps::ThicknessMeasure::Radial, 0.5);
+  ASSERT_GE(up.along.size(), 140u); // a sample every half millimetre of skin or finer
+  EXPECT_NEAR(up.along.back(), 70.0 * std::sqrt(1.01), 1e-3);
+  for (std::size_t k = 0; k < up.along.size(); ++k)
+  {
+    const double z = up.chart[k][1];
+    EXPECT_NEAR(up.thickness[k], skinRadius(z) - kBoneRadius, 1e-4);
+    EXPECT_NEAR(up.along[k], (z + 30.0) * std::sqrt(1.01), 1e-3);
+    const Eigen::Vector3d skin = frame.toWorld(skinRadius(z), 0.4, z);
+    EXPECT_NEAR(up.skin[k][0], skin.x(), 1e-3);
+  }
+  // Along the normal: the normal map's values (0.99 of the radial here).
+  const auto normal = review.profile({0.4, -30.0}, {0.4, 40.0}, caps::ThicknessMeasure::AlongNormal, 0.5);
+  EXPECT_NEAR(normal.thickness.back(), 0.99 * (skinRadius(40.0) - kBoneRadius), 1e-4);
+
+  // Round the axis, the shorter way: from θ = 3 to θ = −3 crosses the seam
+  // (0.283 rad), not the face (6 rad).
+  const double dTheta = 2 * kPi - 6.0;
+  const auto round = review.profile({3.0, 10.0}, {-3.0, 10.0}, caps::ThicknessMeasure::Radial, 0.5);
+  EXPECT_NEAR(round.along.back(), skinRadius(10.0) * dTheta, 1e-3 * skinRadius(10.0) * dTheta);
+  for (double t : round.thickness)
+    EXPECT_NEAR(t, 11.0, 1e-4);
+
+  // A line that leaves the maps (z above 50) has no thickness there, and
+  // its length counts only the skin it crosses.
+  const auto off = review.profile({0.0, 30.0}, {0.0, 70.0}, caps::ThicknessMeasure::Radial, 0.5);
+  EXPECT_TRUE(std::isnan(off.thickness.back()));
+  EXPECT_NEAR(off.along.back(), 20.0 * std::sqrt(1.01), 0.5);
+  EXPECT_THROW(review.profile({0.0, 60.0}, {1.0, 80.0}, caps::ThicknessMeasure::Radial), std::invalid_argument);
+}
+
 } // namespace
