@@ -663,7 +663,9 @@ void IncisionPanel::movePointTo(const NodeId& planId, int point, const SurfacePi
 
 void IncisionPanel::updateHandles()
 {
-  const PlanNode* node = isVisible() ? selectedPlan() : nullptr;
+  if (!isVisible())
+    return; // the handles belong to the panel shown (hideEvent took ours away)
+  const PlanNode* node = selectedPlan();
   const RangeMapNode* skinNode = node ? skinOf(*node) : nullptr;
   if (!skinNode)
   {

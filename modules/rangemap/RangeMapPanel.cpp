@@ -1,6 +1,8 @@
 #include "modules/rangemap/RangeMapPanel.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -15,6 +17,8 @@
 #include <QHeaderView>
 #include <QLabel>
 #include <QLineEdit>
+#include <QPixmap>
+#include <QPointer>
 #include <QPushButton>
 #include <QTableWidget>
 #include <QTimer>
@@ -23,10 +27,12 @@
 #include "modules/rangemap/RangeMapLogic.h"
 #include "modules/rangemap/RangeMapView.h"
 #include "modules/segment/SegmentLogic.h"
+#include "render/XyPlot.h"
 #include "scene/LabelMapNode.h"
 #include "scene/LandmarksNode.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
+#include "scene/ScopedEdit.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/LandmarkPlacement.h"
@@ -148,6 +154,20 @@ void RangeMapPanel::addThicknessReview(QVBoxLayout* layout)
   histogram_ = new ThicknessHistogram(review);
   histogram_->setObjectName("rangemap.histogram");
   reviewLayout->addWidget(histogram_);
+  profile_button_ = new QPushButton(tr("Thickness along a line..."), review);
+  profile_button_->setObjectName("rangemap.profile");
+  profile_button_->setToolTip(tr("Click the line's two ends on the 3D skin: the thickness along it is plotted"));
+  reviewLayout->addWidget(profile_button_);
+  profile_plot_ = new QLabel(review);
+  profile_plot_->setObjectName("rangemap.profilePlot");
+  profile_plot_->setAlignment(Qt::AlignCenter);
+  profile_plot_->hide();
+  reviewLayout->addWidget(profile_plot_);
+  profile_summary_ = new QLabel(review);
+  profile_summary_->setObjectName("rangemap.profileSummary");
+  profile_summary_->setWordWrap(true);
+  profile_summary_->hide();
+  reviewLayout->addWidget(profile_summary_);
   layout->addWidget(review);
 }
 
@@ -202,18 +222,17 @@ void RangeMapPanel::connectControls()
   connect(run_, &QPushButton::clicked, this, &RangeMapPanel::run);
   connect(map_kind_, qOverload<int>(&QComboBox::currentIndexChanged), this, [this](int) { chooseMap(); });
   connect(paint_, &QCheckBox::toggled, this, &RangeMapPanel::paintThickness);
+  connect(profile_button_, &QPushButton::clicked, this, &RangeMapPanel::drawProfileLine);
   connect(map_view_, &RangeMapView::hovered, this, &RangeMapPanel::showProbe);
   connect(map_view_, &RangeMapView::clicked, this, &RangeMapPanel::locate);
   connect(add_landmark_, &QPushButton::clicked, this, &RangeMapPanel::addLandmark);
   connect(place_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::placeStandardLandmarks);
   connect(remove_landmark_, &QPushButton::clicked, this, &RangeMapPanel::removeLandmark);
   connect(export_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::exportLandmarks);
-  connect(landmarks_, &QTableWidget::cellDoubleClicked, this, [this](int r, int) {
-    LandmarksNode* node = landmarksNode(false);
-    if (!node || !review_ || r >= static_cast<int>(node->landmarks().size()))
-      return;
-    const auto chart = review_->chartOf(node->landmarks()[static_cast<size_t>(r)].position);
-    locate(chart[0], chart[1]);
+  connect(landmarks_, &QTableWidget::cellClicked, this, [this](int r, int) { showLandmark(r); });
+  connect(landmarks_, &QTableWidget::currentCellChanged, this, [this](int r, int, int previous, int) {
+    if (!filling_table_ && r != previous)
+      showLandmark(r); // the arrow keys go down the table too
   });
   connect(locate_, &QPushButton::clicked, this, [this]() {
     if (!review_)
@@ -274,17 +293,19 @@ void RangeMapPanel::reloadMaps()
   map_view_->setSpoiled(review_ ? review_->spoiledSamples() : std::vector<unsigned char>());
   const bool ready = review_.has_value();
   for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, place_landmarks_, locate_,
-                                                    remove_landmark_, export_landmarks_})
+                                                    remove_landmark_, export_landmarks_, profile_button_})
     w->setEnabled(ready);
   if (!ready)
   {
     map_view_->clear();
     histogram_->setCounts({}, kHistogramBin);
+    updateProfile();
     return;
   }
   updateThicknessScale();
   showMap();
   updateLandmarks();
+  updateProfile();
   if (paint_->isChecked())
     paintThickness(true);
 }
@@ -302,6 +323,78 @@ void RangeMapPanel::chooseMap()
   showMap();
   if (changed && review_ && paint_->isChecked())
     paintThickness(true);
+  if (changed)
+    updateProfile();
+}
+
+void RangeMapPanel::drawProfileLine()
+{
+  if (!review_)
+  {
+    host_.showError("Thickness along a line", "Build the range maps first.");
+    return;
+  }
+  QPointer<RangeMapPanel> self(this);
+  host_.pickInThreeDView("Click where the line starts on the skin", [self](const SurfacePick& start) {
+    if (!self)
+      return;
+    self->host_.pickInThreeDView("Click where the line ends on the skin", [self, start](const SurfacePick& end) {
+      if (!self || !self->review_)
+        return;
+      self->profile_line_ = {self->review_->chartOf(start.position), self->review_->chartOf(end.position)};
+      self->updateProfile();
+    });
+  });
+}
+
+void RangeMapPanel::updateProfile()
+{
+  const bool shown = review_ && profile_line_;
+  map_view_->setProfileLine(shown ? profile_line_ : std::nullopt);
+  profile_plot_->setVisible(shown);
+  profile_summary_->setVisible(shown);
+  if (!shown)
+    return;
+  const ThicknessProfile profile = review_->profile((*profile_line_)[0], (*profile_line_)[1], measure_);
+  render::PlotSeries series{tr("thickness (mm)").toStdString(), {}, {}, 0x1f77b4};
+  double holes = 0.0;
+  for (std::size_t k = 0; k < profile.along.size(); ++k)
+    if (std::isfinite(profile.thickness[k]))
+    {
+      series.x.push_back(profile.along[k]);
+      series.y.push_back(profile.thickness[k]);
+    }
+    else if (k > 0)
+      holes += profile.along[k] - profile.along[k - 1];
+  const double length = profile.along.back();
+  if (series.x.size() < 2)
+  {
+    profile_plot_->clear();
+    profile_summary_->setText(tr("No thickness along this line: draw it on the face, where the maps have skin "
+                                 "and bone."));
+    return;
+  }
+  render::XyPlot plot;
+  plot.title = tr("Soft-tissue thickness %1 along the line").arg(measureName(measure_)).toStdString();
+  plot.xLabel = tr("along the skin (mm)").toStdString();
+  plot.series = {series};
+  plot.width = std::max(300, map_view_->width()); // drawn at the size shown: the text stays readable
+  plot.height = std::max(200, plot.width * 11 / 20);
+  profile_plot_->setPixmap(QPixmap::fromImage(render::drawXyPlot(plot)));
+  const auto [low, high] = std::minmax_element(series.y.begin(), series.y.end());
+  double mean = 0.0;
+  for (double y : series.y)
+    mean += y;
+  mean /= static_cast<double>(series.y.size());
+  QString text = tr("Line %1 mm along the skin: thickness %2 from %3 to %4 mm, mean %5 mm")
+                   .arg(length, 0, 'f', 1)
+                   .arg(measureName(measure_))
+                   .arg(*low, 0, 'f', 1)
+                   .arg(*high, 0, 'f', 1)
+                   .arg(mean, 0, 'f', 1);
+  if (holes > 0.0)
+    text += tr("; no value over %1 mm (no skin or bone there on the maps)").arg(holes, 0, 'f', 1);
+  profile_summary_->setText(text + ".");
 }
 
 void RangeMapPanel::updateThicknessScale()
@@ -505,6 +598,7 @@ void RangeMapPanel::updateLandmarks()
 {
   LandmarksNode* node = landmarksNode(false);
   const auto& list = node ? node->landmarks() : std::vector<LandmarksNode::Landmark>{};
+  filling_table_ = true;
   landmarks_->setRowCount(static_cast<int>(list.size()));
   std::vector<std::pair<QString, std::array<double, 2>>> onMap;
   for (std::size_t r = 0; r < list.size(); ++r)
@@ -535,6 +629,94 @@ void RangeMapPanel::updateLandmarks()
     }
   }
   map_view_->setLandmarks(std::move(onMap));
+  filling_table_ = false;
+  updateHandles();
+  if (!dragged_.empty())
+  { // the landmark just dragged: its new depth, drawn
+    for (std::size_t r = 0; r < list.size(); ++r)
+      if (list[r].name == dragged_)
+      {
+        landmarks_->selectRow(static_cast<int>(r));
+        showLandmark(static_cast<int>(r));
+      }
+    dragged_.clear();
+  }
+}
+
+void RangeMapPanel::showLandmark(int row)
+{
+  LandmarksNode* node = landmarksNode(false);
+  if (!node || !review_ || row < 0 || row >= static_cast<int>(node->landmarks().size()))
+    return;
+  const LandmarksNode::Landmark& landmark = node->landmarks()[static_cast<std::size_t>(row)];
+  const auto chart = review_->chartOf(landmark.position);
+  map_view_->setMarker(chart);
+  showProbe(chart[0], chart[1]);
+  host_.setCursorPosition(landmark.position);
+  const MeasuredDepth* d = depthOf(landmark);
+  if (!d || !std::isfinite(d->depth) || !std::isfinite(d->boneEnd[0]))
+  {
+    host_.showMeasuredSegment(std::nullopt);
+    host_.showStatus(landmark.name + ": no depth measured in the CT" +
+                     (d ? " (" + d->convention + ")" : std::string(" (segment the CT first)")));
+    return;
+  }
+  char label[96];
+  std::snprintf(label, sizeof label, "%s %.1f mm", landmark.name.c_str(), d->depth);
+  host_.showMeasuredSegment(MeasuredSegment{d->skinEnd, d->boneEnd, label});
+  host_.showStatus(std::string(label) + ", " + d->convention + ": drawn on the slices");
+}
+
+void RangeMapPanel::updateHandles()
+{
+  if (!isVisible())
+    return; // the handles belong to the panel shown (hideEvent took ours away)
+  LandmarksNode* node = review_ ? landmarksNode(false) : nullptr;
+  if (!node || node->landmarks().empty())
+  {
+    host_.setThreeDViewHandles({}, nullptr);
+    return;
+  }
+  std::vector<std::array<double, 3>> points;
+  for (const auto& landmark : node->landmarks())
+    points.push_back(landmark.position);
+  QPointer<RangeMapPanel> self(this);
+  host_.setThreeDViewHandles(points, [self](int index, const SurfacePick& pick) {
+    if (self)
+      self->moveLandmark(static_cast<std::size_t>(index), pick);
+  });
+}
+
+void RangeMapPanel::moveLandmark(std::size_t index, const SurfacePick& pick)
+{
+  LandmarksNode* node = landmarksNode(false);
+  const SurfaceNode* skin = skinSurface(logic_.scene());
+  if (!node || index >= node->landmarks().size())
+    return;
+  if (!skin || pick.surface != skin->id())
+  {
+    host_.showStatus("A landmark goes on the skin: let it go over the skin surface.");
+    updateHandles(); // the handle goes back to the landmark
+    return;
+  }
+  std::vector<LandmarksNode::Landmark> list = node->landmarks();
+  dragged_ = list[index].name;
+  list[index].position = pick.position;
+  ScopedEdit edit(logic_.scene(), node->id(), "Move landmark " + dragged_);
+  node->setLandmarks(std::move(list)); // the table follows, measured again
+}
+
+void RangeMapPanel::showEvent(QShowEvent* event)
+{
+  QWidget::showEvent(event);
+  updateHandles();
+}
+
+void RangeMapPanel::hideEvent(QHideEvent* event)
+{
+  QWidget::hideEvent(event);
+  host_.setThreeDViewHandles({}, nullptr);
+  host_.showMeasuredSegment(std::nullopt);
 }
 
 const RangeMapPanel::MeasuredDepth* RangeMapPanel::depthOf(const LandmarksNode::Landmark& landmark)
@@ -557,8 +739,11 @@ const RangeMapPanel::MeasuredDepth* RangeMapPanel::depthOf(const LandmarksNode::
   {
     return nullptr; // a CT the label map does not fit: the maps' columns still read
   }
+  const seg::LandmarkThickness& measured = rows.front();
+  const auto lps = [](const Eigen::Vector3d& p) { return std::array<double, 3>{p.x(), p.y(), p.z()}; };
   MeasuredDepth& d = depths_[landmark.name];
-  d = {landmark.position, rows.front().depth, rows.front().convention, rows.front().note};
+  d = {landmark.position,         measured.depth, measured.convention, measured.note, lps(measured.depthSkinEnd),
+       lps(measured.depthBoneEnd)};
   return &d;
 }
 

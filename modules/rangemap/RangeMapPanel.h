@@ -10,6 +10,7 @@
 
 #include <QWidget>
 
+#include "modules/core/Module.h"
 #include "modules/rangemap/ThicknessReview.h"
 
 class QVBoxLayout;
@@ -35,6 +36,10 @@ public:
   RangeMapPanel(RangeMapLogic& logic, ModuleHost& host, QWidget* parent = nullptr);
   ~RangeMapPanel() override;
 
+protected:
+  void showEvent(QShowEvent* event) override;
+  void hideEvent(QHideEvent* event) override;
+
 private:
   /// @name The panel's parts, top to bottom, and their wiring
   ///@{
@@ -55,12 +60,25 @@ private:
   void showProbe(double theta, double z);
   void locate(double theta, double z);
   void paintThickness(bool on);
+  /// Arms two picks on the 3D skin: the ends of the line whose thickness
+  /// profile is plotted.
+  void drawProfileLine();
+  /// The profile of the line drawn, by the measure shown: plotted, summed
+  /// up and drawn on the map (nothing while no line is drawn).
+  void updateProfile();
   void addLandmark();
   /// The standard landmarks placed from the maps (seg::placeLandmarks) into
   /// the scene's landmarks, replacing those of the same names; the user's own
   /// stay. Those not placed are named in the status bar with why.
   void placeStandardLandmarks();
   void removeLandmark();
+  /// Landmark @a row of the table on the face (the cursor), on the map and
+  /// in the three slices with its measured depth drawn.
+  void showLandmark(int row);
+  /// The landmarks as handles on the 3D face while the panel is shown: one
+  /// dragged and let go on the skin moves there and is measured again.
+  void updateHandles();
+  void moveLandmark(std::size_t index, const SurfacePick& pick);
   void exportLandmarks();
   void updateLandmarks();
   LandmarksNode* landmarksNode(bool create);
@@ -72,6 +90,9 @@ private:
     double depth = 0.0;
     std::string convention;
     std::string note; ///< what spoils it (metal streaks), if anything
+    /// The measured segment, skin to bone (patient LPS); NaN where none.
+    std::array<double, 3> skinEnd{};
+    std::array<double, 3> boneEnd{};
   };
   const MeasuredDepth* depthOf(const LandmarksNode::Landmark& landmark);
   std::map<std::string, MeasuredDepth> depths_;
@@ -85,6 +106,8 @@ private:
   /// (the last one chosen while the map shows a skin or bone radius).
   ThicknessMeasure measure_ = ThicknessMeasure::Radial;
   bool reload_pending_ = false;
+  bool filling_table_ = false; ///< the table is being rebuilt: its selection means nothing yet
+  std::string dragged_;        ///< the landmark just dragged, shown once measured again
   QCheckBox* smooth_ = nullptr;
   QPushButton* run_ = nullptr;
   QLabel* status_ = nullptr;
@@ -93,6 +116,11 @@ private:
   RangeMapView* map_view_ = nullptr;
   QLabel* probe_ = nullptr;
   ThicknessHistogram* histogram_ = nullptr;
+  QPushButton* profile_button_ = nullptr;
+  QLabel* profile_plot_ = nullptr;
+  QLabel* profile_summary_ = nullptr;
+  /// The line drawn for the profile: its ends on the chart (θ, z).
+  std::optional<std::array<std::array<double, 2>, 2>> profile_line_;
   QLineEdit* landmark_name_ = nullptr;
   QTableWidget* landmarks_ = nullptr;
   QPushButton* add_landmark_ = nullptr;
