@@ -25,10 +25,12 @@
 #include <QTimer>
 #include <QVBoxLayout>
 
+#include "modules/incision/IncisionLogic.h"
 #include "modules/simulate/LivePrediction.h"
 #include "modules/simulate/PlanSimulationRun.h"
 #include "modules/simulate/SimulateLogic.h"
 #include "scene/PlanNode.h"
+#include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
 #include "scene/SurfaceNode.h"
 
@@ -583,6 +585,16 @@ void SimulatePanel::run()
     host_.showError("Simulate", e.what());
     return;
   }
+  // A plan saved in a scene (or replayed) before its CT's metal was known:
+  // refused here as the Incision panel and `caps plan` refuse it.
+  if (const auto* skinNode = logic_.scene().nodeAs<RangeMapNode>(input->skinMapId))
+    if (const std::string spoiled =
+          IncisionLogic(logic_.scene()).cutInMetalStreaks(input->plan, input->skin, *skinNode);
+        !spoiled.empty())
+    {
+      host_.showError("Simulate", "Not run: " + spoiled);
+      return;
+    }
   livePrediction_->cancel(); // the run replaces what it would show
   Scene& scene = logic_.scene();
   QPointer<SimulatePanel> panel(this);

@@ -18,6 +18,7 @@
 #include <QTableWidget>
 
 #include <vtkDataArray.h>
+#include <vtkImageData.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkUnstructuredGrid.h>
@@ -32,6 +33,8 @@
 #include "scene/ScopedEdit.h"
 #include "scene/SolutionNode.h"
 #include "scene/SurfaceNode.h"
+#include "scene/VolumeNode.h"
+#include "segmentation/CylindricalFrame.h"
 
 namespace caps {
 namespace {
@@ -417,6 +420,46 @@ TEST(SimulatePanel, BadMaterialIsRefusedAndNothingRuns)
     const std::string last = w.window().reportedErrors().back();
     EXPECT_NE(last.find(column == 2 ? "Poisson" : "Young"), std::string::npos) << last;
   }
+}
+
+// A plan saved before its CT's metal was known (here: a dental filling put
+// into the demo CT's voxels after the plan was made, in the slice of its
+// first cut point) is refused when it is simulated, with where and what to do,
+// and nothing runs.
+TEST(SimulatePanel, APlanThroughMetalStreaksIsRefused)
+{
+  test::Workstation w;
+  openDemo(w, 3.0);
+  auto* plan = static_cast<PlanNode*>(nodesNamed(w.scene(), NodeType::Plan, kPlan).front());
+  const RangeMapNode* skinNode = w.scene().nodeAs<RangeMapNode>(plan->rangeMapId());
+  ASSERT_NE(skinNode, nullptr);
+  auto* volume = w.scene().nodeAs<VolumeNode>(skinNode->sourceVolumeId());
+  ASSERT_NE(volume, nullptr);
+  const seg::RangeMap skin = RangeMapLogic::toRangeMap(*skinNode);
+  const seg::CylindricalPoint c =
+    skin.frame().fromNormalized({1.0, plan->cutPath().front().x(), plan->cutPath().front().y()});
+  // 2 x 2 x 2 voxels of metal 30 mm inside the skin at the cut's first point.
+  const Eigen::Vector3d inside = skin.frame().toWorld(skin.sample(c.theta, c.z) - 30.0, c.theta, c.z);
+  vtkImageData* ct = volume->image();
+  int ijk[3];
+  double pcoords[3];
+  double at[3] = {inside.x(), inside.y(), inside.z()};
+  ASSERT_NE(ct->ComputeStructuredCoordinates(at, ijk, pcoords), 0);
+  for (int dk = 0; dk <= 1; ++dk)
+    for (int dj = 0; dj <= 1; ++dj)
+      for (int di = 0; di <= 1; ++di)
+        ct->SetScalarComponentFromDouble(ijk[0] + di, ijk[1] + dj, ijk[2] + dk, 0, 3071.0);
+  ct->Modified();
+
+  const std::vector<std::string> before = nodeIds(w.scene());
+  const std::size_t errors = w.window().reportedErrors().size();
+  QTest::mouseClick(w.widget<QPushButton>("simulate.run"), Qt::LeftButton);
+  w.settle(200);
+  ASSERT_TRUE(w.waitUntilIdle(300));
+  ASSERT_EQ(w.window().reportedErrors().size(), errors + 1) << "Run was not refused";
+  const std::string message = w.window().reportedErrors().back();
+  EXPECT_NE(message.find("metal"), std::string::npos) << message;
+  EXPECT_EQ(nodeIds(w.scene()), before) << "something ran";
 }
 
 } // namespace
