@@ -144,11 +144,21 @@ void ReportDocument::fields(const std::vector<std::pair<std::string, std::string
   html_ += "</table>\n";
 }
 
-void ReportDocument::table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows)
+void ReportDocument::table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
+                           const std::vector<int>& widthPercent)
 {
+  if (!widthPercent.empty() && widthPercent.size() != header.size())
+    throw std::invalid_argument("ReportDocument::table: one width per column");
   html_ += "<table" + breakStyle() + " border=\"1\" cellspacing=\"0\" cellpadding=\"3\" width=\"100%\">\n<tr>";
-  for (const auto& h : header)
-    html_ += "<th bgcolor=\"#e8ecf2\">" + escapeHtml(h) + "</th>";
+  for (std::size_t c = 0; c < header.size(); ++c)
+  {
+    html_ += "<th bgcolor=\"#e8ecf2\"";
+    if (!widthPercent.empty())
+      html_ += " width=\"" + std::to_string(widthPercent[c]) + "%\"";
+    html_ += '>';
+    html_ += escapeHtml(header[c]);
+    html_ += "</th>";
+  }
   html_ += "</tr>\n";
   for (const auto& row : rows)
   {

@@ -50,8 +50,12 @@ public:
   void paragraph(const std::string& text);
   /// A two-column table of names and values.
   void fields(const std::vector<std::pair<std::string, std::string>>& rows);
-  /// A table with a header row; numbers are right-aligned.
-  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows);
+  /// A table with a header row; numbers are right-aligned. @a widthPercent,
+  /// when given (one per column), sets each column's share of the page's
+  /// width, so that words such as "approximate" are not broken in a column
+  /// the layout would make too narrow.
+  void table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows,
+             const std::vector<int>& widthPercent = {});
   /// Figures side by side, each @a widthMm wide on paper, and their
   /// captions under them, lettered (a), (b), ... when there are several
   /// (unless @a lettered is false: captions numbered by the caller).
