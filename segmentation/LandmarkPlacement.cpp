@@ -245,6 +245,70 @@ double rhinionZ(const RangeMap& bone, double zNasion, double zTip)
   return nan;
 }
 
+/// The eyes' height for the pupils' columns: a little below the nasion
+/// (the soft-tissue nasion lies about at the upper lid's crease).
+constexpr double kPupilBelowNasion = 5.0; // mm
+/// An orbit on the bone map: a pit at least this deep below both rims.
+constexpr double kOrbitDepth = 8.0; // mm
+
+/// The orbital rims on the bone map's column @a theta (the pupil's), the
+/// tables' mid-supraorbital and mid-infraorbital (De Greef et al. 2006):
+/// the orbit is the deepest bone within 35 mm below and 20 mm above the
+/// nasion (its roof lies 10-20 mm above the soft-tissue nasion), read through a 5-row running median (one-row glitches are not
+/// orbits or rims). Walking
+/// up (down) the column from it, the rim is where the bone first comes
+/// within 1 mm of the highest bone in the next 15 mm: the edge where the
+/// orbit's wall ends, at the crest of a raised margin; that highest bone
+/// must stand kOrbitDepth above the orbit. Linear between rows.
+struct OrbitRims
+{
+  double supra = nan, infra = nan; ///< z (mm); NaN where not found
+};
+OrbitRims orbitRims(const RangeMap& bone, double theta, double zNasion)
+{
+  OrbitRims rims;
+  if (bone.empty() || !std::isfinite(theta) || !std::isfinite(zNasion))
+    return rims;
+  const CylindricalFrame& frame = bone.frame();
+  std::vector<double> raw(static_cast<std::size_t>(frame.nZ()));
+  for (int j = 0; j < frame.nZ(); ++j)
+    raw[j] = bone.sample(theta, frame.indexToZ(j));
+  const std::vector<double> p = runningMedian(raw, 2);
+  // A row without bone is a hole in the map (bone too thin for the
+  // segmentation), not the orbit, whose rays meet its walls.
+  const auto depthOf = [&p](int j) { return std::isfinite(p[j]) ? p[j] : -std::numeric_limits<double>::infinity(); };
+  const int low = std::max(0, rowOf(frame, zNasion - 35.0)), high = rowOf(frame, zNasion + 20.0);
+  int orbit = -1;
+  for (int j = low; j <= high; ++j)
+    if (std::isfinite(p[j]) && (orbit < 0 || p[j] < p[orbit]))
+      orbit = j;
+  if (orbit < 0)
+    return rims;
+  const double floor = p[orbit];
+  const int ahead = static_cast<int>(std::lround(15.0 / frame.zStep()));
+  const auto rim = [&](int direction) {
+    for (int j = orbit + direction; j >= 0 && j < frame.nZ(); j += direction)
+    {
+      double highest = -std::numeric_limits<double>::infinity();
+      for (int k = j; k >= 0 && k < frame.nZ() && std::abs(k - j) <= ahead; k += direction)
+        highest = std::max(highest, depthOf(k));
+      if (!(highest - floor >= kOrbitDepth))
+        return nan; // the bone never rises out of the orbit: no rim
+      if (depthOf(j) >= highest - 1.0)
+      {
+        const int before = j - direction;
+        const double target = highest - 1.0, b = depthOf(before), t = (target - b) / (p[j] - b);
+        const double zBefore = frame.indexToZ(before), zHere = frame.indexToZ(j);
+        return std::isfinite(b) && t > 0.0 && t <= 1.0 ? zBefore + t * (zHere - zBefore) : zHere;
+      }
+    }
+    return nan;
+  };
+  rims.supra = rim(+1);
+  rims.infra = rim(-1);
+  return rims;
+}
+
 /// How far a landmark's rule can be trusted (this file's header comment).
 const char* confidenceOf(std::string_view name)
 {
@@ -415,6 +479,12 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   const double front = kFrontTheta;
   const double cheekLeft = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, +1) : nan;
   const double cheekRight = std::isfinite(zPrn) ? besideTheMidline(skin, zPrn, kCheekOffset, -1) : nan;
+  const double pupilLeft = std::isfinite(zN) ? besideTheMidline(skin, zN - kPupilBelowNasion, kCheekOffset, +1) : nan;
+  const double pupilRight = std::isfinite(zN) ? besideTheMidline(skin, zN - kPupilBelowNasion, kCheekOffset, -1) : nan;
+  const OrbitRims orbitLeft = orbitRims(bone, pupilLeft, zN), orbitRight = orbitRims(bone, pupilRight, zN);
+  const char* noOrbit = bone.empty() ? "the orbits are read on the bone range map, and there is none"
+                                     : "no orbit (bone 8 mm deeper than its rims) under the pupil beside the nasion, "
+                                       "or no rim within 30 mm of it";
   const char* noJaw = "no jaw underside (profile below 60 % of the nose tip) below the nose tip";
   const double zRhinion = rhinionZ(bone, zN, zPrn);
   const char* noRhinion = bone.empty() ? "the nasal bones are read on the bone range map, and there is none"
@@ -441,6 +511,10 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
     {goR.theta, goR.z, "no menton, or no finite sample beside the jaw"},
     {cheekLeft, zPrn, "no skin 32 mm left of the midline at the nose tip's height"},
     {cheekRight, zPrn, "no skin 32 mm right of the midline at the nose tip's height"},
+    {pupilLeft, orbitLeft.supra, noOrbit},
+    {pupilRight, orbitRight.supra, noOrbit},
+    {pupilLeft, orbitLeft.infra, noOrbit},
+    {pupilRight, orbitRight.infra, noOrbit},
     {front, zPrn + 75.0, "75 mm above the nose tip is beyond the scan"},
   };
   const auto& definitions = standardLandmarks();

@@ -58,6 +58,15 @@
 ///   front): under the pupil (half the mean adult interpupillary distance,
 ///   Farkas 1994), beside the ala over the maxilla. (An angle from the axis
 ///   would put it at the jaw on a wide face.)
+/// - supraorbital / infraorbital left/right (fair; need the bone map): the
+///   upper and lower rims of the orbit on the pupil's column (32 mm from the
+///   midsagittal plane, 5 mm below the nasion). The deepest bone of the
+///   column within 35 mm below and 20 mm above the nasion is the orbit;
+///   walking up (down) from it, the rim is where the bone first comes within
+///   1 mm of the highest bone in the next 15 mm (where the orbit's wall ends,
+///   at the crest of a raised margin), which must stand 8 mm or more above
+///   the orbit (De Greef et al. 2006's mid-supraorbital and
+///   mid-infraorbital). Placed on the skin at the rim's height on that column.
 /// - zygion left/right (approximate): the laterally widest point, largest
 ///   r·|cos θ|, of the bone map (the skin map without one) for z between the
 ///   pronasale and the nasion and θ 25° to 80° from the front on that side

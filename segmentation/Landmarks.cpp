@@ -85,6 +85,12 @@ const std::vector<LandmarkDefinition>& standardLandmarks()
      "Left cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
     {"mid_cheek_right",
      "Right cheek over the maxilla under the pupil (32 mm from the midline), at the nose tip's height."},
+    {"supraorbital_left", "Skin over the upper rim of the left orbit above the pupil (the tables' mid-supraorbital)."},
+    {"supraorbital_right",
+     "Skin over the upper rim of the right orbit above the pupil (the tables' mid-supraorbital)."},
+    {"infraorbital_left", "Skin over the lower rim of the left orbit below the pupil (the tables' mid-infraorbital)."},
+    {"infraorbital_right",
+     "Skin over the lower rim of the right orbit below the pupil (the tables' mid-infraorbital)."},
     {"forehead", "Mid-forehead on the midline, 75 mm above the nose tip (below the hairline)."},
   };
   return definitions;

@@ -36,7 +36,7 @@ struct LandmarkDefinition
 /// supraglabella, glabella, nasion, mid_nasal, rhinion, pronasale, subnasale,
 /// mid_philtrum, labrale_superius, labrale_inferius, sublabiale, pogonion,
 /// menton, zygion_left/right, gonion_left/right, mid_cheek_left/right,
-/// forehead.
+/// supraorbital_left/right, infraorbital_left/right, forehead.
 const std::vector<LandmarkDefinition>& standardLandmarks();
 
 /// The description of a standard landmark, or "" for a name that is not one.

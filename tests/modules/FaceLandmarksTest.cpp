@@ -69,6 +69,23 @@ double besideTheMidline(double z, double offset, int side)
   return kFront + side * a;
 }
 
+/// The z of the orbit's rim on the bone's column @a theta, above (@a
+/// direction +1) or below the orbit, by LandmarkPlacement.h's rule on the
+/// analytic bone: walking out from the orbit's middle, where the bone first
+/// comes within 1 mm of the highest bone in the next 15 mm.
+double orbitRim(double theta, int direction)
+{
+  const auto r = [theta](double z) { return FacePhantom::boneRadius(theta, z); };
+  for (double z = Head::zOrbit;; z += direction * 0.001)
+  {
+    double highest = r(z);
+    for (double d = 0.0; d <= 15.0; d += 0.05)
+      highest = std::max(highest, r(z + direction * d));
+    if (r(z) >= highest - 1.0)
+      return z;
+  }
+}
+
 /// Each standard landmark's true (θ, z) on the phantom, by the definition
 /// LandmarkPlacement.h gives it, applied to the analytic profile.
 std::map<std::string, std::pair<double, double>> trueLandmarks()
@@ -116,6 +133,9 @@ std::map<std::string, std::pair<double, double>> trueLandmarks()
     truth["zygion" + suffix] = widestBone(prn, nasion, 25 * st::kDeg, 80 * st::kDeg, side);
     truth["gonion" + suffix] = widestBone(menton, subnasale, 30 * st::kDeg, 95 * st::kDeg, side);
     truth["mid_cheek" + suffix] = {besideTheMidline(prn, 32.0, side), prn};
+    const double pupil = besideTheMidline(nasion - 5.0, 32.0, side);
+    truth["supraorbital" + suffix] = {pupil, orbitRim(pupil, +1)};
+    truth["infraorbital" + suffix] = {pupil, orbitRim(pupil, -1)};
   }
   return truth;
 }

@@ -2,7 +2,7 @@
 // A synthetic head CT with a face: the stylised head of the landmark tests
 // (LandmarkPhantoms.h: a nose, a nasion, a brow, lips, a chin, the chin's
 // underside over a neck) as skin, over a skull with cheekbones, jaw angles,
-// a chin and a rounded lower end, sampled with partial volume, blurred and
+// nasal bones, orbits, a chin and a rounded lower end, sampled with partial volume, blurred and
 // noisy like HeadPhantom. Every landmark's true place and depth follow from
 // the two analytic surfaces r(θ, z) about a vertical axis, so the whole chain
 // (segmentation, range maps, placement, depth in the CT) can be checked

@@ -51,10 +51,17 @@ struct StylisedHead
   static constexpr double zRhinion = 12, nasalBone = 8;
   /// Bone: an ellipse (60 mm lateral, 70 mm front-back) with zygomatic arches
   /// (+10 mm at 65° from the front, z = 15), mandible angles (+10 mm at 75°
-  /// from the front, z = -55) and the nasal bones (up to +8 mm on the front,
-  /// ending at z = 12), none below z = -68 (the neck).
+  /// from the front, z = -55), the nasal bones (up to +8 mm on the front,
+  /// ending at z = 12) and the orbits (below), none below z = -68 (the neck).
   static constexpr double zygionFromFront = 65 * kDeg, zZygion = 15;
   static constexpr double gonionFromFront = 75 * kDeg, zGonion = -55;
+  /// The orbits: flat-bottomed pits 20 mm deep in the skull, centred 29°
+  /// either side of the front and 4 mm below the nasion, 26° wide and 28 mm
+  /// high, with steep walls; their rims raised 2 mm (σ 3 mm) 3 mm above and
+  /// below them: the brow ridge at the glabella's height and the
+  /// infraorbital margin.
+  static constexpr double orbitFromFront = 29 * kDeg, orbitHalfWidth = 13 * kDeg;
+  static constexpr double zOrbit = zNasion - 4, orbitHalfHeight = 14, orbitDepth = 20;
 
   static double skin(double theta, double z)
   {
@@ -79,6 +86,10 @@ struct StylisedHead
     {
       r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * zygionFromFront), 0, 8 * kDeg) * gauss(z, zZygion, 5);
       r += 10 * gauss(angleFrom(theta, -kPi / 2 + side * gonionFromFront), 0, 8 * kDeg) * gauss(z, zGonion, 5);
+      const double a = angleFrom(theta, -kPi / 2 + side * orbitFromFront) / orbitHalfWidth;
+      const double b = (z - zOrbit) / orbitHalfHeight, rho2 = a * a + b * b;
+      const double rims = gauss(z, zOrbit + orbitHalfHeight + 3, 3) + gauss(z, zOrbit - orbitHalfHeight - 3, 3);
+      r += 2.0 * std::exp(-a * a / 4) * rims - orbitDepth * std::exp(-rho2 * rho2 * rho2 * rho2);
     }
     return r;
   }

@@ -68,7 +68,7 @@ RangeMap* StylisedHeadPlacement::bone_ = nullptr;
 TEST(StandardLandmarks, HaveUniqueNamesAndDescriptions)
 {
   const auto& all = standardLandmarks();
-  EXPECT_EQ(all.size(), 20u);
+  EXPECT_EQ(all.size(), 24u);
   for (std::size_t a = 0; a < all.size(); ++a)
   {
     EXPECT_FALSE(std::string(all[a].description).empty());
@@ -166,6 +166,54 @@ TEST_F(StylisedHeadPlacement, ZygionAndGonionAreTheWidestBonePoints)
     EXPECT_NEAR(go->z, StylisedHead::zGonion, 1.5);
     // Patient left is θ > -90°.
     EXPECT_EQ(zy->theta > -kPi / 2, side > 0);
+  }
+}
+
+// The orbits' rims on the pupil's column, against the analytic bone: walking
+// out of the orbit, where the bone first comes within 1 mm of the highest
+// bone in the next 15 mm. A skull without orbits has no rims: not found, with why.
+TEST_F(StylisedHeadPlacement, OrbitalRimsAreWhereTheOrbitsWallsEnd)
+{
+  const LandmarkPlacement placed = placeLandmarks(*skin_, *bone_);
+  for (int side : {1, -1})
+  {
+    const std::string suffix = side > 0 ? "_left" : "_right";
+    const Landmark* supra = placed.find("supraorbital" + suffix);
+    const Landmark* infra = placed.find("infraorbital" + suffix);
+    ASSERT_NE(supra, nullptr);
+    ASSERT_NE(infra, nullptr);
+    EXPECT_NEAR(supra->theta, infra->theta, 1e-12) << "one column, the pupil's";
+    EXPECT_EQ(supra->theta > -kPi / 2, side > 0);
+    for (const auto& [rim, direction] : {std::pair{supra, +1}, std::pair{infra, -1}})
+    {
+      const auto r = [theta = rim->theta](double z) { return StylisedHead::bone(theta, z); };
+      double expected = StylisedHead::zOrbit;
+      for (;; expected += direction * 0.001)
+      {
+        double highest = r(expected);
+        for (double d = 0.0; d <= 15.0; d += 0.05)
+          highest = std::max(highest, r(expected + direction * d));
+        if (r(expected) >= highest - 1.0)
+          break;
+      }
+      std::printf("[ landmark ] %-19s z %6.2f; analytic %6.2f\n", rim->name.c_str(), rim->z, expected);
+      EXPECT_NEAR(rim->z, expected, 1.0) << rim->name; // within about a row (0.90 mm)
+    }
+  }
+  const auto noOrbits = [](double theta, double z) {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return z < -68.0 ? std::nan("") : 1.0 / std::sqrt(c * c / (60.0 * 60.0) + s * s / (70.0 * 70.0));
+  };
+  const LandmarkPlacement without = placeLandmarks(*skin_, fillMap(StylisedHead::frame(), noOrbits));
+  for (const char* name : {"supraorbital_left", "supraorbital_right", "infraorbital_left", "infraorbital_right"})
+  {
+    EXPECT_EQ(without.find(name), nullptr) << name;
+    for (const LandmarkStatus& status : without.status)
+      if (status.name == name)
+      {
+        EXPECT_EQ(status.state, LandmarkState::NotFound) << name;
+        EXPECT_NE(status.reason.find("orbit"), std::string::npos) << status.reason;
+      }
   }
 }
 
