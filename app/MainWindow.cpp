@@ -38,7 +38,9 @@
 
 #include "app/Session.h"
 #include "scene/LabelMapNode.h"
+#include "scene/LandmarksNode.h"
 #include "scene/SceneBundle.h"
+#include "scene/ScopedEdit.h"
 #include "scene/SurfaceNode.h"
 #include "scene/VolumeNode.h"
 #include "segmentation/WindowLevel.h"
@@ -111,9 +113,7 @@ void MainWindow::buildViews()
     connect(view, &ui::SliceView::clicked, this, [this](double x, double y, double z) { moveCursor({x, y, z}); });
     connect(view, &ui::SliceView::hovered, this, &MainWindow::showCursorInfo);
     connect(view, &ui::SliceView::windowLevelChanged, this, &MainWindow::applyWindowLevel);
-    connect(view, &ui::SliceView::rulerMeasured, this, [this](double mm) {
-      statusBar()->showMessage(tr("Ruler: %1 mm (click again for another; Ctrl+M ends the ruler)").arg(mm, 0, 'f', 1));
-    });
+    connect(view, &ui::SliceView::rulerMeasured, this, [this, view](double) { keepRuler(*view); });
     connect(view, &ui::SliceView::sliceChanged, this,
             [this, view](int) { view3d_->setCursorPosition(view->cursorPosition()); });
   }
@@ -776,6 +776,50 @@ void MainWindow::showMeasuredSegment(const std::optional<MeasuredSegment>& segme
     onSlices = ui::SliceSegment{toImageSpace(segment->from), toImageSpace(segment->to), segment->label};
   for (ui::SliceView* view : slice_views_)
     view->setMeasuredSegment(onSlices);
+}
+
+void MainWindow::keepRuler(const ui::SliceView& view)
+{
+  const std::optional<ui::SliceSegment> ruler = view.ruler();
+  if (!ruler)
+    return;
+  // Saved with the scene's landmarks, as a radiology viewer keeps its
+  // measurements with the study; undoable like any edit.
+  Scene& scene = session_.scene();
+  const auto nodes = scene.nodesOfType(NodeType::Landmarks);
+  auto* landmarks = nodes.empty() ? scene.add<LandmarksNode>() : static_cast<LandmarksNode*>(nodes.back());
+  if (nodes.empty())
+    landmarks->setName("Landmarks");
+  const LandmarksNode::Distance distance{"Ruler " + std::to_string(landmarks->distances().size() + 1),
+                                         fromImageSpace(ruler->from), fromImageSpace(ruler->to)};
+  {
+    ScopedEdit edit(scene, landmarks->id(), "Measure " + distance.name);
+    landmarks->addDistance(distance);
+  }
+  statusBar()->showMessage(tr("%1: %2 mm, kept in the scene's landmarks (click again for another; Ctrl+M ends the "
+                              "ruler)")
+                             .arg(QString::fromStdString(distance.name))
+                             .arg(distance.length(), 0, 'f', 1));
+}
+
+std::array<double, 3> MainWindow::fromImageSpace(const std::array<double, 3>& inImage)
+{
+  // Image space goes to patient LPS through the direction matrix.
+  std::array<double, 3> position = inImage;
+  auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
+  if (volume && volume->image())
+  {
+    vtkImageData* image = volume->image();
+    const double* origin = image->GetOrigin();
+    vtkMatrix3x3* direction = image->GetDirectionMatrix();
+    for (int a = 0; a < 3; ++a)
+    {
+      position[static_cast<size_t>(a)] = origin[a];
+      for (int b = 0; b < 3; ++b)
+        position[static_cast<size_t>(a)] += direction->GetElement(a, b) * (inImage[static_cast<size_t>(b)] - origin[b]);
+    }
+  }
+  return position;
 }
 
 std::array<double, 3> MainWindow::toImageSpace(const std::array<double, 3>& position)

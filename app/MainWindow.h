@@ -97,8 +97,11 @@ private:
   void updateOverlay();
   void applyWindowLevel(double window, double level);
   void moveCursor(const std::array<double, 3>& position);
-  /// Patient LPS to the slice views' image space (the volume's axes, origin kept).
+  /// Patient LPS to the slice views' image space (the volume's axes, origin kept), and back.
   std::array<double, 3> toImageSpace(const std::array<double, 3>& position);
+  std::array<double, 3> fromImageSpace(const std::array<double, 3>& inImage);
+  /// The ruler just finished on @a view, kept in the scene's landmarks.
+  void keepRuler(const ui::SliceView& view);
   void showCursorInfo(double x, double y, double z, bool inside);
   void taskFinished(const std::string& title, std::function<void()> finish, const std::string& error, bool cancelled);
   void openScene(const std::filesystem::path& bundle);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -575,23 +576,44 @@ void RangeMapPanel::removeLandmark()
 void RangeMapPanel::exportLandmarks()
 {
   LandmarksNode* node = landmarksNode(false);
-  if (!node || node->landmarks().empty() || !review_)
+  if (!node || (node->landmarks().empty() && node->distances().empty()) || !review_)
   {
-    host_.showError("Export landmarks", "There are no landmarks yet: add some with 'Add on the face'.");
+    host_.showError("Export landmarks", "There are no landmarks yet: add some with 'Add on the face' (or measure "
+                                        "with View > Ruler on the slices).");
     return;
   }
   const QString file =
     QFileDialog::getSaveFileName(host_.window(), tr("Export the landmarks"), "landmarks.csv", tr("CSV (*.csv)"));
   if (file.isEmpty())
     return;
-  std::ofstream out(file.toStdString(), std::ios::binary);
-  out << review_->landmarksCsv(node->landmarks());
-  out.close();
-  if (!out)
-    host_.showError("Export landmarks",
-                    "Could not write " + file.toStdString() + ": check the folder exists and you may write there.");
-  else
-    host_.showStatus("Landmarks written to " + file.toStdString());
+  std::vector<ThicknessReview::CtDepth> depths;
+  for (const auto& landmark : node->landmarks())
+  {
+    const MeasuredDepth* d = depthOf(landmark);
+    depths.push_back(d ? ThicknessReview::CtDepth{d->depth, d->convention, d->note} : ThicknessReview::CtDepth{});
+  }
+  // The ruler's distances beside it: landmarks.csv, landmarks-distances.csv.
+  const std::filesystem::path landmarksFile = file.toStdString();
+  const std::filesystem::path distancesFile =
+    landmarksFile.parent_path() / (landmarksFile.stem().string() + "-distances.csv");
+  std::vector<std::pair<std::filesystem::path, std::string>> outputs{
+    {landmarksFile, review_->landmarksCsv(node->landmarks(), depths)}};
+  if (!node->distances().empty())
+    outputs.emplace_back(distancesFile, ThicknessReview::distancesCsv(node->distances()));
+  for (const auto& [path, text] : outputs)
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+    out.close();
+    if (!out)
+    {
+      host_.showError("Export landmarks",
+                      "Could not write " + path.string() + ": check the folder exists and you may write there.");
+      return;
+    }
+  }
+  host_.showStatus("Landmarks written to " + landmarksFile.string() +
+                   (outputs.size() > 1 ? ", the ruler's distances to " + distancesFile.string() : std::string()));
 }
 
 void RangeMapPanel::updateLandmarks()

@@ -234,18 +234,22 @@ std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins, Thick
   return counts;
 }
 
-std::string ThicknessReview::landmarksCsv(const std::vector<LandmarksNode::Landmark>& landmarks) const
+std::string ThicknessReview::landmarksCsv(const std::vector<LandmarksNode::Landmark>& landmarks,
+                                          const std::vector<CtDepth>& depths) const
 {
+  if (!depths.empty() && depths.size() != landmarks.size())
+    throw std::invalid_argument("landmarksCsv: one depth per landmark, or none");
   std::ostringstream csv;
   csv << "name,x_mm,y_mm,z_mm,theta_deg,axis_z_mm,skin_radius_mm,bone_radius_mm,thickness_radial_mm,"
-         "thickness_normal_mm\n";
+         "thickness_normal_mm,depth_mm,convention,note\n";
   auto number = [&csv](double v, int digits) {
     csv << ',';
     if (std::isfinite(v))
       csv << std::fixed << std::setprecision(digits) << v;
   };
-  for (const auto& landmark : landmarks)
+  for (std::size_t k = 0; k < landmarks.size(); ++k)
   {
+    const auto& landmark = landmarks[k];
     const auto [theta, z] = chartOf(landmark.position);
     const ThicknessProbe p = probe(theta, z);
     csv << csvField(landmark.name);
@@ -257,7 +261,24 @@ std::string ThicknessReview::landmarksCsv(const std::vector<LandmarksNode::Landm
     number(p.boneRadius, 2);
     number(p.thickness, 2);
     number(p.thicknessNormal, 2);
-    csv << '\n';
+    const CtDepth d = depths.empty() ? CtDepth{} : depths[k];
+    number(d.depth, 2);
+    csv << ',' << csvField(d.convention) << ',' << csvField(d.note) << '\n';
+  }
+  return csv.str();
+}
+
+std::string ThicknessReview::distancesCsv(const std::vector<LandmarksNode::Distance>& distances)
+{
+  std::ostringstream csv;
+  csv << "name,from_x_mm,from_y_mm,from_z_mm,to_x_mm,to_y_mm,to_z_mm,length_mm\n" << std::fixed << std::setprecision(2);
+  for (const auto& d : distances)
+  {
+    csv << csvField(d.name);
+    for (const auto& end : {d.from, d.to})
+      for (double c : end)
+        csv << ',' << c;
+    csv << ',' << d.length() << '\n';
   }
   return csv.str();
 }

@@ -122,10 +122,23 @@ public:
   /// into it. Not the neck, the scalp or the ears, which are far thicker.
   std::vector<int> faceHistogram(double binWidth, int bins, ThicknessMeasure measure = ThicknessMeasure::Radial) const;
 
+  /// A landmark's depth measured in the CT by its convention (LandmarkDepth.h).
+  struct CtDepth
+  {
+    double depth = seg::RangeMap::quietNaN(); ///< mm
+    std::string convention;                   ///< how it was measured
+    std::string note;                         ///< what spoils it (metal streaks), if anything
+  };
   /// The landmarks as CSV, one row each: name, x, y, z (LPS mm), theta
   /// (degrees), z along the axis (mm), skin radius, bone radius, thickness
-  /// radial and along the normal (mm); NaN as empty fields.
-  std::string landmarksCsv(const std::vector<LandmarksNode::Landmark>& landmarks) const;
+  /// radial and along the normal (mm), and the depth in the CT with its
+  /// convention and note from @a depths (one per landmark, or none); NaN as
+  /// empty fields.
+  std::string landmarksCsv(const std::vector<LandmarksNode::Landmark>& landmarks,
+                           const std::vector<CtDepth>& depths = {}) const;
+  /// The distances measured with the ruler as CSV, one row each: name, the
+  /// two ends (LPS mm) and the length (mm).
+  static std::string distancesCsv(const std::vector<LandmarksNode::Distance>& distances);
 
 private:
   seg::RangeMap skin_, bone_, thickness_, thickness_normal_;

@@ -241,6 +241,28 @@ TEST(ThicknessReview, LandmarksCsvHasOneRowPerLandmarkWithItsThickness)
   // A name with a comma and quotes is quoted; off the maps the readings are empty.
   EXPECT_EQ(second.rfind("\"far, \"\"away\"\"\",", 0), 0u) << second;
   EXPECT_EQ(second.substr(second.size() - 4), ",,,,") << second;
+
+  // With the depths measured in the CT: the depth, how, and what spoils it.
+  std::istringstream measured(review.landmarksCsv(
+    landmarks, {{12.345, "perpendicular to the skin", ""}, {std::nan(""), "", "in the streaks, check it"}}));
+  std::getline(measured, header);
+  std::getline(measured, first);
+  std::getline(measured, second);
+  EXPECT_NE(header.find(",depth_mm,convention,note"), std::string::npos) << header;
+  EXPECT_NE(first.find(",12.87,12.35,perpendicular to the skin,"), std::string::npos) << first;
+  EXPECT_EQ(second.substr(second.size() - 29), ",,,\"in the streaks, check it\"") << second; // quoted: a comma
+  EXPECT_THROW(review.landmarksCsv(landmarks, {{}}), std::invalid_argument);
+}
+
+// The ruler's distances: both ends and the length (a 3-4-12 box's diagonal is 13).
+TEST(ThicknessReview, DistancesCsvHasBothEndsAndTheLength)
+{
+  std::istringstream csv(caps::ThicknessReview::distancesCsv({{"Ruler 1", {1, 2, 3}, {4, 6, 15}}}));
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  EXPECT_EQ(header, "name,from_x_mm,from_y_mm,from_z_mm,to_x_mm,to_y_mm,to_z_mm,length_mm");
+  EXPECT_EQ(row, "Ruler 1,1.00,2.00,3.00,4.00,6.00,15.00,13.00");
 }
 
 // The profile along a line on the skin, against the cylinder's closed form:

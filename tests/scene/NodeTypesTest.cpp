@@ -9,6 +9,7 @@
 #include "SceneTestUtils.h"
 #include "scene/FeMeshNode.h"
 #include "scene/LabelMapNode.h"
+#include "scene/LandmarksNode.h"
 #include "scene/PlanNode.h"
 #include "scene/RangeMapNode.h"
 #include "scene/Scene.h"
@@ -249,6 +250,39 @@ TEST(NodeTypes, PlanJsonRoundTripAndNoBulk)
 
 // A missing or null key keeps the field (the JsonFields rule) for lists too,
 // and numbers that do not fit an int throw SceneError instead of being cast.
+// Landmarks and the distances measured with the ruler come back as they
+// were; a scene saved before the ruler (no "distances") keeps its landmarks;
+// a position that is not a number is refused with the measurement's name.
+TEST(NodeTypes, LandmarksAndDistancesRoundTrip)
+{
+  TempDir tmp;
+  LandmarksNode n;
+  n.setLandmarks({{"nasion", {1.5, -2.25, 700.125}}});
+  n.addDistance({"Ruler 1", {0.0, 0.0, 0.0}, {3.0, 4.0, 12.0}});
+  EXPECT_DOUBLE_EQ(n.distances().front().length(), 13.0);
+  auto copy = roundTrip(n, tmp.path());
+  EXPECT_EQ(copy->landmarks(), n.landmarks());
+  EXPECT_EQ(copy->distances(), n.distances());
+
+  LandmarksNode old;
+  old.fromJson({{"landmarks", {{{"name", "pogonion"}, {"position", {1, 2, 3}}}}}});
+  ASSERT_EQ(old.landmarks().size(), 1u);
+  EXPECT_TRUE(old.distances().empty());
+  try
+  {
+    old.fromJson(
+      {{"distances",
+        {{{"name", "Ruler 2"}, {"from", {0, 0, 0}}, {"to", {0.0, std::numeric_limits<double>::infinity(), 0.0}}}}}});
+    ADD_FAILURE() << "a distance with a bad end was read";
+  }
+  catch (const std::exception& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("Ruler 2"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(old.distances().empty());
+  old.removeDistance(3); // none: nothing happens
+}
+
 TEST(NodeTypes, NullKeepsListsAndOutOfRangeNumbersThrow)
 {
   LabelMapNode l;

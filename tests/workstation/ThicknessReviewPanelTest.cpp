@@ -246,6 +246,12 @@ TEST(ThicknessReviewPanel, ARulerOnASliceReadsMillimetres)
     EXPECT_EQ(axial->cursorPosition()[size_t(k)], cursor[size_t(k)]) << "a ruler click moved the crosshair";
   EXPECT_GT(rulerPixels(*axial), 30) << "the ruler is not drawn";
   ws.screenshot("thickness-ruler");
+  // Kept in the scene's landmarks (LPS; the sample's axes are the patient's), undoable.
+  auto* landmarks = static_cast<LandmarksNode*>(ws.scene().nodesOfType(NodeType::Landmarks).back());
+  ASSERT_EQ(landmarks->distances().size(), 1u);
+  EXPECT_EQ(landmarks->distances().front().name, "Ruler 1");
+  EXPECT_NEAR(landmarks->distances().front().length(), distance(measured->from, measured->to), 1e-6);
+  EXPECT_EQ(ws.scene().undoStack().undoLabel(), "Measure Ruler 1");
 
   // It belongs to its slice: gone on the next, back on its own.
   axial->handleWheel(+3);
