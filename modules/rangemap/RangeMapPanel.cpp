@@ -18,6 +18,7 @@
 #include <QHeaderView>
 #include <QLabel>
 #include <QLineEdit>
+#include <QListWidget>
 #include <QPixmap>
 #include <QPointer>
 #include <QPushButton>
@@ -215,6 +216,16 @@ void RangeMapPanel::addLandmarks(QVBoxLayout* layout)
   buttons->addWidget(remove_landmark_);
   buttons->addWidget(export_landmarks_);
   marksLayout->addLayout(buttons);
+  // The distances the ruler measured on the slices, kept with the landmarks.
+  distances_label_ = new QLabel(tr("Distances measured on the slices (click one to see it):"), marks);
+  marksLayout->addWidget(distances_label_);
+  distances_ = new QListWidget(marks);
+  distances_->setObjectName("rangemap.distances");
+  distances_->setMaximumHeight(90);
+  marksLayout->addWidget(distances_);
+  remove_distance_ = new QPushButton(tr("Remove distance"), marks);
+  remove_distance_->setObjectName("rangemap.removeDistance");
+  marksLayout->addWidget(remove_distance_);
   layout->addWidget(marks);
 }
 
@@ -230,6 +241,13 @@ void RangeMapPanel::connectControls()
   connect(place_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::placeStandardLandmarks);
   connect(remove_landmark_, &QPushButton::clicked, this, &RangeMapPanel::removeLandmark);
   connect(export_landmarks_, &QPushButton::clicked, this, &RangeMapPanel::exportLandmarks);
+  connect(distances_, &QListWidget::itemClicked, this,
+          [this](QListWidgetItem* item) { showDistance(distances_->row(item)); });
+  connect(distances_, &QListWidget::currentRowChanged, this, [this](int row) {
+    if (!filling_table_)
+      showDistance(row);
+  });
+  connect(remove_distance_, &QPushButton::clicked, this, &RangeMapPanel::removeDistance);
   connect(landmarks_, &QTableWidget::cellClicked, this, [this](int r, int) { showLandmark(r); });
   connect(landmarks_, &QTableWidget::currentCellChanged, this, [this](int r, int, int previous, int) {
     if (!filling_table_ && r != previous)
@@ -651,6 +669,12 @@ void RangeMapPanel::updateLandmarks()
     }
   }
   map_view_->setLandmarks(std::move(onMap));
+  distances_->clear();
+  const auto& distances = node ? node->distances() : std::vector<LandmarksNode::Distance>{};
+  for (const auto& d : distances)
+    distances_->addItem(QString("%1: %2 mm").arg(QString::fromStdString(d.name)).arg(d.length(), 0, 'f', 1));
+  for (QWidget* w : std::initializer_list<QWidget*>{distances_label_, distances_, remove_distance_})
+    w->setVisible(!distances.empty());
   filling_table_ = false;
   updateHandles();
   if (!dragged_.empty())
@@ -687,6 +711,33 @@ void RangeMapPanel::showLandmark(int row)
   std::snprintf(label, sizeof label, "%s %.1f mm", landmark.name.c_str(), d->depth);
   host_.showMeasuredSegment(MeasuredSegment{d->skinEnd, d->boneEnd, label});
   host_.showStatus(std::string(label) + ", " + d->convention + ": drawn on the slices");
+}
+
+void RangeMapPanel::showDistance(int row)
+{
+  LandmarksNode* node = landmarksNode(false);
+  if (!node || row < 0 || row >= static_cast<int>(node->distances().size()))
+    return;
+  const LandmarksNode::Distance& d = node->distances()[static_cast<std::size_t>(row)];
+  char label[96];
+  std::snprintf(label, sizeof label, "%s %.1f mm", d.name.c_str(), d.length());
+  host_.setCursorPosition(d.from); // the slice it was measured on
+  host_.showMeasuredSegment(MeasuredSegment{d.from, d.to, label});
+  host_.showStatus(std::string(label) + ": drawn on the slices");
+}
+
+void RangeMapPanel::removeDistance()
+{
+  LandmarksNode* node = landmarksNode(false);
+  const int row = distances_->currentRow();
+  if (!node || row < 0 || row >= static_cast<int>(node->distances().size()))
+  {
+    host_.showStatus("Choose a distance in the list first.");
+    return;
+  }
+  host_.showMeasuredSegment(std::nullopt);
+  ScopedEdit edit(logic_.scene(), node->id(), "Remove " + node->distances()[static_cast<std::size_t>(row)].name);
+  node->removeDistance(static_cast<std::size_t>(row));
 }
 
 void RangeMapPanel::updateHandles()

@@ -18,6 +18,7 @@ class QCheckBox;
 class QComboBox;
 class QLabel;
 class QLineEdit;
+class QListWidget;
 class QPushButton;
 class QTableWidget;
 
@@ -72,6 +73,10 @@ private:
   /// stay. Those not placed are named in the status bar with why.
   void placeStandardLandmarks();
   void removeLandmark();
+  /// Distance @a row of the list (a ruler kept in the scene) drawn on the
+  /// slices, the cursor at its start (the slice it was measured on).
+  void showDistance(int row);
+  void removeDistance();
   /// Landmark @a row of the table on the face (the cursor), on the map and
   /// in the three slices with its measured depth drawn.
   void showLandmark(int row);
@@ -128,6 +133,9 @@ private:
   QPushButton* remove_landmark_ = nullptr;
   QPushButton* export_landmarks_ = nullptr;
   QPushButton* locate_ = nullptr;
+  QLabel* distances_label_ = nullptr;
+  QListWidget* distances_ = nullptr;
+  QPushButton* remove_distance_ = nullptr;
 };
 
 } // namespace caps

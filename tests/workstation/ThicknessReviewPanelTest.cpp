@@ -12,6 +12,7 @@
 
 #include <QAction>
 #include <QLabel>
+#include <QListWidget>
 #include <QPushButton>
 #include <QRegularExpression>
 #include <QTableWidget>
@@ -32,6 +33,8 @@
 
 namespace caps {
 namespace {
+
+namespace fs = std::filesystem;
 
 constexpr double kDegree = std::numbers::pi / 180.0;
 
@@ -252,6 +255,15 @@ TEST(ThicknessReviewPanel, ARulerOnASliceReadsMillimetres)
   EXPECT_EQ(landmarks->distances().front().name, "Ruler 1");
   EXPECT_NEAR(landmarks->distances().front().length(), distance(measured->from, measured->to), 1e-6);
   EXPECT_EQ(ws.scene().undoStack().undoLabel(), "Measure Ruler 1");
+  // Listed in the Range maps panel; clicked, it is drawn on the slices; and
+  // it comes back with the saved scene.
+  const auto listed = [&ws]() {
+    auto* list = ws.widget<QListWidget>("rangemap.distances");
+    return list && list->count() == 1 && list->isVisible() ? list : nullptr;
+  };
+  ASSERT_NE(listed(), nullptr) << "the distance is not listed";
+  EXPECT_EQ(listed()->item(0)->text(),
+            "Ruler 1: " + QString::number(distance(measured->from, measured->to), 'f', 1) + " mm");
 
   // It belongs to its slice: gone on the next, back on its own.
   axial->handleWheel(+3);
@@ -266,6 +278,22 @@ TEST(ThicknessReviewPanel, ARulerOnASliceReadsMillimetres)
   QTest::mouseClick(axial, Qt::LeftButton, Qt::NoModifier, pa);
   ws.settle(100);
   EXPECT_LT(std::hypot(axial->cursorPosition()[0] - a[0], axial->cursorPosition()[1] - a[1]), 2.0 * mmPerPixel);
+
+  // Saved with the scene, listed when it is opened again, and drawn on the
+  // slices when clicked.
+  const fs::path bundle = test::scratchFolder() / "with-ruler.caps";
+  fs::remove_all(bundle);
+  ASSERT_TRUE(ws.window().saveSceneTo(bundle));
+  ws.window().openPath(bundle);
+  ASSERT_TRUE(ws.waitUntilIdle(120)) << ws.errors();
+  ws.selectModule("rangemap");
+  ASSERT_NE(listed(), nullptr) << "the distance did not come back with the scene";
+  QTest::mouseClick(listed()->viewport(), Qt::LeftButton, Qt::NoModifier,
+                    listed()->visualItemRect(listed()->item(0)).center());
+  ws.settle(200);
+  ASSERT_TRUE(axial->measuredSegment().has_value());
+  EXPECT_NEAR(distance(axial->measuredSegment()->from, measured->from), 0.0, 1e-6);
+  EXPECT_NEAR(distance(axial->measuredSegment()->to, measured->to), 0.0, 1e-6);
 }
 
 TEST(ThicknessReviewPanel, ALineDrawnOnTheSkinGetsItsThicknessProfile)
