@@ -208,6 +208,11 @@ double BoneDepthProbe::hu(const Eigen::Vector3d& world) const
   return huAtIndex(indexOf(world));
 }
 
+bool BoneDepthProbe::againstAnObject(const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward) const
+{
+  return hu(skinPoint + 1.5 * outward) >= skinThreshold_ && hu(skinPoint + 3.0 * outward) >= skinThreshold_;
+}
+
 double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector3d& direction,
                                 Eigen::Vector3d* hit) const
 {

@@ -107,6 +107,14 @@ public:
   /// The HU at a world point (trilinear; -1000 outside the CT).
   double hu(const Eigen::Vector3d& world) const;
 
+  /// Whether the skin at @a skinPoint lies against something outside the
+  /// body: tissue-like HU (at or above the skin threshold) 1.5 mm and 3 mm
+  /// out along the unit @a outward. There the segmentation's skin is the
+  /// edge of its body mask beside the head holder, the table's pad or a
+  /// dressing, not a surface the CT measured, and no thickness read there
+  /// can be trusted. Outside the CT is air.
+  bool againstAnObject(const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward) const;
+
 private:
   // Indices are 0-based continuous voxel indices (the extent's start at 0).
   Eigen::Vector3d indexOf(const Eigen::Vector3d& world) const;

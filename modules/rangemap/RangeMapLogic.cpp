@@ -242,6 +242,23 @@ bool RangeMapLogic::measureLandmarkDepths(const VolumeNode& volume, std::vector<
   return true;
 }
 
+std::function<bool(const Eigen::Vector3d&)> RangeMapLogic::againstAnObject(const VolumeNode& volume,
+                                                                           const seg::CylindricalFrame& frame) const
+{
+  SegmentLogic segment(scene());
+  const LabelMapNode* labels = segment.findLabelMap(volume);
+  if (!labels || !volume.image())
+    return {};
+  const Parameters thresholds = forLabelMap(Parameters{}, *labels);
+  vtkSmartPointer<vtkImageData> ct(volume.image());
+  const vtkSmartPointer<vtkImageData> bone = SegmentLogic::maskOf(labels->image(), kBoneLabel);
+  auto probe =
+    std::make_shared<const seg::BoneDepthProbe>(ct, bone, thresholds.boneThresholdHu, thresholds.skinThresholdHu);
+  return [ct, bone, probe, frame](const Eigen::Vector3d& p) {
+    return probe->againstAnObject(p, frame.radialDirection(frame.toCylindrical(p).theta));
+  };
+}
+
 const std::vector<seg::MetalPiece>& RangeMapLogic::metalOf(const VolumeNode& volume) const
 {
   vtkImageData* image = volume.image();

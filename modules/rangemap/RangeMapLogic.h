@@ -5,6 +5,7 @@
 
 #include <map>
 #include <optional>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -145,6 +146,14 @@ public:
   /// The metal in @a volume's CT (seg::findMetal), found once per image and
   /// kept; a landmark in the slices its streaks spoil gets a note.
   const std::vector<seg::MetalPiece>& metalOf(const VolumeNode& volume) const;
+
+  /// Where the skin of @a volume's CT lies against an object outside the
+  /// body (seg::BoneDepthProbe::againstAnObject, looking out along the
+  /// radial direction of @a frame: the head holder, the table's pad), as a
+  /// test of a skin point (LPS mm); an empty test while the volume has no
+  /// label map. The test holds the CT and the bone mask it reads.
+  std::function<bool(const Eigen::Vector3d&)> againstAnObject(const VolumeNode& volume,
+                                                              const seg::CylindricalFrame& frame) const;
 
   /// One line per fact: the axis (origin, direction, tilt, slices, residual) and z range.
   static std::string describeAxis(const seg::HeadAxisFit& axis);

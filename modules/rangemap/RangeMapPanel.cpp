@@ -308,7 +308,9 @@ void RangeMapPanel::reloadMaps()
   depths_.clear(); // new maps may come with a new CT or label map
   if (const RangeMapNode* skin = RangeMapLogic::newestMaps(logic_.scene()).skin; review_ && skin)
     if (const auto* source = logic_.scene().nodeAs<VolumeNode>(skin->sourceVolumeId()); source && source->image())
-      review_->setSpoiled(ThicknessReview::spoiledBy(logic_.metalOf(*source), source->image()));
+      review_->setSpoiled(
+        ThicknessReview::eitherOf(ThicknessReview::spoiledBy(logic_.metalOf(*source), source->image()),
+                                  logic_.againstAnObject(*source, review_->skin().frame())));
   map_view_->setSpoiled(review_ ? review_->spoiledSamples() : std::vector<unsigned char>());
   const bool ready = review_.has_value();
   for (QWidget* w : std::initializer_list<QWidget*>{map_kind_, paint_, add_landmark_, place_landmarks_, locate_,

@@ -168,7 +168,7 @@ vtkSmartPointer<vtkPolyData> ThicknessReview::paintThickness(vtkPolyData* surfac
   values->SetName("thickness_mm");
   values->SetNumberOfTuples(surface->GetNumberOfPoints());
   auto streaks = vtkSmartPointer<vtkUnsignedCharArray>::New();
-  streaks->SetName("metal_streaks");
+  streaks->SetName("unreliable_skin");
   streaks->SetNumberOfTuples(surface->GetNumberOfPoints());
   for (vtkIdType i = 0; i < surface->GetNumberOfPoints(); ++i)
   {
@@ -204,6 +204,15 @@ ThicknessReview::SpoiledTest ThicknessReview::spoiledBy(const std::vector<seg::M
     return {};
   vtkSmartPointer<vtkImageData> image(ct);
   return [metal, image](const Eigen::Vector3d& p) { return seg::streaksAt(metal, image, p) != nullptr; };
+}
+
+ThicknessReview::SpoiledTest ThicknessReview::eitherOf(SpoiledTest a, SpoiledTest b)
+{
+  if (!a)
+    return b;
+  if (!b)
+    return a;
+  return [a = std::move(a), b = std::move(b)](const Eigen::Vector3d& p) { return a(p) || b(p); };
 }
 
 std::vector<int> ThicknessReview::faceHistogram(double binWidth, int bins, ThicknessMeasure measure) const

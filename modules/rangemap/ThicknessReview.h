@@ -97,18 +97,21 @@ public:
   vtkSmartPointer<vtkPolyData> paintThickness(vtkPolyData* surface,
                                               ThicknessMeasure measure = ThicknessMeasure::Radial) const;
 
-  /// Where the CT's metal streaks spoil the skin: true for a world point
-  /// (LPS mm) in the slices a piece of metal's streaks spoil
-  /// (RangeMapLogic::metalOf, seg::streaksAt). Those samples are left out of
+  /// Where the skin is not to be trusted: true for a world point (LPS mm)
+  /// in the slices a piece of metal's streaks spoil (spoiledBy()), or on
+  /// skin pressed against the head holder (RangeMapLogic::againstAnObject);
+  /// eitherOf() joins the two. Those samples are left out of
   /// faceHistogram(), and paintThickness() paints no thickness there (NaN)
-  /// and marks them 1 in the point array "metal_streaks". Unset: no metal.
+  /// and marks them 1 in the point array "unreliable_skin". Unset: none.
   using SpoiledTest = std::function<bool(const Eigen::Vector3d&)>;
   void setSpoiled(SpoiledTest spoiled) { spoiled_ = std::move(spoiled); }
-  /// 1 for each sample of the skin map (index i + nθ j) whose skin lies in
-  /// the spoiled slices, else 0; all 0 without a test.
+  /// 1 for each sample of the skin map (index i + nθ j) whose skin the test
+  /// marks, else 0; all 0 without a test.
   std::vector<unsigned char> spoiledSamples() const;
   /// The test for @a volume's CT, from its metal (none: an empty test).
   static SpoiledTest spoiledBy(const std::vector<seg::MetalPiece>& metal, vtkImageData* ct);
+  /// True where either test is (an empty test is never true); empty when both are.
+  static SpoiledTest eitherOf(SpoiledTest a, SpoiledTest b);
 
   /// The face's rows of the maps: from 10 mm below the lowest standard
   /// landmark placed on them to 10 mm above the highest (fromScene() finds

@@ -89,7 +89,7 @@ struct Review
   std::vector<seg::LandmarkThickness> rows;
   std::optional<LabelMapNode::Thresholds> thresholds;
   std::vector<std::string> metal;       ///< each piece of metal (or undiluted contrast) and the slices it spoils
-  ThicknessReview::SpoiledTest spoiled; ///< where those slices hold the skin
+  ThicknessReview::SpoiledTest spoiled; ///< skin in those slices or against the head holder
 };
 
 /// 1. The CT, the newest maps, the landmarks and their depths.
@@ -126,7 +126,8 @@ Review gather(Scene& scene)
   logic.measureLandmarkDepths(*r.volume, r.rows);
   for (const seg::MetalPiece& piece : logic.metalOf(*r.volume))
     r.metal.push_back(seg::describe(piece, r.volume->image()));
-  r.spoiled = ThicknessReview::spoiledBy(logic.metalOf(*r.volume), r.volume->image());
+  r.spoiled = ThicknessReview::eitherOf(ThicknessReview::spoiledBy(logic.metalOf(*r.volume), r.volume->image()),
+                                        logic.againstAnObject(*r.volume, r.skin.frame()));
   if (const LabelMapNode* labels = SegmentLogic(scene).findLabelMap(*r.volume))
     r.thresholds = labels->thresholds();
   return r;
@@ -310,7 +311,7 @@ std::optional<QImage> paintedFace(Scene& scene, const Review& r, double dpi)
   const seg::CylindricalFrame& frame = r.radial.frame();
   // The Range maps panel's painting (its "thickness_mm"), radial.
   ThicknessReview review(r.skin, r.bone, r.radial, r.normal);
-  review.setSpoiled(r.spoiled); // no thickness painted in the metal's streaks
+  review.setSpoiled(r.spoiled); // no thickness painted in the metal's streaks or against the head holder
   const vtkSmartPointer<vtkPolyData> painted = review.paintThickness(head, ThicknessMeasure::Radial);
   render::Figure figure;
   figure.printWidthMm = 120.0;
@@ -394,7 +395,10 @@ void addMethod(ReportDocument& doc, const Review& r)
                 "landmark is placed, since every rule starts from the nose tip. Metal and undiluted contrast: "
                 "connected voxels at 3000 HU and above (4 or more); the slices within 5 mm of them are spoiled "
                 "by their streaks, a landmark there is listed to be checked on the slices, the skin there is "
-                "left out of the statistics and unpainted on the face, and no plan may be cut there.");
+                "left out of the statistics and unpainted on the face, and no plan may be cut there. Skin pressed "
+                "against the head holder or the table's pad (tissue-like HU 1.5 mm and 3 mm outside it, along "
+                "the ray from the head axis) is the edge of the segmentation's body, not a measured surface: it "
+                "is left out and unpainted too.");
 }
 
 } // namespace

@@ -224,6 +224,36 @@ TEST(RangeMapLogic, LandmarkDepthsInTheCtMatchTheEllipsoidsAlongTheNormal)
     const bool inItsSlices = std::abs(row.position.z() - filling.z()) < 5.0;
     EXPECT_EQ(row.note.empty(), !inItsSlices) << row.position.transpose() << ": " << row.note;
   }
+
+  // Skin against an object: none on the free head; with a head holder of
+  // tissue-like plastic filling the space behind the head (y beyond the
+  // skin's back, LPS), the skin at the back and only there.
+  const caps::seg::CylindricalFrame frame(phantom.centre, Eigen::Vector3d::UnitZ(), -60.0, 60.0, 64, 32);
+  volume->setImage(phantom.images.ct);
+  const auto freeHead = logic.againstAnObject(*volume, frame);
+  ASSERT_TRUE(bool(freeHead));
+  for (const auto& row : rows)
+    EXPECT_FALSE(freeHead(row.position)) << row.position.transpose();
+  auto held = vtkSmartPointer<vtkImageData>::New();
+  held->DeepCopy(phantom.images.ct);
+  const int* dims = held->GetDimensions();
+  for (int k = 0; k < dims[2]; ++k)
+    for (int j = 0; j < dims[1]; ++j)
+      for (int i = 0; i < dims[0]; ++i)
+      {
+        double world[3];
+        held->TransformIndexToPhysicalPoint(i, j, k, world);
+        if (world[1] >= phantom.centre.y() + HeadPhantom::skinB)
+          held->SetScalarComponentFromDouble(i, j, k, 0, 40.0);
+      }
+  volume->setImage(held);
+  const auto onTheHolder = logic.againstAnObject(*volume, frame);
+  for (const auto& row : rows)
+  {
+    const Eigen::Vector3d q = row.position - phantom.centre;
+    const bool atTheBack = std::abs(std::atan2(q.y(), q.x()) - std::numbers::pi / 2) < 1e-6 && std::abs(q.z()) < 1.0;
+    EXPECT_EQ(onTheHolder(row.position), atTheBack) << q.transpose();
+  }
 }
 
 TEST(RangeMapLogic, SmoothingAndBadInput)

@@ -164,7 +164,7 @@ TEST(ThicknessReview, SkinInMetalStreaksIsLeftOutOfTheHistogramAndThePaint)
   surface->SetPoints(points);
   const auto painted = review.paintThickness(surface);
   auto* values = vtkDoubleArray::SafeDownCast(painted->GetPointData()->GetArray("thickness_mm"));
-  auto* streaks = painted->GetPointData()->GetArray("metal_streaks");
+  auto* streaks = painted->GetPointData()->GetArray("unreliable_skin");
   ASSERT_TRUE(values && streaks);
   EXPECT_NEAR(values->GetValue(0), skinRadius(0.0) - kBoneRadius, 1e-4);
   EXPECT_TRUE(std::isnan(values->GetValue(1)));
@@ -198,6 +198,15 @@ TEST(ThicknessReview, SpoiledByTheMetalOfACt)
   EXPECT_FALSE(spoiled(Eigen::Vector3d(2.0, 3.0, 40.0)));
   EXPECT_FALSE(spoiled(Eigen::Vector3d(2.0, 3.0, 10.0)));
   EXPECT_FALSE(bool(caps::ThicknessReview::spoiledBy({}, ct)));
+
+  // Joined with another test (skin against the head holder): either marks.
+  const auto below = [](const Eigen::Vector3d& p) { return p.z() < 5.0; };
+  const auto either = caps::ThicknessReview::eitherOf(spoiled, below);
+  EXPECT_TRUE(either(Eigen::Vector3d(2.0, 3.0, 30.0)));
+  EXPECT_TRUE(either(Eigen::Vector3d(2.0, 3.0, 2.0)));
+  EXPECT_FALSE(either(Eigen::Vector3d(2.0, 3.0, 10.0)));
+  EXPECT_TRUE(caps::ThicknessReview::eitherOf({}, below)(Eigen::Vector3d(0.0, 0.0, 0.0)));
+  EXPECT_FALSE(bool(caps::ThicknessReview::eitherOf({}, {})));
 }
 
 TEST(ThicknessReview, TheSkinIsPaintedWithTheMeasureShown)

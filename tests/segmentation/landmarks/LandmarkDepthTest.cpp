@@ -39,6 +39,9 @@ struct SpheresCt
   /// has it in the mask, 1.6 mm thick.
   double wallRadius = 0;
   static constexpr double kWallThickness = 0.6;
+  /// A head holder: tissue-like plastic filling y ≥ holderY (behind the
+  /// head, LPS); none by default.
+  double holderY = 1e9;
 
   vtkNew<vtkImageData> ct, mask;
 
@@ -60,6 +63,7 @@ struct SpheresCt
     }
     else
       hu += (kBone - kTissue) * ramp(boneRadius - r);
+    hu = std::max(hu, kAir + (kTissue - kAir) * ramp(x.y() - holderY));
     if ((x - beadCentre).norm() < beadRadius)
       hu = 3000;
     return hu;
@@ -259,10 +263,29 @@ TEST(LandmarkDepth, NoBoneWithinReachIsNaNAndBadImagesAreRefused)
   EXPECT_THROW(BoneDepthProbe(phantom.ct, other, kThreshold), std::invalid_argument);
 }
 
+// Skin pressed against the head holder: tissue-like HU just outside it. The
+// skin beside it, or facing air, or 3 mm clear of the holder, is not.
+TEST(LandmarkDepth, SkinAgainstTheHeadHolderIsFound)
+{
+  for (const double gap : {0.0, 3.0})
+  {
+    SpheresCt s;
+    s.holderY = s.skinRadius + gap;
+    s.build();
+    const BoneDepthProbe probe(s.ct, s.mask, kThreshold, kSkinThreshold);
+    const Eigen::Vector3d back = Eigen::Vector3d::UnitY(), front = -back, side = Eigen::Vector3d::UnitX();
+    EXPECT_EQ(probe.againstAnObject(s.skinRadius * back, back), gap == 0.0) << "gap " << gap;
+    EXPECT_FALSE(probe.againstAnObject(s.skinRadius * front, front)) << "gap " << gap;
+    EXPECT_FALSE(probe.againstAnObject(s.skinRadius * side, side)) << "gap " << gap;
+  }
+}
+
 TEST(LandmarkDepth, EachLandmarkHasItsPublishedConvention)
 {
   EXPECT_EQ(depthConventionOf("pronasale"), DepthConvention::NotADepth);
   EXPECT_EQ(depthConventionOf("menton"), DepthConvention::NearestBone);
+  EXPECT_EQ(depthConventionOf("supraorbital_left"), DepthConvention::NearestBone); // the rim's edge
+  EXPECT_EQ(depthConventionOf("infraorbital_right"), DepthConvention::NearestBone);
   EXPECT_EQ(depthConventionOf("glabella"), DepthConvention::SkinNormal);
   LandmarkDepth row;
   row.bone.alongSkinNormal = 7.0;
