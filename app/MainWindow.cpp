@@ -765,7 +765,7 @@ void MainWindow::setThreeDViewCamera(const SnapshotNode::Camera& c)
 
 void MainWindow::setCursorPosition(const std::array<double, 3>& position)
 {
-  moveCursor(toImageSpace(position));
+  moveCursor(rotateAboutOrigin(position, true));
   view3d_->setMarker(position);
 }
 
@@ -773,7 +773,8 @@ void MainWindow::showMeasuredSegment(const std::optional<MeasuredSegment>& segme
 {
   std::optional<ui::SliceSegment> onSlices;
   if (segment)
-    onSlices = ui::SliceSegment{toImageSpace(segment->from), toImageSpace(segment->to), segment->label};
+    onSlices =
+      ui::SliceSegment{rotateAboutOrigin(segment->from, true), rotateAboutOrigin(segment->to, true), segment->label};
   for (ui::SliceView* view : slice_views_)
     view->setMeasuredSegment(onSlices);
 }
@@ -791,7 +792,7 @@ void MainWindow::keepRuler(const ui::SliceView& view)
   if (nodes.empty())
     landmarks->setName("Landmarks");
   const LandmarksNode::Distance distance{"Ruler " + std::to_string(landmarks->distances().size() + 1),
-                                         fromImageSpace(ruler->from), fromImageSpace(ruler->to)};
+                                         rotateAboutOrigin(ruler->from, false), rotateAboutOrigin(ruler->to, false)};
   {
     ScopedEdit edit(scene, landmarks->id(), "Measure " + distance.name);
     landmarks->addDistance(distance);
@@ -802,44 +803,25 @@ void MainWindow::keepRuler(const ui::SliceView& view)
                              .arg(distance.length(), 0, 'f', 1));
 }
 
-std::array<double, 3> MainWindow::fromImageSpace(const std::array<double, 3>& inImage)
+std::array<double, 3> MainWindow::rotateAboutOrigin(const std::array<double, 3>& point, bool toImage)
 {
-  // Image space goes to patient LPS through the direction matrix.
-  std::array<double, 3> position = inImage;
+  // The views' image space keeps the volume's origin and axes: patient LPS
+  // is origin + D (p - origin), image space origin + Dᵀ (x - origin).
+  std::array<double, 3> rotated = point;
   auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
-  if (volume && volume->image())
+  if (!volume || !volume->image())
+    return rotated;
+  vtkImageData* image = volume->image();
+  const double* origin = image->GetOrigin();
+  vtkMatrix3x3* direction = image->GetDirectionMatrix();
+  for (int a = 0; a < 3; ++a)
   {
-    vtkImageData* image = volume->image();
-    const double* origin = image->GetOrigin();
-    vtkMatrix3x3* direction = image->GetDirectionMatrix();
-    for (int a = 0; a < 3; ++a)
-    {
-      position[static_cast<size_t>(a)] = origin[a];
-      for (int b = 0; b < 3; ++b)
-        position[static_cast<size_t>(a)] += direction->GetElement(a, b) * (inImage[static_cast<size_t>(b)] - origin[b]);
-    }
+    rotated[static_cast<size_t>(a)] = origin[a];
+    for (int b = 0; b < 3; ++b)
+      rotated[static_cast<size_t>(a)] += (toImage ? direction->GetElement(b, a) : direction->GetElement(a, b)) *
+                                         (point[static_cast<size_t>(b)] - origin[b]);
   }
-  return position;
-}
-
-std::array<double, 3> MainWindow::toImageSpace(const std::array<double, 3>& position)
-{
-  // Patient LPS goes to image space through the transposed direction matrix.
-  std::array<double, 3> inImage = position;
-  auto* volume = session_.scene().nodeAs<VolumeNode>(volume_id_);
-  if (volume && volume->image())
-  {
-    vtkImageData* image = volume->image();
-    const double* origin = image->GetOrigin();
-    vtkMatrix3x3* direction = image->GetDirectionMatrix();
-    for (int a = 0; a < 3; ++a)
-    {
-      inImage[static_cast<size_t>(a)] = origin[a];
-      for (int b = 0; b < 3; ++b)
-        inImage[static_cast<size_t>(a)] += direction->GetElement(b, a) * (position[static_cast<size_t>(b)] - origin[b]);
-    }
-  }
-  return inImage;
+  return rotated;
 }
 
 void MainWindow::previewThresholds(const std::optional<std::array<double, 2>>& hu)

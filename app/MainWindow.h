@@ -97,9 +97,9 @@ private:
   void updateOverlay();
   void applyWindowLevel(double window, double level);
   void moveCursor(const std::array<double, 3>& position);
-  /// Patient LPS to the slice views' image space (the volume's axes, origin kept), and back.
-  std::array<double, 3> toImageSpace(const std::array<double, 3>& position);
-  std::array<double, 3> fromImageSpace(const std::array<double, 3>& inImage);
+  /// Patient LPS to the slice views' image space (the volume's axes, origin
+  /// kept) when @a toImage, else back.
+  std::array<double, 3> rotateAboutOrigin(const std::array<double, 3>& point, bool toImage);
   /// The ruler just finished on @a view, kept in the scene's landmarks.
   void keepRuler(const ui::SliceView& view);
   void showCursorInfo(double x, double y, double z, bool inside);

@@ -252,14 +252,14 @@ constexpr double kPupilBelowNasion = 5.0; // mm
 constexpr double kOrbitDepth = 8.0; // mm
 
 /// The orbital rims on the bone map's column @a theta (the pupil's), the
-/// tables' mid-supraorbital and mid-infraorbital (De Greef et al. 2006):
-/// the orbit is the deepest bone within 35 mm below and 20 mm above the
-/// nasion (its roof lies 10-20 mm above the soft-tissue nasion), read through a 5-row running median (one-row glitches are not
-/// orbits or rims). Walking
-/// up (down) the column from it, the rim is where the bone first comes
-/// within 1 mm of the highest bone in the next 15 mm: the edge where the
-/// orbit's wall ends, at the crest of a raised margin; that highest bone
-/// must stand kOrbitDepth above the orbit. Linear between rows.
+/// tables' mid-supraorbital and mid-infraorbital (De Greef et al. 2006).
+/// The orbit is the deepest bone within 35 mm below and 20 mm above the
+/// nasion (its roof lies 10-20 mm above the soft-tissue nasion), read
+/// through a 5-row running median (one-row glitches are not orbits or rims).
+/// Walking up (down) the column from it, the rim is where the bone first
+/// comes within 1 mm of the highest bone in the next 15 mm: the edge where
+/// the orbit's wall ends, at the crest of a raised margin; that highest
+/// bone must stand kOrbitDepth above the orbit. Linear between rows.
 struct OrbitRims
 {
   double supra = nan, infra = nan; ///< z (mm); NaN where not found
@@ -483,8 +483,8 @@ LandmarkPlacement placeLandmarks(const RangeMap& skin, const RangeMap& bone)
   const double pupilRight = std::isfinite(zN) ? besideTheMidline(skin, zN - kPupilBelowNasion, kCheekOffset, -1) : nan;
   const OrbitRims orbitLeft = orbitRims(bone, pupilLeft, zN), orbitRight = orbitRims(bone, pupilRight, zN);
   const char* noOrbit = bone.empty() ? "the orbits are read on the bone range map, and there is none"
-                                     : "no orbit (bone 8 mm deeper than its rims) under the pupil beside the nasion, "
-                                       "or no rim within 30 mm of it";
+                                     : "no orbit under the pupil beside the nasion on the bone map (bone 8 mm "
+                                       "deeper than the bone above and below it)";
   const char* noJaw = "no jaw underside (profile below 60 % of the nose tip) below the nose tip";
   const double zRhinion = rhinionZ(bone, zN, zPrn);
   const char* noRhinion = bone.empty() ? "the nasal bones are read on the bone range map, and there is none"

@@ -376,7 +376,17 @@ void RangeMapPanel::updateProfile()
   profile_summary_->setVisible(shown);
   if (!shown)
     return;
-  const ThicknessProfile profile = review_->profile((*profile_line_)[0], (*profile_line_)[1], measure_);
+  ThicknessProfile profile;
+  try
+  {
+    profile = review_->profile((*profile_line_)[0], (*profile_line_)[1], measure_);
+  }
+  catch (const std::exception& e) // neither end on the skin map (maps built again since)
+  {
+    profile_plot_->clear();
+    profile_summary_->setText(QString::fromStdString(e.what()));
+    return;
+  }
   render::PlotSeries series{tr("thickness (mm)").toStdString(), {}, {}, 0x1f77b4};
   double holes = 0.0;
   for (std::size_t k = 0; k < profile.along.size(); ++k)
