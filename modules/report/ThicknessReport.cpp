@@ -177,7 +177,7 @@ void addLandmarks(ReportDocument& doc, const Review& r)
   {
     doc.table({"#", "Landmark", "Confidence", "Depth (mm)", "Measured", "⊥ skin (mm)", "Nearest bone (mm)",
                "Radial map (mm)", "Normal map (mm)"},
-              rows, {4, 17, 15, 9, 12, 10, 11, 11, 11});
+              rows, {4, 19, 14, 9, 12, 10, 11, 10, 11});
     doc.paragraph("Measured: ⊥ skin, perpendicular to the skin to the first bone; nearest, to the nearest bone; "
                   "nearest*, to the nearest bone because no bone lies perpendicular to the skin within 60 mm "
                   "(lips without teeth behind them, bone too thin for the CT); none, no bone beneath (the nose "
