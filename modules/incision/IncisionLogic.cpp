@@ -45,14 +45,16 @@ planning::IncisionPlan IncisionLogic::applyRecipe(const planning::PlanRecipe& re
   return planning::applyRecipe(recipe, skin, procedures());
 }
 
-std::string IncisionLogic::cutInMetalStreaks(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
-                                             const RangeMapNode& skinNode) const
+std::string IncisionLogic::cutOnUnsoundSkin(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
+                                            const RangeMapNode& skinNode) const
 {
   const auto* volume = scene().nodeAs<VolumeNode>(skinNode.sourceVolumeId());
   if (!volume || !volume->image())
     return {};
   const RangeMapLogic rangeMaps(scene());
-  return planning::cutInMetalStreaks(plan, skin, rangeMaps.metalOf(*volume), volume->image());
+  const std::string metal = planning::cutInMetalStreaks(plan, skin, rangeMaps.metalOf(*volume), volume->image());
+  return !metal.empty() ? metal
+                        : planning::cutAgainstAnObject(plan, skin, rangeMaps.againstAnObject(*volume, skin.frame()));
 }
 
 void IncisionLogic::writePlan(const planning::IncisionPlan& plan, PlanNode& node)

@@ -107,10 +107,11 @@ public:
 
   /// Why @a plan, drawn on @a skin (the map of @a skinNode), cannot be cut:
   /// its cut runs through skin in the slices that metal's streaks spoil in
-  /// the CT the map was made from (planning::cutInMetalStreaks); "" when it
-  /// does not, or when that CT is not in the scene.
-  std::string cutInMetalStreaks(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
-                                const RangeMapNode& skinNode) const;
+  /// the CT the map was made from (planning::cutInMetalStreaks), or over
+  /// skin pressed against the head holder (planning::cutAgainstAnObject);
+  /// "" when it does not, or when that CT is not in the scene.
+  std::string cutOnUnsoundSkin(const planning::IncisionPlan& plan, const seg::RangeMap& skin,
+                               const RangeMapNode& skinNode) const;
 
 private:
   std::optional<planning::ProcedureLibrary> library_;

@@ -471,7 +471,7 @@ void IncisionPanel::placeAt(const SurfacePick& pick)
                                            "\nClick nearer the middle of the measured skin, or make the cut smaller.");
     return;
   }
-  if (const std::string spoiled = logic_.cutInMetalStreaks(plan, skin, *skinNode); !spoiled.empty())
+  if (const std::string spoiled = logic_.cutOnUnsoundSkin(plan, skin, *skinNode); !spoiled.empty())
   {
     host_.showError("Place on the skin", "The " + procedure->title() + " cannot be placed there: " + spoiled + ".");
     return;

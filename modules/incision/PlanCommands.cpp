@@ -552,7 +552,7 @@ public:
     readTheCt();
     takeTheRangeMaps();
     recordThePlan();
-    refuseACutInMetalStreaks();
+    refuseACutOnUnsoundSkin();
     saveTheRecipe(); // before the long solve: the plan is kept even if the prediction fails
     predict();
     printThePrediction();
@@ -674,13 +674,17 @@ private:
     }
   }
 
-  /// No cut through skin the CT's metal streaks spoil: its skin and bone
-  /// there are artefacts (planning::cutInMetalStreaks).
-  void refuseACutInMetalStreaks()
+  /// No cut through skin the CT's metal streaks spoil, or over skin pressed
+  /// against the head holder: its skin and bone there are artefacts
+  /// (planning::cutInMetalStreaks, planning::cutAgainstAnObject).
+  void refuseACutOnUnsoundSkin()
   {
     const RangeMapLogic rangeMaps(logic_.scene());
-    const std::string why =
+    std::string why =
       planning::cutInMetalStreaks(recorded_->plan(), maps_.skin, rangeMaps.metalOf(*volume_), volume_->image());
+    if (why.empty())
+      why = planning::cutAgainstAnObject(recorded_->plan(), maps_.skin,
+                                         rangeMaps.againstAnObject(*volume_, maps_.skin.frame()));
     if (!why.empty())
       throw std::invalid_argument("The plan cannot be cut where it is: " + why + ".");
   }

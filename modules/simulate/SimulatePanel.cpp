@@ -588,8 +588,7 @@ void SimulatePanel::run()
   // A plan saved in a scene (or replayed) before its CT's metal was known:
   // refused here as the Incision panel and `caps plan` refuse it.
   if (const auto* skinNode = logic_.scene().nodeAs<RangeMapNode>(input->skinMapId))
-    if (const std::string spoiled =
-          IncisionLogic(logic_.scene()).cutInMetalStreaks(input->plan, input->skin, *skinNode);
+    if (const std::string spoiled = IncisionLogic(logic_.scene()).cutOnUnsoundSkin(input->plan, input->skin, *skinNode);
         !spoiled.empty())
     {
       host_.showError("Simulate", "Not run: " + spoiled);

@@ -89,5 +89,27 @@ TEST(CutOnSoundSkin, ACutThroughTheSlicesMetalSpoilsIsRefusedWithWhereAndWhatToD
   EXPECT_EQ(planning::cutInMetalStreaks(plan, skin, metal, nullptr), "");
 }
 
+// Skin pressed against the head holder (here: the test says the skin behind
+// y = 70 mm is, LPS posterior): a cut reaching there is refused at its first
+// millimetre step beyond it, with where; a cut on the face is accepted.
+TEST(CutOnSoundSkin, ACutOverSkinAgainstTheHeadHolderIsRefused)
+{
+  const seg::RangeMap skin = cylinderSkin(80.0);
+  const auto onTheHolder = [](const Eigen::Vector3d& p) { return p.y() > 70.0; };
+  const double back = pi / 2;
+  const std::string refused =
+    planning::cutAgainstAnObject(straightCut(skin, back - 60 * degree, 10.0, back, 10.0), skin, onTheHolder);
+  std::printf("[ refused  ] %s\n", refused.c_str());
+  EXPECT_NE(refused.find("head holder"), std::string::npos) << refused;
+  // y = 80 sin θ passes 70 at θ = asin(7/8) = 61.0°: the first step beyond.
+  const std::size_t at = refused.find("θ ");
+  ASSERT_NE(at, std::string::npos) << refused;
+  EXPECT_NEAR(std::stod(refused.substr(at + 3)), std::asin(7.0 / 8.0) / degree, 1.0) << refused;
+  EXPECT_EQ(planning::cutAgainstAnObject(straightCut(skin, kFront - 15 * degree, 10.0, kFront + 15 * degree, 10.0),
+                                         skin, onTheHolder),
+            "");
+  EXPECT_EQ(planning::cutAgainstAnObject(straightCut(skin, back - 60 * degree, 10.0, back, 10.0), skin, {}), "");
+}
+
 } // namespace
 } // namespace caps::test
