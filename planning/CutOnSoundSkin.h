@@ -30,7 +30,7 @@ std::string cutInMetalStreaks(const IncisionPlan& plan, const seg::RangeMap& ski
 /// Why @a plan cannot be cut on @a skin: the first point of its cut (walked
 /// as cutInMetalStreaks walks it) whose skin @a againstAnObject marks (skin
 /// pressed against the head holder or the table's pad:
-/// seg::BoneDepthProbe::againstAnObject), with where and what to do; "" when
+/// seg::skinAgainstAnObject), with where and what to do; "" when
 /// none is or the test is empty.
 std::string cutAgainstAnObject(const IncisionPlan& plan, const seg::RangeMap& skin,
                                const std::function<bool(const Eigen::Vector3d&)>& againstAnObject);

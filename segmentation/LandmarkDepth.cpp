@@ -115,44 +115,79 @@ DepthConvention depthConventionOf(const std::string& landmarkName)
   return DepthConvention::SkinNormal;
 }
 
-BoneDepthProbe::BoneDepthProbe(vtkImageData* ct, vtkImageData* boneMask, double boneThresholdHu, double skinThresholdHu,
-                               double searchDistance)
-  : ct_(ct), mask_(nullptr), threshold_(boneThresholdHu), skinThreshold_(skinThresholdHu),
-    searchDistance_(searchDistance)
+CtSampler::CtSampler(vtkImageData* ct) : ct_(ct)
 {
   if (!ct || ct->GetNumberOfScalarComponents() != 1 || !ct->GetScalarPointer())
     throw std::invalid_argument("The landmark depths need a CT with one value per voxel.");
-  if (!boneMask || boneMask->GetScalarType() != VTK_UNSIGNED_CHAR || boneMask->GetNumberOfScalarComponents() != 1 ||
-      !boneMask->GetScalarPointer())
-    throw std::invalid_argument("The landmark depths need the bone mask (unsigned char, one value per voxel).");
   geometry_ = ImageGeometry::of(ct);
-  if (!ImageGeometry::of(boneMask).sameGrid(geometry_))
-    throw std::invalid_argument("The bone mask is not on the CT's grid.");
-  if (!(searchDistance > 0.0))
-    throw std::invalid_argument("The bone search distance must be positive.");
   dims_ = geometry_.dimensions();
   if (dims_[0] < 2 || dims_[1] < 2 || dims_[2] < 2)
     throw std::invalid_argument("The CT must have at least two voxels along each axis.");
-  mask_ = static_cast<const unsigned char*>(boneMask->GetScalarPointer());
 }
 
-Eigen::Vector3d BoneDepthProbe::indexOf(const Eigen::Vector3d& world) const
+Eigen::Vector3d CtSampler::indexOf(const Eigen::Vector3d& world) const
 {
   const Eigen::Vector3d start(geometry_.extent[0], geometry_.extent[2], geometry_.extent[4]);
   return geometry_.worldToIndex(world) - start;
 }
 
-Eigen::Vector3d BoneDepthProbe::worldOf(const Eigen::Vector3d& index) const
+Eigen::Vector3d CtSampler::worldOf(const Eigen::Vector3d& index) const
 {
   const Eigen::Vector3d start(geometry_.extent[0], geometry_.extent[2], geometry_.extent[4]);
   return geometry_.indexToWorld(index + start);
 }
 
+double CtSampler::huAtIndex(const Eigen::Vector3d& index) const
+{
+  const double x = index.x(), y = index.y(), z = index.z();
+  if (!(x >= 0.0 && y >= 0.0 && z >= 0.0 && x <= dims_[0] - 1 && y <= dims_[1] - 1 && z <= dims_[2] - 1))
+    return kAirHu;
+  const int i = std::min(int(x), dims_[0] - 2), j = std::min(int(y), dims_[1] - 2), k = std::min(int(z), dims_[2] - 2);
+  const double fx = x - i, fy = y - j, fz = z - k;
+  // GetScalarComponentAsDouble takes indices in the extent's own numbering.
+  auto v = [&](int a, int b, int c) {
+    return ct_->GetScalarComponentAsDouble(geometry_.extent[0] + i + a, geometry_.extent[2] + j + b,
+                                           geometry_.extent[4] + k + c, 0);
+  };
+  const double c00 = v(0, 0, 0) + fx * (v(1, 0, 0) - v(0, 0, 0));
+  const double c10 = v(0, 1, 0) + fx * (v(1, 1, 0) - v(0, 1, 0));
+  const double c01 = v(0, 0, 1) + fx * (v(1, 0, 1) - v(0, 0, 1));
+  const double c11 = v(0, 1, 1) + fx * (v(1, 1, 1) - v(0, 1, 1));
+  const double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
+}
+
+double CtSampler::hu(const Eigen::Vector3d& world) const
+{
+  return huAtIndex(indexOf(world));
+}
+
+bool skinAgainstAnObject(const CtSampler& ct, const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward,
+                         double skinThresholdHu)
+{
+  return ct.hu(skinPoint + 1.5 * outward) >= skinThresholdHu && ct.hu(skinPoint + 3.0 * outward) >= skinThresholdHu;
+}
+
+BoneDepthProbe::BoneDepthProbe(vtkImageData* ct, vtkImageData* boneMask, double boneThresholdHu, double skinThresholdHu,
+                               double searchDistance)
+  : ct_(ct), mask_(nullptr), threshold_(boneThresholdHu), skinThreshold_(skinThresholdHu),
+    searchDistance_(searchDistance)
+{
+  if (!boneMask || boneMask->GetScalarType() != VTK_UNSIGNED_CHAR || boneMask->GetNumberOfScalarComponents() != 1 ||
+      !boneMask->GetScalarPointer())
+    throw std::invalid_argument("The landmark depths need the bone mask (unsigned char, one value per voxel).");
+  if (!ImageGeometry::of(boneMask).sameGrid(ct_.geometry()))
+    throw std::invalid_argument("The bone mask is not on the CT's grid.");
+  if (!(searchDistance > 0.0))
+    throw std::invalid_argument("The bone search distance must be positive.");
+  mask_ = static_cast<const unsigned char*>(boneMask->GetScalarPointer());
+}
+
 bool BoneDepthProbe::inMask(int i, int j, int k) const
 {
-  if (i < 0 || j < 0 || k < 0 || i >= dims_[0] || j >= dims_[1] || k >= dims_[2])
+  if (i < 0 || j < 0 || k < 0 || i >= ct_.dimensions()[0] || j >= ct_.dimensions()[1] || k >= ct_.dimensions()[2])
     return false;
-  return mask_[i + dims_[0] * (j + std::ptrdiff_t(dims_[1]) * k)] != 0;
+  return mask_[i + ct_.dimensions()[0] * (j + std::ptrdiff_t(ct_.dimensions()[1]) * k)] != 0;
 }
 
 bool BoneDepthProbe::inMask(const Eigen::Vector3d& index) const
@@ -173,7 +208,7 @@ bool BoneDepthProbe::maskTouches(const Eigen::Vector3d& index) const
 
 bool BoneDepthProbe::goesIntoBone(const Eigen::Vector3d& world, const Eigen::Vector3d& direction) const
 {
-  const double h = 0.5 * geometry_.spacing.maxCoeff();
+  const double h = 0.5 * ct_.geometry().spacing.maxCoeff();
   Eigen::Vector3d gradient;
   for (int a = 0; a < 3; ++a)
   {
@@ -183,40 +218,10 @@ bool BoneDepthProbe::goesIntoBone(const Eigen::Vector3d& world, const Eigen::Vec
   return gradient.dot(direction) >= 0.5 * gradient.norm() * direction.norm() && gradient.norm() > 0.0;
 }
 
-double BoneDepthProbe::huAtIndex(const Eigen::Vector3d& index) const
-{
-  const double x = index.x(), y = index.y(), z = index.z();
-  if (!(x >= 0.0 && y >= 0.0 && z >= 0.0 && x <= dims_[0] - 1 && y <= dims_[1] - 1 && z <= dims_[2] - 1))
-    return kAirHu;
-  const int i = std::min(int(x), dims_[0] - 2), j = std::min(int(y), dims_[1] - 2), k = std::min(int(z), dims_[2] - 2);
-  const double fx = x - i, fy = y - j, fz = z - k;
-  // GetScalarComponentAsDouble takes indices in the extent's own numbering.
-  auto v = [&](int a, int b, int c) {
-    return ct_->GetScalarComponentAsDouble(geometry_.extent[0] + i + a, geometry_.extent[2] + j + b,
-                                           geometry_.extent[4] + k + c, 0);
-  };
-  const double c00 = v(0, 0, 0) + fx * (v(1, 0, 0) - v(0, 0, 0));
-  const double c10 = v(0, 1, 0) + fx * (v(1, 1, 0) - v(0, 1, 0));
-  const double c01 = v(0, 0, 1) + fx * (v(1, 0, 1) - v(0, 0, 1));
-  const double c11 = v(0, 1, 1) + fx * (v(1, 1, 1) - v(0, 1, 1));
-  const double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
-  return c0 + fz * (c1 - c0);
-}
-
-double BoneDepthProbe::hu(const Eigen::Vector3d& world) const
-{
-  return huAtIndex(indexOf(world));
-}
-
-bool BoneDepthProbe::againstAnObject(const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward) const
-{
-  return hu(skinPoint + 1.5 * outward) >= skinThreshold_ && hu(skinPoint + 3.0 * outward) >= skinThreshold_;
-}
-
 double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector3d& direction,
                                 Eigen::Vector3d* hit) const
 {
-  const double step = 0.25 * geometry_.spacing.minCoeff();
+  const double step = 0.25 * ct_.geometry().spacing.minCoeff();
   const Eigen::Vector3d d = direction.normalized();
   auto index = [&](double t) { return indexOf(from + t * d); };
   auto isBone = [&](double t) { return huAtIndex(index(t)) >= threshold_; };
@@ -250,7 +255,7 @@ double BoneDepthProbe::alongRay(const Eigen::Vector3d& from, const Eigen::Vector
       *hit = from + t * d;
     return t;
   };
-  const double window = 2.0 * geometry_.spacing.maxCoeff();
+  const double window = 2.0 * ct_.geometry().spacing.maxCoeff();
   double previous = 0.0;
   bool wasBone = isBone(0.0);
   for (double t = step; t <= searchDistance_; t += step)
@@ -294,16 +299,16 @@ double BoneDepthProbe::toNearest(const Eigen::Vector3d& from, double radius, Eig
     return RangeMap::quietNaN();
   // The box of voxels a sphere of the radius reaches: along index axis a,
   // radius times the norm of row a of the world-to-index map.
-  const Eigen::Matrix3d toIndex = geometry_.indexToWorldMatrix().inverse();
+  const Eigen::Matrix3d toIndex = ct_.geometry().indexToWorldMatrix().inverse();
   const Eigen::Vector3d centre = indexOf(from);
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a)
   {
     const double reach = radius * toIndex.row(a).norm() + 1.0;
     lo[a] = std::max(0, int(std::floor(centre[a] - reach)));
-    hi[a] = std::min(dims_[a] - 1, int(std::ceil(centre[a] + reach)));
+    hi[a] = std::min(ct_.dimensions()[a] - 1, int(std::ceil(centre[a] + reach)));
   }
-  const double voxelDiagonal = geometry_.spacing.norm();
+  const double voxelDiagonal = ct_.geometry().spacing.norm();
   // The bone surface: on each voxel edge from a voxel of the bone mask to
   // one outside it, where the HU (linear between the two) falls through the
   // threshold; the edge's middle where it does not (a mask edge without a
@@ -324,7 +329,8 @@ double BoneDepthProbe::toNearest(const Eigen::Vector3d& from, double radius, Eig
         for (const auto& o : kOffsets)
         {
           const int a = i + o[0], b = j + o[1], c = k + o[2];
-          if (a < 0 || b < 0 || c < 0 || a >= dims_[0] || b >= dims_[1] || c >= dims_[2] || inMask(a, b, c))
+          if (a < 0 || b < 0 || c < 0 || a >= ct_.dimensions()[0] || b >= ct_.dimensions()[1] ||
+              c >= ct_.dimensions()[2] || inMask(a, b, c))
             continue;
           const Eigen::Vector3d outside(a, b, c);
           const double vIn = huAtIndex(inside), vOut = huAtIndex(outside);
@@ -352,7 +358,7 @@ Eigen::Vector3d BoneDepthProbe::skinNormal(const Eigen::Vector3d& skinPoint) con
   // A first guess: the HU gradient (HU rises from air into tissue, so it
   // points inward), fitted by least squares on a 5 x 5 x 5 stencil of half
   // voxels.
-  const double h = 0.5 * geometry_.spacing.maxCoeff();
+  const double h = 0.5 * ct_.geometry().spacing.maxCoeff();
   Eigen::Matrix3d normalMatrix = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   for (int a = -2; a <= 2; ++a)
@@ -406,7 +412,7 @@ Eigen::Vector3d BoneDepthProbe::ontoSkin(const Eigen::Vector3d& point, const Eig
   // The skin crossing (air to tissue, walking inward) on the line through
   // the point along the normal nearest the point, within 4 mm.
   constexpr double kReach = 4.0;
-  const double step = 0.1 * geometry_.spacing.minCoeff();
+  const double step = 0.1 * ct_.geometry().spacing.minCoeff();
   auto inside = [&](double t) { return hu(point + t * inwardNormal) >= skinThreshold_; };
   auto crossingIn = [&](double a, double b) -> double {
     if (inside(a) || !inside(b))
@@ -440,7 +446,7 @@ BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
   if (out.inwardNormal.allFinite())
   {
     const Eigen::Vector3d onSkin = ontoSkin(skinPoint, out.inwardNormal);
-    if ((onSkin - skinPoint).norm() > 0.25 * geometry_.spacing.minCoeff())
+    if ((onSkin - skinPoint).norm() > 0.25 * ct_.geometry().spacing.minCoeff())
     {
       const Eigen::Vector3d normal = skinNormal(onSkin);
       if (normal.allFinite())
@@ -451,7 +457,7 @@ BoneDepth BoneDepthProbe::measure(const Eigen::Vector3d& skinPoint) const
   // The nearest bone is no farther than the bone along the normal; the
   // search reaches a voxel past it, for the surface's discretisation.
   const bool alongFound = std::isfinite(out.alongSkinNormal);
-  const double radius = alongFound ? out.alongSkinNormal + geometry_.spacing.norm() : searchDistance_;
+  const double radius = alongFound ? out.alongSkinNormal + ct_.geometry().spacing.norm() : searchDistance_;
   out.toNearestBone = toNearest(out.skinPoint, radius, &out.nearestBone);
   if (alongFound && !(out.toNearestBone <= out.alongSkinNormal))
   {

@@ -64,6 +64,38 @@ struct BoneDepth
   Eigen::Vector3d nearestBone = Eigen::Vector3d::Constant(RangeMap::quietNaN());
 };
 
+/// The HU of a CT at world points (LPS mm): trilinear between voxel
+/// centres, air (-1000 HU) outside the CT. References the image, which must
+/// outlive the sampler.
+class CtSampler
+{
+public:
+  /// @throws std::invalid_argument for a CT without one value per voxel or
+  /// with fewer than two voxels along an axis.
+  explicit CtSampler(vtkImageData* ct);
+  double hu(const Eigen::Vector3d& world) const;
+  /// At 0-based continuous voxel indices (the extent's start at 0).
+  double huAtIndex(const Eigen::Vector3d& index) const;
+  Eigen::Vector3d indexOf(const Eigen::Vector3d& world) const;
+  Eigen::Vector3d worldOf(const Eigen::Vector3d& index) const;
+  const ImageGeometry& geometry() const { return geometry_; }
+  const std::array<int, 3>& dimensions() const { return dims_; }
+
+private:
+  vtkImageData* ct_;
+  ImageGeometry geometry_;
+  std::array<int, 3> dims_;
+};
+
+/// Whether the skin at @a skinPoint lies against something outside the
+/// body: tissue-like HU (at or above @a skinThresholdHu) 1.5 mm and 3 mm
+/// out along the unit @a outward. There the segmentation's skin is the edge
+/// of its body mask beside the head holder, the table's pad or a dressing,
+/// not a surface the CT measured, and no thickness read there can be
+/// trusted. Outside the CT is air.
+bool skinAgainstAnObject(const CtSampler& ct, const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward,
+                         double skinThresholdHu);
+
 /**
  * @brief Finds the bone surface from points on the skin, in the CT: the
  *        crossing of boneThresholdHu (trilinear HU, refined by bisection, as
@@ -105,32 +137,22 @@ public:
   Eigen::Vector3d ontoSkin(const Eigen::Vector3d& point, const Eigen::Vector3d& inwardNormal) const;
 
   /// The HU at a world point (trilinear; -1000 outside the CT).
-  double hu(const Eigen::Vector3d& world) const;
-
-  /// Whether the skin at @a skinPoint lies against something outside the
-  /// body: tissue-like HU (at or above the skin threshold) 1.5 mm and 3 mm
-  /// out along the unit @a outward. There the segmentation's skin is the
-  /// edge of its body mask beside the head holder, the table's pad or a
-  /// dressing, not a surface the CT measured, and no thickness read there
-  /// can be trusted. Outside the CT is air.
-  bool againstAnObject(const Eigen::Vector3d& skinPoint, const Eigen::Vector3d& outward) const;
+  double hu(const Eigen::Vector3d& world) const { return ct_.hu(world); }
 
 private:
   // Indices are 0-based continuous voxel indices (the extent's start at 0).
-  Eigen::Vector3d indexOf(const Eigen::Vector3d& world) const;
-  Eigen::Vector3d worldOf(const Eigen::Vector3d& index) const;
+  Eigen::Vector3d indexOf(const Eigen::Vector3d& world) const { return ct_.indexOf(world); }
+  Eigen::Vector3d worldOf(const Eigen::Vector3d& index) const { return ct_.worldOf(index); }
+  double huAtIndex(const Eigen::Vector3d& index) const { return ct_.huAtIndex(index); }
   bool inMask(int i, int j, int k) const;
   bool inMask(const Eigen::Vector3d& index) const;      ///< the nearest voxel
   bool maskTouches(const Eigen::Vector3d& index) const; ///< any voxel of the trilinear cell
   /// Whether a line along @a direction at @a world heads into the bone:
   /// within 60 degrees of the HU's gradient.
   bool goesIntoBone(const Eigen::Vector3d& world, const Eigen::Vector3d& direction) const;
-  double huAtIndex(const Eigen::Vector3d& index) const;
 
-  vtkImageData* ct_;
+  CtSampler ct_;
   const unsigned char* mask_;
-  ImageGeometry geometry_;
-  std::array<int, 3> dims_;
   double threshold_;
   double skinThreshold_;
   double searchDistance_;

@@ -249,13 +249,11 @@ std::function<bool(const Eigen::Vector3d&)> RangeMapLogic::againstAnObject(const
   const LabelMapNode* labels = segment.findLabelMap(volume);
   if (!labels || !volume.image())
     return {};
-  const Parameters thresholds = forLabelMap(Parameters{}, *labels);
+  const double skinThreshold = forLabelMap(Parameters{}, *labels).skinThresholdHu;
   vtkSmartPointer<vtkImageData> ct(volume.image());
-  const vtkSmartPointer<vtkImageData> bone = SegmentLogic::maskOf(labels->image(), kBoneLabel);
-  auto probe =
-    std::make_shared<const seg::BoneDepthProbe>(ct, bone, thresholds.boneThresholdHu, thresholds.skinThresholdHu);
-  return [ct, bone, probe, frame](const Eigen::Vector3d& p) {
-    return probe->againstAnObject(p, frame.radialDirection(frame.toCylindrical(p).theta));
+  auto sampler = std::make_shared<const seg::CtSampler>(ct);
+  return [ct, sampler, frame, skinThreshold](const Eigen::Vector3d& p) {
+    return seg::skinAgainstAnObject(*sampler, p, frame.radialDirection(frame.toCylindrical(p).theta), skinThreshold);
   };
 }
 

@@ -148,10 +148,10 @@ public:
   const std::vector<seg::MetalPiece>& metalOf(const VolumeNode& volume) const;
 
   /// Where the skin of @a volume's CT lies against an object outside the
-  /// body (seg::BoneDepthProbe::againstAnObject, looking out along the
-  /// radial direction of @a frame: the head holder, the table's pad), as a
-  /// test of a skin point (LPS mm); an empty test while the volume has no
-  /// label map. The test holds the CT and the bone mask it reads.
+  /// body (seg::skinAgainstAnObject, looking out along the radial direction
+  /// of @a frame: the head holder, the table's pad), as a test of a skin
+  /// point (LPS mm), at the label map's skin threshold; an empty test while
+  /// the volume has no label map. The test holds the CT it reads.
   std::function<bool(const Eigen::Vector3d&)> againstAnObject(const VolumeNode& volume,
                                                               const seg::CylindricalFrame& frame) const;
 

@@ -272,11 +272,11 @@ TEST(LandmarkDepth, SkinAgainstTheHeadHolderIsFound)
     SpheresCt s;
     s.holderY = s.skinRadius + gap;
     s.build();
-    const BoneDepthProbe probe(s.ct, s.mask, kThreshold, kSkinThreshold);
+    const CtSampler ct(s.ct);
     const Eigen::Vector3d back = Eigen::Vector3d::UnitY(), front = -back, side = Eigen::Vector3d::UnitX();
-    EXPECT_EQ(probe.againstAnObject(s.skinRadius * back, back), gap == 0.0) << "gap " << gap;
-    EXPECT_FALSE(probe.againstAnObject(s.skinRadius * front, front)) << "gap " << gap;
-    EXPECT_FALSE(probe.againstAnObject(s.skinRadius * side, side)) << "gap " << gap;
+    EXPECT_EQ(skinAgainstAnObject(ct, s.skinRadius * back, back, kSkinThreshold), gap == 0.0) << "gap " << gap;
+    EXPECT_FALSE(skinAgainstAnObject(ct, s.skinRadius * front, front, kSkinThreshold)) << "gap " << gap;
+    EXPECT_FALSE(skinAgainstAnObject(ct, s.skinRadius * side, side, kSkinThreshold)) << "gap " << gap;
   }
 }
 
